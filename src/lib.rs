@@ -1,0 +1,16 @@
+//! # origami-fmu
+//!
+//! Origami folding dynamics with the iso-parametric ANCF shell model (Tao & Li
+//! 2019, as corrected in the project's MATH notes): every facet is a cubic
+//! triangular Kirchhoff shell with Green-Lagrange membrane strain, creases are
+//! rotational springs at the crease end nodes, and the mass matrix is
+//! constant. The model is packed as an FMI 2.0 co-simulation FMU.
+//!
+//! Layers, bottom up: [`mesh`] (crease pattern as data), [`scene`] (FOLD
+//! scenes with physics keys), and [`model`] (the plain Rust API that the FMU
+//! and the CLI drive).
+#![warn(missing_docs)]
+
+pub mod mesh;
+pub mod model;
+pub mod scene;

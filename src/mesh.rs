@@ -1,0 +1,501 @@
+//! The crease pattern as data: flat reference vertices, counter-clockwise
+//! triangles and labelled edges, plus the topology (edge-to-face incidence,
+//! vertex fans) that the DOF layout and the creases need.
+//!
+//! A [`Mesh`] is built with [`Mesh::new`], which validates it: indices in
+//! range, no degenerate or clockwise triangle, no edge shared by more than two
+//! triangles, every crease between exactly two triangles. Triangle edges that
+//! are not listed become smooth (interior) or boundary edges.
+
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::fmt;
+
+/// What an edge does mechanically.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum EdgeKind {
+    /// A fold line (FOLD `M`, `V` or `U`): facets may kink across it and a
+    /// rotational spring acts on the kink.
+    Crease,
+    /// A smooth edge (FOLD `F`, `J`, or a triangulation diagonal): the
+    /// surface stays C1 across it.
+    Smooth,
+    /// A free edge of the sheet (FOLD `B`): exactly one facet.
+    Boundary,
+}
+
+/// One edge of the mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Edge {
+    /// The two end vertices.
+    pub v: [usize; 2],
+    /// Crease, smooth or boundary.
+    pub kind: EdgeKind,
+    /// Target fold angle at full actuation in radians, FOLD sign (valley
+    /// positive). Only meaningful for creases.
+    pub fold_target: f64,
+    /// The FOLD edge this mesh edge lies on; `None` for diagonals added by
+    /// triangulation. Refinement keeps the tag on both halves.
+    pub fold_edge: Option<usize>,
+}
+
+impl Edge {
+    /// A crease between `a` and `b` folding to `fold_target` radians.
+    pub fn crease(a: usize, b: usize, fold_target: f64) -> Self {
+        Edge { v: [a, b], kind: EdgeKind::Crease, fold_target, fold_edge: None }
+    }
+    /// A smooth edge between `a` and `b`.
+    pub fn smooth(a: usize, b: usize) -> Self {
+        Edge { v: [a, b], kind: EdgeKind::Smooth, fold_target: 0.0, fold_edge: None }
+    }
+    /// A boundary edge between `a` and `b`.
+    pub fn boundary(a: usize, b: usize) -> Self {
+        Edge { v: [a, b], kind: EdgeKind::Boundary, fold_target: 0.0, fold_edge: None }
+    }
+}
+
+/// A validated crease pattern with its topology.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Mesh {
+    /// Reference (stress-free, flat) vertex coordinates in metres.
+    pub coords: Vec<Vector2<f64>>,
+    /// Triangles, counter-clockwise in the reference coordinates.
+    pub triangles: Vec<[usize; 3]>,
+    /// All edges: the listed ones first, in the given order, then the
+    /// unlisted triangle edges.
+    pub edges: Vec<Edge>,
+    /// For each edge, the one or two triangles that contain it.
+    pub edge_faces: Vec<Vec<usize>>,
+    /// For each triangle, the edge index of its sides (v0v1, v1v2, v2v0).
+    pub face_edges: Vec<[usize; 3]>,
+}
+
+/// What is wrong with a mesh, naming the index.
+#[derive(Clone, Debug, PartialEq)]
+#[allow(missing_docs)] // variant fields are named for what they hold
+pub enum MeshError {
+    /// A triangle or edge refers to a vertex that does not exist.
+    VertexOutOfRange { what: String, index: usize, vertex: usize, count: usize },
+    /// A triangle names the same vertex twice.
+    RepeatedVertex { triangle: usize },
+    /// A triangle has (nearly) zero area.
+    Degenerate { triangle: usize, area: f64 },
+    /// A triangle is clockwise in the reference plane.
+    Inverted { triangle: usize },
+    /// More than two triangles share an edge.
+    NonManifold { vertices: [usize; 2], faces: Vec<usize> },
+    /// A listed edge is not a side of any triangle.
+    DanglingEdge { edge: usize },
+    /// An edge is listed twice.
+    DuplicateEdge { first: usize, second: usize },
+    /// A crease does not lie between exactly two triangles.
+    CreaseNotInterior { edge: usize, faces: usize },
+    /// An edge marked boundary has two triangles.
+    BoundaryNotOnBoundary { edge: usize },
+    /// A non-finite coordinate or fold angle.
+    NotFinite { what: String, index: usize },
+    /// The vertex fan around a vertex is not a single disc or half-disc
+    /// (e.g. two sheets touching at a point).
+    NonManifoldVertex { vertex: usize },
+}
+
+impl fmt::Display for MeshError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use MeshError::*;
+        match self {
+            VertexOutOfRange { what, index, vertex, count } => write!(
+                f,
+                "{what} {index} refers to vertex {vertex}, but there are only {count} vertices"
+            ),
+            RepeatedVertex { triangle } => write!(f, "face {triangle} repeats a vertex"),
+            Degenerate { triangle, area } => {
+                write!(f, "face {triangle} is degenerate (area {area:.3e})")
+            }
+            Inverted { triangle } => write!(
+                f,
+                "face {triangle} is clockwise (inverted); faces must be counter-clockwise"
+            ),
+            NonManifold { vertices, faces } => write!(
+                f,
+                "edge {}-{} is shared by {} faces {:?}; at most two are allowed (non-manifold)",
+                vertices[0],
+                vertices[1],
+                faces.len(),
+                faces
+            ),
+            DanglingEdge { edge } => write!(f, "edge {edge} is not a side of any face"),
+            DuplicateEdge { first, second } => {
+                write!(f, "edge {second} repeats edge {first} (same two vertices)")
+            }
+            CreaseNotInterior { edge, faces } => write!(
+                f,
+                "edge {edge} is a crease but borders {faces} face(s); a crease needs exactly two"
+            ),
+            BoundaryNotOnBoundary { edge } => {
+                write!(f, "edge {edge} is marked boundary but borders two faces")
+            }
+            NotFinite { what, index } => write!(f, "{what} {index} is not a finite number"),
+            NonManifoldVertex { vertex } => write!(
+                f,
+                "the faces around vertex {vertex} do not form one fan (sheets touching at a point)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for MeshError {}
+
+/// Relative area below which a triangle counts as degenerate (against the
+/// square of the mean edge length of the whole mesh).
+const DEGENERATE_AREA: f64 = 1e-12;
+
+impl Mesh {
+    /// Validate the pattern and build its topology. `edges` lists labelled
+    /// edges; unlisted triangle sides become smooth or boundary edges.
+    pub fn new(
+        coords: Vec<Vector2<f64>>,
+        triangles: Vec<[usize; 3]>,
+        edges: Vec<Edge>,
+    ) -> Result<Mesh, MeshError> {
+        let nv = coords.len();
+        for (i, c) in coords.iter().enumerate() {
+            if !(c.x.is_finite() && c.y.is_finite()) {
+                return Err(MeshError::NotFinite { what: "vertex".into(), index: i });
+            }
+        }
+        let mut scale2 = 0.0;
+        let mut nscale = 0usize;
+        for (t, tri) in triangles.iter().enumerate() {
+            for &v in tri {
+                if v >= nv {
+                    return Err(MeshError::VertexOutOfRange {
+                        what: "face".into(),
+                        index: t,
+                        vertex: v,
+                        count: nv,
+                    });
+                }
+            }
+            if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+                return Err(MeshError::RepeatedVertex { triangle: t });
+            }
+            for k in 0..3 {
+                scale2 += (coords[tri[(k + 1) % 3]] - coords[tri[k]]).norm_squared();
+                nscale += 1;
+            }
+        }
+        let mean_len2 = if nscale > 0 { scale2 / nscale as f64 } else { 1.0 };
+        for (t, tri) in triangles.iter().enumerate() {
+            let a = coords[tri[1]] - coords[tri[0]];
+            let b = coords[tri[2]] - coords[tri[0]];
+            let area = 0.5 * (a.x * b.y - a.y * b.x);
+            if area.abs() <= DEGENERATE_AREA * mean_len2 {
+                return Err(MeshError::Degenerate { triangle: t, area });
+            }
+            if area < 0.0 {
+                return Err(MeshError::Inverted { triangle: t });
+            }
+        }
+
+        // Listed edges first.
+        let key = |a: usize, b: usize| if a < b { (a, b) } else { (b, a) };
+        let mut index: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut all = Vec::with_capacity(edges.len() + triangles.len() * 2);
+        for (e, edge) in edges.into_iter().enumerate() {
+            for &v in &edge.v {
+                if v >= nv {
+                    return Err(MeshError::VertexOutOfRange {
+                        what: "edge".into(),
+                        index: e,
+                        vertex: v,
+                        count: nv,
+                    });
+                }
+            }
+            if !edge.fold_target.is_finite() {
+                return Err(MeshError::NotFinite { what: "fold angle of edge".into(), index: e });
+            }
+            if let Some(&first) = index.get(&key(edge.v[0], edge.v[1])) {
+                return Err(MeshError::DuplicateEdge { first, second: e });
+            }
+            index.insert(key(edge.v[0], edge.v[1]), e);
+            all.push(edge);
+        }
+        let n_listed = all.len();
+        let mut edge_faces: Vec<Vec<usize>> = vec![Vec::new(); n_listed];
+        let mut face_edges = Vec::with_capacity(triangles.len());
+        for (t, tri) in triangles.iter().enumerate() {
+            let mut fe = [0usize; 3];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                let e = *index.entry(key(a, b)).or_insert_with(|| {
+                    all.push(Edge::smooth(a, b));
+                    edge_faces.push(Vec::new());
+                    all.len() - 1
+                });
+                edge_faces[e].push(t);
+                fe[k] = e;
+            }
+            face_edges.push(fe);
+        }
+        for (e, faces) in edge_faces.iter().enumerate() {
+            if faces.len() > 2 {
+                return Err(MeshError::NonManifold { vertices: all[e].v, faces: faces.clone() });
+            }
+            if faces.is_empty() {
+                return Err(MeshError::DanglingEdge { edge: e });
+            }
+            match all[e].kind {
+                EdgeKind::Crease if faces.len() != 2 => {
+                    return Err(MeshError::CreaseNotInterior { edge: e, faces: faces.len() });
+                }
+                EdgeKind::Boundary if faces.len() == 2 => {
+                    return Err(MeshError::BoundaryNotOnBoundary { edge: e });
+                }
+                _ => {}
+            }
+            if faces.len() == 1 {
+                all[e].kind = EdgeKind::Boundary;
+            }
+            if e >= n_listed {
+                // Unlisted interior edges stay smooth; nothing else to do.
+            }
+        }
+        // Two triangles across an edge must traverse it in opposite directions
+        // (consistent orientation); with all faces counter-clockwise in the
+        // plane this holds unless faces overlap.
+        for (e, faces) in edge_faces.iter().enumerate() {
+            if faces.len() == 2 {
+                let [a, b] = all[e].v;
+                let dir = |t: usize| {
+                    let tri = triangles[t];
+                    (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
+                };
+                if dir(faces[0]) == dir(faces[1]) {
+                    return Err(MeshError::Inverted { triangle: faces[1] });
+                }
+            }
+        }
+        let mesh = Mesh { coords, triangles, edges: all, edge_faces, face_edges };
+        for v in 0..nv {
+            mesh.fan(v)?;
+        }
+        Ok(mesh)
+    }
+
+    /// Number of vertices.
+    pub fn n_vertices(&self) -> usize {
+        self.coords.len()
+    }
+
+    /// Reference area of triangle `t`.
+    pub fn area(&self, t: usize) -> f64 {
+        let [a, b, c] = self.triangles[t];
+        let u = self.coords[b] - self.coords[a];
+        let w = self.coords[c] - self.coords[a];
+        0.5 * (u.x * w.y - u.y * w.x)
+    }
+
+    /// Reference length of edge `e`.
+    pub fn edge_length(&self, e: usize) -> f64 {
+        let [a, b] = self.edges[e].v;
+        (self.coords[b] - self.coords[a]).norm()
+    }
+
+    /// The edge between vertices `a` and `b`, if any.
+    pub fn find_edge(&self, a: usize, b: usize) -> Option<usize> {
+        self.edges
+            .iter()
+            .position(|e| (e.v[0] == a && e.v[1] == b) || (e.v[0] == b && e.v[1] == a))
+    }
+
+    /// The triangles around vertex `v`, ordered counter-clockwise, with the
+    /// edges between them: `edges[i]` precedes `faces[i]` and `edges[i+1]`
+    /// follows it. For an interior vertex the fan is closed
+    /// (`edges.len() == faces.len()`, the last face followed by `edges[0]`);
+    /// for a boundary vertex it is open, starts and ends on a boundary edge
+    /// (`edges.len() == faces.len() + 1`). A vertex used by no face has an
+    /// empty fan.
+    pub fn fan(&self, v: usize) -> Result<Fan, MeshError> {
+        // For each incident face: the edge entering (v -> prev-ccw) and leaving.
+        // In a CCW triangle (v, p, q): going CCW around v we pass edge v-p,
+        // then the face, then edge v-q.
+        let mut incident: Vec<(usize, usize, usize)> = Vec::new(); // (face, in_edge, out_edge)
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(k) = tri.iter().position(|&x| x == v) {
+                let fe = self.face_edges[t];
+                // side k is (tri[k], tri[k+1]); side k+2 is (tri[k+2], tri[k]).
+                incident.push((t, fe[k], fe[(k + 2) % 3]));
+            }
+        }
+        if incident.is_empty() {
+            return Ok(Fan { vertex: v, faces: vec![], edges: vec![], closed: false });
+        }
+        // Find a start: a face whose in-edge is a boundary edge (open fan).
+        let start = incident
+            .iter()
+            .position(|&(_, ein, _)| self.edge_faces[ein].len() == 1)
+            .unwrap_or(0);
+        let closed = self.edge_faces[incident[start].1].len() == 2;
+        let mut faces = Vec::with_capacity(incident.len());
+        let mut edges = vec![incident[start].1];
+        let mut cur = start;
+        let mut used = vec![false; incident.len()];
+        loop {
+            used[cur] = true;
+            let (t, _, eout) = incident[cur];
+            faces.push(t);
+            if self.edge_faces[eout].len() == 1 {
+                edges.push(eout);
+                break;
+            }
+            let next = incident.iter().position(|&(t2, ein, _)| ein == eout && t2 != t);
+            match next {
+                Some(n) if !used[n] => {
+                    edges.push(eout);
+                    cur = n;
+                }
+                Some(n) if n == start && closed => break,
+                _ => return Err(MeshError::NonManifoldVertex { vertex: v }),
+            }
+        }
+        if faces.len() != incident.len() {
+            return Err(MeshError::NonManifoldVertex { vertex: v });
+        }
+        Ok(Fan { vertex: v, faces, edges, closed })
+    }
+}
+
+/// The counter-clockwise fan of triangles around one vertex (see [`Mesh::fan`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fan {
+    /// The centre vertex.
+    pub vertex: usize,
+    /// Faces in counter-clockwise order.
+    pub faces: Vec<usize>,
+    /// Edges in counter-clockwise order; `edges[i]` precedes `faces[i]`.
+    pub edges: Vec<usize>,
+    /// True for an interior vertex (the fan closes on itself).
+    pub closed: bool,
+}
+
+/// Small builders for test and example meshes.
+pub mod builders {
+    use super::*;
+
+    /// Unit square (side `a`) split along the 0-2 diagonal into two triangles.
+    /// Vertices 0 (0,0), 1 (a,0), 2 (a,a), 3 (0,a); the diagonal is a crease
+    /// folding to `fold_target` when `crease` is true, smooth otherwise.
+    pub fn square_with_diagonal(a: f64, crease: bool, fold_target: f64) -> Mesh {
+        let coords = vec![
+            Vector2::new(0.0, 0.0),
+            Vector2::new(a, 0.0),
+            Vector2::new(a, a),
+            Vector2::new(0.0, a),
+        ];
+        let tris = vec![[0, 1, 2], [0, 2, 3]];
+        let diag = if crease { Edge::crease(0, 2, fold_target) } else { Edge::smooth(0, 2) };
+        Mesh::new(coords, tris, vec![diag]).expect("valid square")
+    }
+
+    /// A rectangular strip `[0, lx] x [0, ly]` with `nx` x `ny` cells, each
+    /// split into two triangles along alternating diagonals; all interior
+    /// edges smooth.
+    pub fn strip(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
+        grid(lx, ly, nx, ny, &[])
+    }
+
+    /// Like [`strip`], with the vertical grid lines at the listed column
+    /// indices (1..nx) made creases folding to `fold_target`.
+    pub fn grid(lx: f64, ly: f64, nx: usize, ny: usize, crease_cols: &[(usize, f64)]) -> Mesh {
+        let id = |i: usize, j: usize| j * (nx + 1) + i;
+        let mut coords = Vec::new();
+        for j in 0..=ny {
+            for i in 0..=nx {
+                coords.push(Vector2::new(lx * i as f64 / nx as f64, ly * j as f64 / ny as f64));
+            }
+        }
+        let mut tris = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                if (i + j) % 2 == 0 {
+                    tris.push([a, b, c]);
+                    tris.push([a, c, d]);
+                } else {
+                    tris.push([a, b, d]);
+                    tris.push([b, c, d]);
+                }
+            }
+        }
+        let mut edges = Vec::new();
+        for &(i, target) in crease_cols {
+            for j in 0..ny {
+                edges.push(Edge::crease(id(i, j), id(i, j + 1), target));
+            }
+        }
+        Mesh::new(coords, tris, edges).expect("valid grid")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::builders::*;
+    use super::*;
+
+    fn v(x: f64, y: f64) -> Vector2<f64> {
+        Vector2::new(x, y)
+    }
+
+    #[test]
+    fn square_topology() {
+        let m = square_with_diagonal(1.0, true, 1.0);
+        assert_eq!(m.edges.len(), 5);
+        assert_eq!(m.edges[0].kind, EdgeKind::Crease);
+        assert_eq!(m.edges.iter().filter(|e| e.kind == EdgeKind::Boundary).count(), 4);
+        let fan0 = m.fan(0).unwrap();
+        assert!(!fan0.closed);
+        assert_eq!(fan0.faces, vec![0, 1]);
+        assert_eq!(fan0.edges.len(), 3);
+        assert_eq!(fan0.edges[1], 0);
+    }
+
+    #[test]
+    fn interior_fan_is_closed() {
+        let m = grid(2.0, 2.0, 2, 2, &[]);
+        let centre = 4;
+        let fan = m.fan(centre).unwrap();
+        assert!(fan.closed);
+        assert_eq!(fan.faces.len(), fan.edges.len());
+        assert!(fan.faces.len() >= 4);
+    }
+
+    #[test]
+    fn bad_meshes_are_errors() {
+        let sq = || vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.)];
+        assert!(matches!(
+            Mesh::new(sq(), vec![[0, 1, 7]], vec![]),
+            Err(MeshError::VertexOutOfRange { vertex: 7, .. })
+        ));
+        assert!(matches!(
+            Mesh::new(sq(), vec![[0, 2, 1]], vec![]),
+            Err(MeshError::Inverted { triangle: 0 })
+        ));
+        let line = vec![v(0., 0.), v(1., 0.), v(2., 0.)];
+        assert!(matches!(
+            Mesh::new(line, vec![[0, 1, 2]], vec![]),
+            Err(MeshError::Degenerate { triangle: 0, .. })
+        ));
+        // crease with one facet
+        assert!(matches!(
+            Mesh::new(sq(), vec![[0, 1, 2]], vec![Edge::crease(0, 1, 1.0)]),
+            Err(MeshError::CreaseNotInterior { edge: 0, faces: 1 })
+        ));
+        // three triangles on edge 0-1 (non-manifold)
+        let c = vec![v(0., 0.), v(1., 0.), v(0.5, 1.), v(0.5, 2.), v(0.5, -1.)];
+        let err = Mesh::new(c, vec![[0, 1, 2], [0, 1, 3], [1, 0, 4]], vec![]).unwrap_err();
+        assert!(matches!(err, MeshError::NonManifold { .. }), "{err}");
+        assert!(err.to_string().contains("non-manifold"));
+    }
+}

@@ -1,0 +1,257 @@
+//! A scene: the crease pattern plus everything physical about it (material,
+//! crease stiffness, actuators, supports, loads, solver settings, outputs).
+//!
+//! This module holds the scene as plain data with documented SI defaults.
+//! The FOLD reader, validation, refinement and pattern generators live in
+//! submodules and produce a [`Scene`].
+
+use crate::mesh::Mesh;
+use serde::{Deserialize, Serialize};
+
+/// Sheet material, SI units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Material {
+    /// Young's modulus E in Pa.
+    pub youngs_modulus: f64,
+    /// Poisson's ratio nu, in (-1, 0.5).
+    pub poisson_ratio: f64,
+    /// Sheet thickness h in m.
+    pub thickness: f64,
+    /// Mass density rho in kg/m^3.
+    pub density: f64,
+}
+
+impl Default for Material {
+    /// Paper-like sheet: E = 3 GPa, nu = 0.3, h = 0.1 mm, rho = 800 kg/m^3.
+    fn default() -> Self {
+        Material { youngs_modulus: 3.0e9, poisson_ratio: 0.3, thickness: 1.0e-4, density: 800.0 }
+    }
+}
+
+impl Material {
+    /// Bending stiffness D = E h^3 / (12 (1 - nu^2)) in N m.
+    pub fn bending_stiffness(&self) -> f64 {
+        let Material { youngs_modulus: e, poisson_ratio: nu, thickness: h, .. } = *self;
+        e * h * h * h / (12.0 * (1.0 - nu * nu))
+    }
+}
+
+/// How stiff the creases are (MATH.md section 5).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum CreaseStiffness {
+    /// k_crease = (L_F / L*) D with the length scale L* in m.
+    LengthScale(f64),
+    /// Rotational stiffness per unit crease length in N m / (rad m) = N / rad.
+    PerLength(f64),
+}
+
+impl Default for CreaseStiffness {
+    /// L* = 10 mm.
+    fn default() -> Self {
+        CreaseStiffness::LengthScale(0.01)
+    }
+}
+
+impl CreaseStiffness {
+    /// Whole-crease rotational stiffness (N m / rad) of a crease of length `len`.
+    pub fn stiffness(&self, material: &Material, len: f64) -> f64 {
+        match *self {
+            CreaseStiffness::LengthScale(l) => len / l * material.bending_stiffness(),
+            CreaseStiffness::PerLength(k) => k * len,
+        }
+    }
+}
+
+/// How an actuator's input acts on its creases.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ActuatorMode {
+    /// Input u = fold fraction: each crease's rest angle is u times its target.
+    RestAngle,
+    /// Input = moment per unit crease length (N m / m), folding positive.
+    Torque,
+}
+
+/// A named group of creases driven by one input.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Actuator {
+    /// FMI variable name of the input.
+    pub name: String,
+    /// Mesh edge indices (creases) it drives.
+    pub edges: Vec<usize>,
+    /// Rest-angle or torque actuation.
+    pub mode: ActuatorMode,
+    /// Input value at t = 0.
+    pub start: f64,
+}
+
+/// What a support fixes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Fix {
+    /// The vertex position is fixed; the sheet may rotate about it.
+    Position,
+    /// Position and all surface gradients at the vertex are fixed.
+    Clamped,
+}
+
+/// A set of supported vertices.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Support {
+    /// Mesh vertex indices.
+    pub vertices: Vec<usize>,
+    /// What is fixed.
+    pub fix: Fix,
+}
+
+/// A named input attached to one vertex (a force vector, or a prescribed
+/// position). Creates the inputs `<name>.x`, `<name>.y`, `<name>.z`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VertexInput {
+    /// Variable name prefix.
+    pub name: String,
+    /// Mesh vertex index.
+    pub vertex: usize,
+}
+
+/// Time integrator choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Integrator {
+    /// Generalized-alpha (Chung & Hulbert 1993), implicit, second order.
+    GeneralizedAlpha,
+    /// Central differences with the constant mass matrix, explicit.
+    CentralDifference,
+}
+
+/// Solver settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolverSettings {
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Spectral radius at infinite frequency for generalized-alpha, in [0, 1].
+    pub rho_inf: f64,
+    /// Largest internal step in s.
+    pub max_step: f64,
+    /// Smallest internal step before the advance fails, in s.
+    pub min_step: f64,
+    /// Relative tolerance (Newton and local error control).
+    pub tolerance: f64,
+    /// Maximum Newton iterations per step.
+    pub max_newton: usize,
+    /// Default experiment stop time in s.
+    pub stop_time: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            integrator: Integrator::GeneralizedAlpha,
+            rho_inf: 0.8,
+            max_step: 1e-3,
+            min_step: 1e-9,
+            tolerance: 1e-6,
+            max_newton: 20,
+            stop_time: 1.0,
+        }
+    }
+}
+
+/// Damping.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Damping {
+    /// Rayleigh mass-proportional coefficient alpha (1/s).
+    pub alpha: f64,
+    /// Rayleigh stiffness-proportional coefficient beta (s).
+    pub beta: f64,
+    /// Crease damping per unit crease length, N m s / (rad m).
+    pub crease: f64,
+}
+
+impl Default for Damping {
+    fn default() -> Self {
+        Damping { alpha: 0.0, beta: 0.0, crease: 0.0 }
+    }
+}
+
+/// Which output groups the FMU exposes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Outputs {
+    /// `vertex[i].x/y/z`.
+    pub positions: bool,
+    /// `crease[e].angle`.
+    pub fold_angles: bool,
+    /// `energy.kinetic`, `energy.strain`, `energy.crease`.
+    pub energies: bool,
+}
+
+impl Default for Outputs {
+    fn default() -> Self {
+        Outputs { positions: true, fold_angles: true, energies: true }
+    }
+}
+
+/// Everything the model needs, validated.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Scene {
+    /// Scene name (model name of the FMU).
+    pub name: String,
+    /// The crease pattern.
+    pub mesh: Mesh,
+    /// Number of FOLD vertices: mesh vertices `0..n` are FOLD vertices `0..n`
+    /// (refinement appends new vertices after them).
+    pub fold_vertex_count: usize,
+    /// Number of FOLD edges (mesh edges carry `fold_edge` tags).
+    pub fold_edge_count: usize,
+    /// Sheet material.
+    pub material: Material,
+    /// Crease stiffness rule.
+    pub crease: CreaseStiffness,
+    /// Damping.
+    pub damping: Damping,
+    /// Actuators (one input each).
+    pub actuators: Vec<Actuator>,
+    /// Supports.
+    pub supports: Vec<Support>,
+    /// Gravity in m/s^2, `None` when absent.
+    pub gravity: Option<[f64; 3]>,
+    /// Vertex force inputs.
+    pub vertex_forces: Vec<VertexInput>,
+    /// Prescribed vertex position inputs.
+    pub vertex_motions: Vec<VertexInput>,
+    /// Solver settings.
+    pub solver: SolverSettings,
+    /// Output groups.
+    pub outputs: Outputs,
+}
+
+impl Scene {
+    /// A scene around `mesh` with every default of a plain FOLD file: paper
+    /// material, no supports, no gravity, one rest-angle actuator `fold`
+    /// over every crease.
+    pub fn with_defaults(name: &str, mesh: Mesh) -> Scene {
+        let creases: Vec<usize> = (0..mesh.edges.len())
+            .filter(|&e| mesh.edges[e].kind == crate::mesh::EdgeKind::Crease)
+            .collect();
+        let fold_vertex_count = mesh.n_vertices();
+        let fold_edge_count = mesh.edges.len();
+        Scene {
+            name: name.to_string(),
+            mesh,
+            fold_vertex_count,
+            fold_edge_count,
+            material: Material::default(),
+            crease: CreaseStiffness::default(),
+            damping: Damping::default(),
+            actuators: vec![Actuator {
+                name: "fold".into(),
+                edges: creases,
+                mode: ActuatorMode::RestAngle,
+                start: 0.0,
+            }],
+            supports: vec![],
+            gravity: None,
+            vertex_forces: vec![],
+            vertex_motions: vec![],
+            solver: SolverSettings::default(),
+            outputs: Outputs::default(),
+        }
+    }
+}
