@@ -11,6 +11,7 @@
 //! and the CLI drive).
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod mesh;
 pub mod model;
 pub mod scene;

@@ -43,15 +43,30 @@ pub struct Edge {
 impl Edge {
     /// A crease between `a` and `b` folding to `fold_target` radians.
     pub fn crease(a: usize, b: usize, fold_target: f64) -> Self {
-        Edge { v: [a, b], kind: EdgeKind::Crease, fold_target, fold_edge: None }
+        Edge {
+            v: [a, b],
+            kind: EdgeKind::Crease,
+            fold_target,
+            fold_edge: None,
+        }
     }
     /// A smooth edge between `a` and `b`.
     pub fn smooth(a: usize, b: usize) -> Self {
-        Edge { v: [a, b], kind: EdgeKind::Smooth, fold_target: 0.0, fold_edge: None }
+        Edge {
+            v: [a, b],
+            kind: EdgeKind::Smooth,
+            fold_target: 0.0,
+            fold_edge: None,
+        }
     }
     /// A boundary edge between `a` and `b`.
     pub fn boundary(a: usize, b: usize) -> Self {
-        Edge { v: [a, b], kind: EdgeKind::Boundary, fold_target: 0.0, fold_edge: None }
+        Edge {
+            v: [a, b],
+            kind: EdgeKind::Boundary,
+            fold_target: 0.0,
+            fold_edge: None,
+        }
     }
 }
 
@@ -76,7 +91,12 @@ pub struct Mesh {
 #[allow(missing_docs)] // variant fields are named for what they hold
 pub enum MeshError {
     /// A triangle or edge refers to a vertex that does not exist.
-    VertexOutOfRange { what: String, index: usize, vertex: usize, count: usize },
+    VertexOutOfRange {
+        what: String,
+        index: usize,
+        vertex: usize,
+        count: usize,
+    },
     /// A triangle names the same vertex twice.
     RepeatedVertex { triangle: usize },
     /// A triangle has (nearly) zero area.
@@ -84,7 +104,10 @@ pub enum MeshError {
     /// A triangle is clockwise in the reference plane.
     Inverted { triangle: usize },
     /// More than two triangles share an edge.
-    NonManifold { vertices: [usize; 2], faces: Vec<usize> },
+    NonManifold {
+        vertices: [usize; 2],
+        faces: Vec<usize>,
+    },
     /// A listed edge is not a side of any triangle.
     DanglingEdge { edge: usize },
     /// An edge is listed twice.
@@ -104,7 +127,12 @@ impl fmt::Display for MeshError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use MeshError::*;
         match self {
-            VertexOutOfRange { what, index, vertex, count } => write!(
+            VertexOutOfRange {
+                what,
+                index,
+                vertex,
+                count,
+            } => write!(
                 f,
                 "{what} {index} refers to vertex {vertex}, but there are only {count} vertices"
             ),
@@ -161,7 +189,10 @@ impl Mesh {
         let nv = coords.len();
         for (i, c) in coords.iter().enumerate() {
             if !(c.x.is_finite() && c.y.is_finite()) {
-                return Err(MeshError::NotFinite { what: "vertex".into(), index: i });
+                return Err(MeshError::NotFinite {
+                    what: "vertex".into(),
+                    index: i,
+                });
             }
         }
         let mut scale2 = 0.0;
@@ -185,7 +216,11 @@ impl Mesh {
                 nscale += 1;
             }
         }
-        let mean_len2 = if nscale > 0 { scale2 / nscale as f64 } else { 1.0 };
+        let mean_len2 = if nscale > 0 {
+            scale2 / nscale as f64
+        } else {
+            1.0
+        };
         for (t, tri) in triangles.iter().enumerate() {
             let a = coords[tri[1]] - coords[tri[0]];
             let b = coords[tri[2]] - coords[tri[0]];
@@ -214,7 +249,10 @@ impl Mesh {
                 }
             }
             if !edge.fold_target.is_finite() {
-                return Err(MeshError::NotFinite { what: "fold angle of edge".into(), index: e });
+                return Err(MeshError::NotFinite {
+                    what: "fold angle of edge".into(),
+                    index: e,
+                });
             }
             if let Some(&first) = index.get(&key(edge.v[0], edge.v[1])) {
                 return Err(MeshError::DuplicateEdge { first, second: e });
@@ -241,14 +279,20 @@ impl Mesh {
         }
         for (e, faces) in edge_faces.iter().enumerate() {
             if faces.len() > 2 {
-                return Err(MeshError::NonManifold { vertices: all[e].v, faces: faces.clone() });
+                return Err(MeshError::NonManifold {
+                    vertices: all[e].v,
+                    faces: faces.clone(),
+                });
             }
             if faces.is_empty() {
                 return Err(MeshError::DanglingEdge { edge: e });
             }
             match all[e].kind {
                 EdgeKind::Crease if faces.len() != 2 => {
-                    return Err(MeshError::CreaseNotInterior { edge: e, faces: faces.len() });
+                    return Err(MeshError::CreaseNotInterior {
+                        edge: e,
+                        faces: faces.len(),
+                    });
                 }
                 EdgeKind::Boundary if faces.len() == 2 => {
                     return Err(MeshError::BoundaryNotOnBoundary { edge: e });
@@ -277,7 +321,13 @@ impl Mesh {
                 }
             }
         }
-        let mesh = Mesh { coords, triangles, edges: all, edge_faces, face_edges };
+        let mesh = Mesh {
+            coords,
+            triangles,
+            edges: all,
+            edge_faces,
+            face_edges,
+        };
         for v in 0..nv {
             mesh.fan(v)?;
         }
@@ -330,7 +380,12 @@ impl Mesh {
             }
         }
         if incident.is_empty() {
-            return Ok(Fan { vertex: v, faces: vec![], edges: vec![], closed: false });
+            return Ok(Fan {
+                vertex: v,
+                faces: vec![],
+                edges: vec![],
+                closed: false,
+            });
         }
         // Find a start: a face whose in-edge is a boundary edge (open fan).
         let start = incident
@@ -350,7 +405,9 @@ impl Mesh {
                 edges.push(eout);
                 break;
             }
-            let next = incident.iter().position(|&(t2, ein, _)| ein == eout && t2 != t);
+            let next = incident
+                .iter()
+                .position(|&(t2, ein, _)| ein == eout && t2 != t);
             match next {
                 Some(n) if !used[n] => {
                     edges.push(eout);
@@ -363,7 +420,12 @@ impl Mesh {
         if faces.len() != incident.len() {
             return Err(MeshError::NonManifoldVertex { vertex: v });
         }
-        Ok(Fan { vertex: v, faces, edges, closed })
+        Ok(Fan {
+            vertex: v,
+            faces,
+            edges,
+            closed,
+        })
     }
 }
 
@@ -395,7 +457,11 @@ pub mod builders {
             Vector2::new(0.0, a),
         ];
         let tris = vec![[0, 1, 2], [0, 2, 3]];
-        let diag = if crease { Edge::crease(0, 2, fold_target) } else { Edge::smooth(0, 2) };
+        let diag = if crease {
+            Edge::crease(0, 2, fold_target)
+        } else {
+            Edge::smooth(0, 2)
+        };
         Mesh::new(coords, tris, vec![diag]).expect("valid square")
     }
 
@@ -413,7 +479,10 @@ pub mod builders {
         let mut coords = Vec::new();
         for j in 0..=ny {
             for i in 0..=nx {
-                coords.push(Vector2::new(lx * i as f64 / nx as f64, ly * j as f64 / ny as f64));
+                coords.push(Vector2::new(
+                    lx * i as f64 / nx as f64,
+                    ly * j as f64 / ny as f64,
+                ));
             }
         }
         let mut tris = Vec::new();
@@ -453,7 +522,13 @@ mod tests {
         let m = square_with_diagonal(1.0, true, 1.0);
         assert_eq!(m.edges.len(), 5);
         assert_eq!(m.edges[0].kind, EdgeKind::Crease);
-        assert_eq!(m.edges.iter().filter(|e| e.kind == EdgeKind::Boundary).count(), 4);
+        assert_eq!(
+            m.edges
+                .iter()
+                .filter(|e| e.kind == EdgeKind::Boundary)
+                .count(),
+            4
+        );
         let fan0 = m.fan(0).unwrap();
         assert!(!fan0.closed);
         assert_eq!(fan0.faces, vec![0, 1]);

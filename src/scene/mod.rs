@@ -24,14 +24,24 @@ pub struct Material {
 impl Default for Material {
     /// Paper-like sheet: E = 3 GPa, nu = 0.3, h = 0.1 mm, rho = 800 kg/m^3.
     fn default() -> Self {
-        Material { youngs_modulus: 3.0e9, poisson_ratio: 0.3, thickness: 1.0e-4, density: 800.0 }
+        Material {
+            youngs_modulus: 3.0e9,
+            poisson_ratio: 0.3,
+            thickness: 1.0e-4,
+            density: 800.0,
+        }
     }
 }
 
 impl Material {
     /// Bending stiffness D = E h^3 / (12 (1 - nu^2)) in N m.
     pub fn bending_stiffness(&self) -> f64 {
-        let Material { youngs_modulus: e, poisson_ratio: nu, thickness: h, .. } = *self;
+        let Material {
+            youngs_modulus: e,
+            poisson_ratio: nu,
+            thickness: h,
+            ..
+        } = *self;
         e * h * h * h / (12.0 * (1.0 - nu * nu))
     }
 }
@@ -167,7 +177,11 @@ pub struct Damping {
 
 impl Default for Damping {
     fn default() -> Self {
-        Damping { alpha: 0.0, beta: 0.0, crease: 0.0 }
+        Damping {
+            alpha: 0.0,
+            beta: 0.0,
+            crease: 0.0,
+        }
     }
 }
 
@@ -184,7 +198,11 @@ pub struct Outputs {
 
 impl Default for Outputs {
     fn default() -> Self {
-        Outputs { positions: true, fold_angles: true, energies: true }
+        Outputs {
+            positions: true,
+            fold_angles: true,
+            energies: true,
+        }
     }
 }
 

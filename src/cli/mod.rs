@@ -1,0 +1,29 @@
+//! Command-line interface. Each subcommand lives in its own file and
+//! returns `Result<(), String>`; errors print to stderr with a non-zero exit.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// origami-fmu: origami folding dynamics (iso-ANCF shells) as FMI 2.0 co-simulation FMUs.
+#[derive(Parser, Debug)]
+#[command(name = "origami-fmu", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {}
+
+/// Run the CLI with the process arguments.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result: Result<(), String> = match cli.command {};
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
