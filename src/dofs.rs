@@ -1,0 +1,498 @@
+//! Global degrees of freedom: the layout that lets creases kink while smooth
+//! edges stay smooth (MATH.md section 4).
+//!
+//! The unknowns are *vector slots* (3 scalars each). Every vertex has a
+//! position slot. Around a vertex, the incident facets split into *sectors*
+//! at crease and boundary edges; each sector s has a surface gradient
+//! `G_s` (3x2, with respect to the flat pattern coordinates), written as
+//! `G_s = sum_k q_k c_{s,k}^T` over a few slots `q_k` of the vertex:
+//!
+//! 1. interior vertex without creases: `G = [q_x q_y]` (two slots);
+//! 2. sector between two non-parallel creases a, b: `G [d_a d_b] = [t_a t_b]`,
+//!    so the crease tangent slots `t` are shared by the sectors on both
+//!    sides of a crease (the surface stays continuous along it);
+//! 3. sector between two anti-parallel creases (a straight crease through the
+//!    vertex) or between a crease and the boundary: the crease tangent plus
+//!    one extra in-sector slot along the perpendicular;
+//! 4. sector between two boundary edges (no crease): two free slots.
+//!
+//! A facet's gradient DOF at v towards w is `G_s (X_w - X_v)`, so each facet's
+//! 27 local DOFs are a constant linear map of the slots: [`LocalMap`].
+
+use crate::mesh::{EdgeKind, Mesh};
+use nalgebra::{Matrix2, Vector2};
+
+/// A linear combination of at most two slots: `sum coeff * q[slot]`.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Combo {
+    /// Number of terms used (1 or 2).
+    pub len: u8,
+    /// Slot indices.
+    pub slot: [u32; 2],
+    /// Coefficients.
+    pub coeff: [f64; 2],
+}
+
+impl Combo {
+    fn one(slot: usize, coeff: f64) -> Combo {
+        Combo {
+            len: 1,
+            slot: [slot as u32, 0],
+            coeff: [coeff, 0.0],
+        }
+    }
+    fn two(s0: usize, c0: f64, s1: usize, c1: f64) -> Combo {
+        Combo {
+            len: 2,
+            slot: [s0 as u32, s1 as u32],
+            coeff: [c0, c1],
+        }
+    }
+    /// The terms as (slot, coefficient) pairs.
+    pub fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        (0..self.len as usize).map(move |k| (self.slot[k] as usize, self.coeff[k]))
+    }
+    /// Evaluate on a slot vector `q` (3 scalars per slot).
+    pub fn eval(&self, q: &[f64]) -> nalgebra::Vector3<f64> {
+        let mut r = nalgebra::Vector3::zeros();
+        for (s, c) in self.terms() {
+            r += c * nalgebra::Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
+        }
+        r
+    }
+}
+
+/// How one facet's 9 local nodal vectors (MATH.md order
+/// `[r1, r1_eta, r1_zeta, r2, r2_zeta, r2_xi, r3, r3_xi, r3_eta]`) follow
+/// from the slots.
+pub type LocalMap = [Combo; 9];
+
+/// What a slot stands for (for scaling and for supports).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SlotKind {
+    /// Position of a vertex (m).
+    Position,
+    /// A surface gradient vector (dimensionless).
+    Gradient,
+}
+
+/// A sector of the fan around a vertex: its facets and gradient.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sector {
+    /// Facets in the sector.
+    pub faces: Vec<usize>,
+    /// Coefficients: `G = sum_k q[slot_k] c_k^T`.
+    pub terms: Vec<(usize, Vector2<f64>)>,
+}
+
+/// The slot layout of a whole mesh.
+#[derive(Clone, Debug)]
+pub struct DofLayout {
+    /// Vertex that owns each slot.
+    pub slot_vertex: Vec<usize>,
+    /// Kind of each slot.
+    pub slot_kind: Vec<SlotKind>,
+    /// Position slot of each vertex.
+    pub position_slot: Vec<usize>,
+    /// Sectors around each vertex.
+    pub sectors: Vec<Vec<Sector>>,
+    /// For each facet, its local map.
+    pub local: Vec<LocalMap>,
+}
+
+/// Two unit directions closer than this (1 - |cos|) count as parallel.
+const PARALLEL_TOL: f64 = 1e-9;
+
+impl DofLayout {
+    /// Build the layout of a validated mesh.
+    pub fn new(mesh: &Mesh) -> DofLayout {
+        let nv = mesh.n_vertices();
+        let mut slot_vertex = Vec::new();
+        let mut slot_kind = Vec::new();
+        let mut new_slot = |v: usize, kind: SlotKind| {
+            slot_vertex.push(v);
+            slot_kind.push(kind);
+            slot_vertex.len() - 1
+        };
+        let mut position_slot = vec![0; nv];
+        let mut sectors = vec![Vec::new(); nv];
+        for v in 0..nv {
+            position_slot[v] = new_slot(v, SlotKind::Position);
+            let fan = mesh.fan(v).expect("mesh validated its fans");
+            if fan.faces.is_empty() {
+                continue;
+            }
+            let dir = |e: usize| {
+                let [a, b] = mesh.edges[e].v;
+                let w = if a == v { b } else { a };
+                (mesh.coords[w] - mesh.coords[v]).normalize()
+            };
+            let is_crease = |e: usize| mesh.edges[e].kind == EdgeKind::Crease;
+            // Split the fan into sectors at creases: list of (first edge, faces, last edge).
+            let nf = fan.faces.len();
+            let crease_pos: Vec<usize> = (0..fan.edges.len())
+                .filter(|&i| is_crease(fan.edges[i]))
+                .collect();
+            let mut raw: Vec<(Option<usize>, Vec<usize>, Option<usize>)> = Vec::new();
+            if fan.closed {
+                if crease_pos.is_empty() {
+                    raw.push((None, fan.faces.clone(), None));
+                } else {
+                    let nc = crease_pos.len();
+                    for k in 0..nc {
+                        let start = crease_pos[k];
+                        let end = crease_pos[(k + 1) % nc];
+                        let mut faces = Vec::new();
+                        let mut i = start;
+                        loop {
+                            faces.push(fan.faces[i]);
+                            i = (i + 1) % nf;
+                            if i == end {
+                                break;
+                            }
+                        }
+                        raw.push((Some(fan.edges[start]), faces, Some(fan.edges[end])));
+                    }
+                }
+            } else {
+                // Open fan: edges[0] and edges[nf] are boundary edges.
+                let mut cuts = vec![0usize];
+                cuts.extend(crease_pos.iter().copied().filter(|&i| i > 0 && i < nf));
+                cuts.push(nf);
+                for w in cuts.windows(2) {
+                    let (s, e) = (w[0], w[1]);
+                    let first = if s == 0 { None } else { Some(fan.edges[s]) };
+                    let last = if e == nf { None } else { Some(fan.edges[e]) };
+                    raw.push((first, fan.faces[s..e].to_vec(), last));
+                }
+            }
+            // Crease tangent slots, shared (with sign) across anti-parallel
+            // creases that bound one sector.
+            let mut tangent: Vec<(usize, usize, f64)> = Vec::new(); // (edge, slot, sign)
+            let find = |tangent: &Vec<(usize, usize, f64)>, e: usize| {
+                tangent.iter().find(|t| t.0 == e).map(|t| (t.1, t.2))
+            };
+            for (first, _, last) in &raw {
+                if let (Some(a), Some(b)) = (*first, *last)
+                    && a != b
+                    && 1.0 + dir(a).dot(&dir(b)) < PARALLEL_TOL
+                {
+                    match (find(&tangent, a), find(&tangent, b)) {
+                        (Some((s, sg)), None) => tangent.push((b, s, -sg)),
+                        (None, Some((s, sg))) => tangent.push((a, s, -sg)),
+                        (None, None) => {
+                            let s = new_slot(v, SlotKind::Gradient);
+                            tangent.push((a, s, 1.0));
+                            tangent.push((b, s, -1.0));
+                        }
+                        (Some(_), Some(_)) => {}
+                    }
+                }
+            }
+            for &i in &crease_pos {
+                let e = fan.edges[i];
+                if find(&tangent, e).is_none() {
+                    let s = new_slot(v, SlotKind::Gradient);
+                    tangent.push((e, s, 1.0));
+                }
+            }
+            for (first, faces, last) in raw {
+                let perp = |d: Vector2<f64>| Vector2::new(-d.y, d.x);
+                // Columns: G [d0 d1] = [u0 u1] with u_k = sign * q[slot].
+                let (d0, u0, d1, u1) = match (first, last) {
+                    (None, None) => {
+                        let sx = new_slot(v, SlotKind::Gradient);
+                        let sy = new_slot(v, SlotKind::Gradient);
+                        (Vector2::x(), (sx, 1.0), Vector2::y(), (sy, 1.0))
+                    }
+                    (Some(a), Some(b))
+                        if a != b && (1.0 - dir(a).dot(&dir(b)).abs()) >= PARALLEL_TOL =>
+                    {
+                        (
+                            dir(a),
+                            find(&tangent, a).unwrap(),
+                            dir(b),
+                            find(&tangent, b).unwrap(),
+                        )
+                    }
+                    (Some(a), _) | (None, Some(a)) => {
+                        let extra = new_slot(v, SlotKind::Gradient);
+                        (
+                            dir(a),
+                            find(&tangent, a).unwrap(),
+                            perp(dir(a)),
+                            (extra, 1.0),
+                        )
+                    }
+                };
+                let dinv = Matrix2::from_columns(&[d0, d1])
+                    .try_inverse()
+                    .expect("sector directions span the plane");
+                // G = [u0 u1] D^-1 = u0 row0(D^-1) + u1 row1(D^-1)
+                let terms = vec![
+                    (u0.0, u0.1 * dinv.row(0).transpose()),
+                    (u1.0, u1.1 * dinv.row(1).transpose()),
+                ];
+                sectors[v].push(Sector { faces, terms });
+            }
+        }
+
+        let sector_of = |v: usize, f: usize| {
+            sectors[v]
+                .iter()
+                .find(|s| s.faces.contains(&f))
+                .expect("every face is in a sector")
+        };
+        let grad = |v: usize, w: usize, f: usize| {
+            let s = sector_of(v, f);
+            let x = mesh.coords[w] - mesh.coords[v];
+            let (s0, c0) = s.terms[0];
+            let (s1, c1) = s.terms[1];
+            Combo::two(s0, c0.dot(&x), s1, c1.dot(&x))
+        };
+        let local = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(f, &[a, b, c])| {
+                [
+                    Combo::one(position_slot[a], 1.0),
+                    grad(a, b, f),
+                    grad(a, c, f),
+                    Combo::one(position_slot[b], 1.0),
+                    grad(b, c, f),
+                    grad(b, a, f),
+                    Combo::one(position_slot[c], 1.0),
+                    grad(c, a, f),
+                    grad(c, b, f),
+                ]
+            })
+            .collect();
+        DofLayout {
+            slot_vertex,
+            slot_kind,
+            position_slot,
+            sectors,
+            local,
+        }
+    }
+
+    /// Number of vector slots.
+    pub fn n_slots(&self) -> usize {
+        self.slot_vertex.len()
+    }
+
+    /// Number of scalar DOFs (3 per slot).
+    pub fn n_dofs(&self) -> usize {
+        3 * self.n_slots()
+    }
+
+    /// The gradient of `face` at vertex `v` applied to the reference vector
+    /// `x` (a combination of slots).
+    pub fn gradient_along(&self, v: usize, face: usize, x: Vector2<f64>) -> Combo {
+        let s = self.sectors[v]
+            .iter()
+            .find(|s| s.faces.contains(&face))
+            .expect("face at vertex");
+        let (s0, c0) = s.terms[0];
+        let (s1, c1) = s.terms[1];
+        Combo::two(s0, c0.dot(&x), s1, c1.dot(&x))
+    }
+
+    /// Slots owned by vertex `v` (its position first).
+    pub fn vertex_slots(&self, v: usize) -> Vec<usize> {
+        (0..self.n_slots())
+            .filter(|&s| self.slot_vertex[s] == v)
+            .collect()
+    }
+
+    /// The flat reference configuration: positions `(X, Y, 0)` and every
+    /// sector gradient the identity, i.e. each slot set so that
+    /// `G_s = [e_x e_y]`.
+    pub fn reference_state(&self, mesh: &Mesh) -> Vec<f64> {
+        let mut q = vec![0.0; self.n_dofs()];
+        for (v, x) in mesh.coords.iter().enumerate() {
+            let s = self.position_slot[v];
+            q[3 * s] = x.x;
+            q[3 * s + 1] = x.y;
+        }
+        // Each gradient slot is G applied to some reference direction; with
+        // G = [e_x e_y] that is the direction itself. Recover it from any
+        // sector using the slot: G = sum q_k c_k^T must equal I (2 rows used).
+        for v in 0..self.sectors.len() {
+            for sec in &self.sectors[v] {
+                // Solve [q0 q1] [c0 c1]^T = I2 (in the xy block) for q0, q1.
+                let (s0, c0) = sec.terms[0];
+                let (s1, c1) = sec.terms[1];
+                let cm = Matrix2::from_rows(&[c0.transpose(), c1.transpose()]);
+                let qm = cm.try_inverse().expect("sector map invertible");
+                // [q0 q1] = C^-1 with columns q0, q1 (xy components)
+                for (k, s) in [s0, s1].into_iter().enumerate() {
+                    q[3 * s] = qm[(0, k)];
+                    q[3 * s + 1] = qm[(1, k)];
+                    q[3 * s + 2] = 0.0;
+                }
+            }
+        }
+        q
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::builders::{grid, square_with_diagonal};
+    use crate::mesh::{Edge, Mesh};
+
+    #[test]
+    fn counts_from_math_md() {
+        assert_eq!(
+            DofLayout::new(&square_with_diagonal(1.0, true, 1.0)).n_dofs(),
+            42
+        );
+        assert_eq!(
+            DofLayout::new(&square_with_diagonal(1.0, false, 0.0)).n_dofs(),
+            36
+        );
+    }
+
+    /// A vertex with 4 creases (generic directions, like a Miura vertex where
+    /// no sector spans 180 degrees): 15 DOF.
+    #[test]
+    fn interior_vertex_with_four_creases_has_15() {
+        let c = |x: f64, y: f64| Vector2::new(x, y);
+        // centre 0, ring 1..6; creases to 1, 3, 4, 6 (1 and 4 collinear).
+        let coords = vec![
+            c(0.0, 0.0),
+            c(1.0, 0.0),
+            c(0.6, 1.0),
+            c(-0.5, 0.9),
+            c(-1.0, 0.0),
+            c(-0.4, -1.0),
+            c(0.5, -0.9),
+        ];
+        let tris: Vec<[usize; 3]> = (1..=6).map(|i| [0, i, i % 6 + 1]).collect();
+        let edges = vec![
+            Edge::crease(0, 1, 1.0),
+            Edge::crease(0, 3, -1.0),
+            Edge::crease(0, 4, 1.0),
+            Edge::crease(0, 6, -1.0),
+        ];
+        let mesh = Mesh::new(coords, tris, edges).unwrap();
+        let layout = DofLayout::new(&mesh);
+        assert_eq!(layout.vertex_slots(0).len() * 3, 15);
+    }
+
+    /// A straight crease line through a vertex with no other crease: the
+    /// tangent is shared, each side gets one extra vector: 12 DOF.
+    #[test]
+    fn straight_crease_through_vertex_shares_tangent() {
+        let m = grid(2.0, 2.0, 2, 2, &[(1, 0.5)]);
+        let layout = DofLayout::new(&m);
+        let centre = 4;
+        assert_eq!(layout.vertex_slots(centre).len(), 4);
+        // The reference state is consistent: every facet gradient is the edge vector.
+        let q = layout.reference_state(&m);
+        check_reference(&m, &layout, &q);
+    }
+
+    fn check_reference(m: &Mesh, layout: &DofLayout, q: &[f64]) {
+        for (f, &[a, b, c]) in m.triangles.iter().enumerate() {
+            let x = |v: usize| nalgebra::Vector3::new(m.coords[v].x, m.coords[v].y, 0.0);
+            let expect = [
+                x(a),
+                x(b) - x(a),
+                x(c) - x(a),
+                x(b),
+                x(c) - x(b),
+                x(a) - x(b),
+                x(c),
+                x(a) - x(c),
+                x(b) - x(c),
+            ];
+            for k in 0..9 {
+                let got = layout.local[f][k].eval(q);
+                assert!(
+                    (got - expect[k]).norm() < 1e-12,
+                    "face {f} vector {k}: {got} vs {}",
+                    expect[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn reference_state_reproduces_every_facet() {
+        for mesh in [
+            square_with_diagonal(1.0, true, 1.0),
+            square_with_diagonal(0.3, false, 0.0),
+            grid(3.0, 1.0, 3, 2, &[(1, 1.0), (2, -1.0)]),
+        ] {
+            let layout = DofLayout::new(&mesh);
+            let q = layout.reference_state(&mesh);
+            check_reference(&mesh, &layout, &q);
+        }
+    }
+
+    /// A rigid fold of the creased square is represented exactly: rotate
+    /// facet 1 about the diagonal and find slots reproducing both facets.
+    #[test]
+    fn rigid_fold_is_representable_only_across_a_crease() {
+        use nalgebra::{Rotation3, Unit, Vector3};
+        for crease in [true, false] {
+            let mesh = square_with_diagonal(1.0, crease, 1.0);
+            let layout = DofLayout::new(&mesh);
+            let axis = Unit::new_normalize(Vector3::new(1.0, 1.0, 0.0));
+            let rot = Rotation3::from_axis_angle(&axis, 0.7);
+            let x3 = |v: usize| Vector3::new(mesh.coords[v].x, mesh.coords[v].y, 0.0);
+            // facet 0 = (0,1,2) stays, facet 1 = (0,2,3) rotates about the 0-2 line
+            let pos = |f: usize, v: usize| if f == 1 { rot * x3(v) } else { x3(v) };
+            // Least squares: find q with local[f][k](q) = target for all f, k.
+            let n = layout.n_dofs();
+            let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+            for (f, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+                let t = [
+                    pos(f, a),
+                    pos(f, b) - pos(f, a),
+                    pos(f, c) - pos(f, a),
+                    pos(f, b),
+                    pos(f, c) - pos(f, b),
+                    pos(f, a) - pos(f, b),
+                    pos(f, c),
+                    pos(f, a) - pos(f, c),
+                    pos(f, b) - pos(f, c),
+                ];
+                for k in 0..9 {
+                    for comp in 0..3 {
+                        let r: Vec<(usize, f64)> = layout.local[f][k]
+                            .terms()
+                            .map(|(s, cf)| (3 * s + comp, cf))
+                            .collect();
+                        rows.push((r, t[k][comp]));
+                    }
+                }
+            }
+            let mut a = nalgebra::DMatrix::zeros(rows.len(), n);
+            let mut rhs = nalgebra::DVector::zeros(rows.len());
+            for (i, (r, t)) in rows.iter().enumerate() {
+                for &(j, cf) in r {
+                    a[(i, j)] += cf;
+                }
+                rhs[i] = *t;
+            }
+            let sol = a.clone().svd(true, true).solve(&rhs, 1e-12).unwrap();
+            let resid = (a * sol - rhs).norm();
+            if crease {
+                assert!(
+                    resid < 1e-10,
+                    "creased square must fold rigidly, residual {resid}"
+                );
+            } else {
+                assert!(
+                    resid > 1e-3,
+                    "smooth square must not fold, residual {resid}"
+                );
+            }
+        }
+    }
+}
