@@ -16,3 +16,4 @@ pub mod dofs;
 pub mod mesh;
 pub mod model;
 pub mod scene;
+pub mod solver;
