@@ -11,6 +11,7 @@
 //! and the CLI drive).
 #![warn(missing_docs)]
 
+pub mod assembly;
 pub mod cli;
 pub mod dofs;
 pub mod mesh;

@@ -89,7 +89,11 @@ pub struct StepReport {
     pub min_step: f64,
 }
 
-use crate::scene::{ActuatorMode, Scene};
+use crate::assembly::{Assembler, Evaluation, Physics, State};
+use crate::element::Rule;
+use crate::scene::{ActuatorMode, CreaseStiffness, Fix, Scene};
+use crate::solver::SparseSolver;
+use crate::solver::generalized_alpha::{self as ga, Dynamics};
 
 /// Life-cycle phase of a [`Model`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -105,22 +109,48 @@ pub enum Phase {
 pub struct ModelState {
     /// Simulation time.
     pub time: f64,
-    /// Generalized coordinates.
-    pub q: Vec<f64>,
-    /// Generalized velocities.
-    pub v: Vec<f64>,
-    /// Generalized accelerations (and integrator memory).
-    pub a: Vec<f64>,
-    /// Unwrapped crease angles at the last step (continuity through 0 = 2 pi).
+    /// Positions, velocities, accelerations (all DOFs; empty before initialization).
+    pub dynamics: Dynamics,
+    /// Unwrapped angle of every crease end at `time` (continuity through 0 = 2 pi).
     pub crease_theta: Vec<f64>,
     /// Input values in force at `time`.
     pub inputs_now: Vec<f64>,
-    /// Input values set for the next step.
+    /// Input values set for the end of the next step.
     pub inputs_next: Vec<f64>,
     /// Parameter values.
     pub parameters: Vec<f64>,
     /// Phase.
     pub phase: Phase,
+    /// Internal step size the controller proposes next.
+    pub h_next: f64,
+    /// Output values at `time`.
+    pub outputs: Vec<f64>,
+}
+
+/// Everything built at initialization from the scene and parameters.
+struct System {
+    asm: Assembler,
+    solver: SparseSolver,
+    coeffs: ga::Coefficients,
+    settings: ga::Settings,
+    scales: Vec<f64>,
+    /// For each crease end: (actuator index, fold target) of rest-angle actuators.
+    rest: Vec<Vec<(usize, f64)>>,
+    /// For each crease end: torque actuators acting on it.
+    torque: Vec<Vec<usize>>,
+    /// Constant external force (gravity), all DOFs; None without gravity.
+    gravity: Option<Vec<f64>>,
+    /// Slots fixed by supports (value = reference value), scalar indices.
+    supported: Vec<(usize, f64)>,
+    /// Scalar indices of each motion input component (input index, scalar).
+    motion: Vec<(usize, usize)>,
+    /// Scalar index of each force input component (input index, scalar).
+    force: Vec<(usize, usize)>,
+    /// For each `crease[e]` output: the crease ends averaged.
+    angle_ends: Vec<Vec<usize>>,
+    ws: ga::Workspace,
+    max_step: f64,
+    min_step: f64,
 }
 
 /// One origami scene with its state and stepper.
@@ -130,6 +160,7 @@ pub struct Model {
     inputs: Vec<VariableSpec>,
     outputs: Vec<VariableSpec>,
     state: ModelState,
+    sys: Option<System>,
 }
 
 impl Model {
@@ -138,30 +169,21 @@ impl Model {
         let parameters = parameter_table(&scene);
         let inputs = input_table(&scene);
         let outputs = output_table(&scene);
-        let n = 3 * scene.mesh.n_vertices();
-        let mut q = vec![0.0; n];
-        for (i, x) in scene.mesh.coords.iter().enumerate() {
-            q[3 * i] = x.x;
-            q[3 * i + 1] = x.y;
-        }
         let state = ModelState {
             time: 0.0,
-            q,
-            v: vec![0.0; n],
-            a: vec![0.0; n],
+            dynamics: Dynamics { q: vec![], v: vec![], qdd: vec![], abar: vec![] },
             crease_theta: vec![],
             inputs_now: inputs.iter().map(|v| v.start).collect(),
             inputs_next: inputs.iter().map(|v| v.start).collect(),
             parameters: parameters.iter().map(|v| v.start).collect(),
             phase: Phase::Setup,
+            h_next: scene.solver.max_step,
+            outputs: outputs.iter().map(|v| v.start).collect(),
         };
-        Ok(Model {
-            scene,
-            parameters,
-            inputs,
-            outputs,
-            state,
-        })
+        // Build once now so that a bad scene fails at instantiation.
+        let mut m = Model { scene, parameters, inputs, outputs, state, sys: None };
+        m.build()?;
+        Ok(m)
     }
 
     /// The scene the model was built from (with parameters as last set).
@@ -188,6 +210,10 @@ impl Model {
     pub fn phase(&self) -> Phase {
         self.state.phase
     }
+    /// Number of scalar degrees of freedom (free and fixed).
+    pub fn n_dofs(&self) -> usize {
+        self.sys.as_ref().map(|s| s.asm.n_dofs()).unwrap_or(0)
+    }
 
     /// Value of parameter `i`.
     pub fn parameter(&self, i: usize) -> Result<f64, Error> {
@@ -195,31 +221,47 @@ impl Model {
             .parameters
             .get(i)
             .copied()
-            .ok_or(Error::NoSuchVariable {
-                kind: "parameter",
-                index: i,
-            })
+            .ok_or(Error::NoSuchVariable { kind: "parameter", index: i })
     }
 
     /// Set parameter `i`; only before [`Model::initialize`]. A non-finite or
     /// out-of-range value is rejected and nothing changes.
     pub fn set_parameter(&mut self, i: usize, value: f64) -> Result<(), Error> {
-        let spec = self.parameters.get(i).ok_or(Error::NoSuchVariable {
-            kind: "parameter",
-            index: i,
-        })?;
+        let spec =
+            self.parameters.get(i).ok_or(Error::NoSuchVariable { kind: "parameter", index: i })?;
         if self.state.phase != Phase::Setup {
             return Err(Error::Phase(format!(
                 "parameter {} can only be set before initialization",
                 spec.name
             )));
         }
+        let bad = |reason: &str| Error::BadValue {
+            name: spec.name.clone(),
+            value,
+            reason: reason.into(),
+        };
         if !value.is_finite() {
-            return Err(Error::BadValue {
-                name: spec.name.clone(),
-                value,
-                reason: "not a finite number".into(),
-            });
+            return Err(bad("not a finite number"));
+        }
+        match spec.name.as_str() {
+            "material.youngs_modulus" | "material.thickness" | "material.density"
+            | "crease.length_scale" | "solver.max_step" | "solver.tolerance"
+                if value <= 0.0 =>
+            {
+                return Err(bad("must be positive"));
+            }
+            "material.poisson_ratio" if !(value > -1.0 && value < 0.5) => {
+                return Err(bad("must be in (-1, 0.5)"));
+            }
+            "solver.rho_inf" if !(0.0..=1.0).contains(&value) => {
+                return Err(bad("must be in [0, 1]"));
+            }
+            "crease.stiffness_per_length" | "damping.alpha" | "damping.beta" | "damping.crease"
+                if value < 0.0 =>
+            {
+                return Err(bad("must not be negative"));
+            }
+            _ => {}
         }
         self.state.parameters[i] = value;
         Ok(())
@@ -231,19 +273,13 @@ impl Model {
             .inputs_next
             .get(i)
             .copied()
-            .ok_or(Error::NoSuchVariable {
-                kind: "input",
-                index: i,
-            })
+            .ok_or(Error::NoSuchVariable { kind: "input", index: i })
     }
 
     /// Set input `i`: the value reached at the end of the next step (ramped
     /// from the value in force now). Non-finite values are rejected.
     pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
-        let spec = self.inputs.get(i).ok_or(Error::NoSuchVariable {
-            kind: "input",
-            index: i,
-        })?;
+        let spec = self.inputs.get(i).ok_or(Error::NoSuchVariable { kind: "input", index: i })?;
         if !value.is_finite() {
             return Err(Error::BadValue {
                 name: spec.name.clone(),
@@ -258,18 +294,61 @@ impl Model {
         Ok(())
     }
 
-    /// End of setup: apply parameters and compute the initial state.
+    /// End of setup: apply parameters, build the system and compute the
+    /// initial accelerations.
     pub fn initialize(&mut self) -> Result<(), Error> {
         if self.state.phase != Phase::Setup {
             return Err(Error::Phase("model is already initialized".into()));
         }
+        self.apply_parameters();
+        self.build()?;
+        let sys = self.sys.as_mut().expect("built");
+        let n = sys.asm.n_dofs();
+        let mut q = sys.asm.layout.reference_state(&self.scene.mesh);
+        let u = self.state.inputs_now.clone();
+        let d = drive(sys, &u);
+        for &(i, x) in &d.prescribed {
+            q[i] = x;
+        }
+        let v = vec![0.0; n];
+        let theta_prev = vec![std::f64::consts::PI; sys.asm.creases.len()];
+        let mut ev = Evaluation::default();
+        sys.asm
+            .evaluate(
+                &State { q: &q, v: &v, theta0: &d.theta0, moment: &d.moment, theta_prev: &theta_prev },
+                &mut ev,
+                None,
+            )
+            .map_err(Error::Scene)?;
+        // M qdd = f_ext - f_int on the free DOFs.
+        let mut rhs = vec![0.0; sys.asm.n_free];
+        for i in 0..n {
+            let fi = sys.asm.free[i];
+            if fi != crate::assembly::FIXED {
+                rhs[fi] = d.f_ext[i] - ev.force[i];
+            }
+        }
+        let mvals = sys.asm.mass_values().to_vec();
+        sys.solver.factor(&mvals).map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+        sys.solver.solve_in_place(&mut rhs).map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+        let mut qdd = vec![0.0; n];
+        for i in 0..n {
+            let fi = sys.asm.free[i];
+            if fi != crate::assembly::FIXED {
+                qdd[i] = rhs[fi];
+            }
+        }
+        self.state.dynamics = Dynamics { q, v, abar: qdd.clone(), qdd };
+        self.state.crease_theta = ev.theta.clone();
+        self.state.h_next = sys.max_step;
         self.state.phase = Phase::Running;
+        self.state.outputs = self.compute_outputs(&ev);
         Ok(())
     }
 
-    /// Advance from the current time by `h` seconds with internal steps. On
-    /// failure the state is exactly as before the call.
-    // PLACEHOLDER until the stepper lands: keeps the sheet where it is.
+    /// Advance from the current time by `h` seconds with internal steps,
+    /// ramping the inputs from their values in force to the values last
+    /// set. On failure the state is exactly as before the call.
     pub fn advance(&mut self, h: f64) -> Result<StepReport, Error> {
         if self.state.phase != Phase::Running {
             return Err(Error::Phase("advance before initialize".into()));
@@ -281,27 +360,146 @@ impl Model {
                 reason: "must be a positive finite number".into(),
             });
         }
-        self.state.time += h;
-        self.state.inputs_now.clone_from(&self.state.inputs_next);
-        Ok(StepReport {
-            steps: 1,
-            min_step: h,
-            ..Default::default()
-        })
+        let saved = self.state.clone();
+        match self.advance_inner(h) {
+            Ok(r) => Ok(r),
+            Err(e) => {
+                self.state = saved;
+                Err(e)
+            }
+        }
+    }
+
+    fn advance_inner(&mut self, big_h: f64) -> Result<StepReport, Error> {
+        let t0 = self.state.time;
+        let sys = self.sys.as_mut().expect("initialized");
+        let mut report = StepReport { min_step: f64::INFINITY, ..Default::default() };
+        let mut s = 0.0; // elapsed within the advance
+        let mut h = self.state.h_next.min(sys.max_step);
+        let u0 = self.state.inputs_now.clone();
+        let u1 = self.state.inputs_next.clone();
+        let mut u = u0.clone();
+        while s < big_h {
+            let remaining = big_h - s;
+            if h >= remaining || remaining - h < 1e-3 * h {
+                h = remaining;
+            }
+            let frac = (s + h) / big_h;
+            for k in 0..u.len() {
+                u[k] = u0[k] + (u1[k] - u0[k]) * frac;
+            }
+            let d = drive(sys, &u);
+            let gd = ga::Drive {
+                theta0: &d.theta0,
+                moment: &d.moment,
+                f_ext: &d.f_ext,
+                prescribed: &d.prescribed,
+                theta_prev: &self.state.crease_theta,
+            };
+            let res = ga::step(
+                &sys.asm,
+                &mut sys.solver,
+                sys.coeffs,
+                &self.state.dynamics,
+                h,
+                &gd,
+                &sys.scales,
+                sys.settings,
+                &mut sys.ws,
+            );
+            match res {
+                Ok((next, out)) => {
+                    report.newton_iterations += out.iterations;
+                    report.factorizations += out.factorizations;
+                    let at_min = h <= sys.min_step * 1.000001;
+                    if out.error <= 1.0 || at_min {
+                        self.state.dynamics = next;
+                        self.state.crease_theta.clone_from(&sys.ws.evaluation().theta);
+                        s += h;
+                        report.steps += 1;
+                        report.min_step = report.min_step.min(h);
+                        let grow = if out.error > 0.0 { 0.9 * out.error.powf(-1.0 / 3.0) } else { 2.0 };
+                        let hn = (h * grow.clamp(0.2, 2.0)).min(sys.max_step);
+                        if h < remaining || s >= big_h {
+                            // do not let a short final step shrink the next advance's step
+                            self.state.h_next = if h < remaining { hn } else { hn.max(self.state.h_next) };
+                        }
+                        h = hn;
+                    } else {
+                        report.rejected += 1;
+                        h = (h * (0.9 * out.error.powf(-1.0 / 3.0)).clamp(0.2, 0.9)).max(sys.min_step);
+                    }
+                }
+                Err(reason) => {
+                    report.rejected += 1;
+                    h *= 0.25;
+                    if h < sys.min_step {
+                        return Err(Error::StepFailed { time: t0 + s, reason });
+                    }
+                }
+            }
+        }
+        let ev = sys.ws.evaluation().clone();
+        self.state.time = t0 + big_h;
+        self.state.inputs_now = u1;
+        self.state.outputs = self.compute_outputs(&ev);
+        if self.state.outputs.iter().any(|x| !x.is_finite()) {
+            return Err(Error::StepFailed { time: t0, reason: "outputs are not finite".into() });
+        }
+        Ok(report)
     }
 
     /// Current values of all outputs, in the order of [`Model::outputs`].
     pub fn output_values(&self) -> Vec<f64> {
+        self.state.outputs.clone()
+    }
+
+    /// Kinetic, strain and crease energy now (J).
+    pub fn energies(&self) -> [f64; 3] {
+        let o = &self.state.outputs;
+        if self.scene.outputs.energies {
+            [o[o.len() - 3], o[o.len() - 2], o[o.len() - 1]]
+        } else {
+            [f64::NAN; 3]
+        }
+    }
+
+    /// Current position of mesh vertex `v`.
+    pub fn vertex_position(&self, v: usize) -> [f64; 3] {
+        match &self.sys {
+            Some(sys) if self.state.phase == Phase::Running => {
+                let s = sys.asm.position_slot(v);
+                let q = &self.state.dynamics.q;
+                [q[3 * s], q[3 * s + 1], q[3 * s + 2]]
+            }
+            _ => {
+                let x = self.scene.mesh.coords[v];
+                [x.x, x.y, 0.0]
+            }
+        }
+    }
+
+    fn compute_outputs(&self, ev: &Evaluation) -> Vec<f64> {
+        let sys = self.sys.as_ref().expect("built");
         let mut out = Vec::with_capacity(self.outputs.len());
         let o = self.scene.outputs;
         if o.positions {
-            out.extend_from_slice(&self.state.q[..3 * self.scene.fold_vertex_count]);
+            for v in 0..self.scene.fold_vertex_count {
+                out.extend(self.vertex_position(v));
+            }
         }
         if o.fold_angles {
-            out.extend(fold_edges(&self.scene).iter().map(|_| 0.0));
+            for ends in &sys.angle_ends {
+                let sum: f64 = ends.iter().map(|&i| ev.theta[i] - std::f64::consts::PI).sum();
+                out.push(sum / ends.len().max(1) as f64);
+            }
         }
         if o.energies {
-            out.extend([0.0, 0.0, 0.0]);
+            let v = &self.state.dynamics.v;
+            let mut mv = vec![0.0; v.len()];
+            sys.asm.mass_mul(v, &mut mv);
+            let ke = 0.5 * v.iter().zip(&mv).map(|(a, b)| a * b).sum::<f64>();
+            out.extend([ke, ev.strain_energy, ev.crease_energy]);
         }
         out
     }
@@ -313,16 +511,219 @@ impl Model {
 
     /// Restore a state saved from a model of the same scene.
     pub fn restore_state(&mut self, s: &ModelState) -> Result<(), Error> {
-        let ok = s.q.len() == self.state.q.len()
-            && s.v.len() == self.state.v.len()
+        let ok = s.dynamics.q.len() == self.state.dynamics.q.len()
             && s.inputs_next.len() == self.inputs.len()
-            && s.parameters.len() == self.parameters.len();
-        if !ok {
-            return Err(Error::State("its sizes do not match this model".into()));
+            && s.parameters.len() == self.parameters.len()
+            && s.outputs.len() == self.outputs.len();
+        if !ok || s.phase != self.state.phase {
+            return Err(Error::State("its sizes or phase do not match this model".into()));
         }
         self.state = s.clone();
         Ok(())
     }
+
+    fn apply_parameters(&mut self) {
+        let sc = &mut self.scene;
+        for (spec, &x) in self.parameters.iter().zip(&self.state.parameters) {
+            match spec.name.as_str() {
+                "material.youngs_modulus" => sc.material.youngs_modulus = x,
+                "material.poisson_ratio" => sc.material.poisson_ratio = x,
+                "material.thickness" => sc.material.thickness = x,
+                "material.density" => sc.material.density = x,
+                "crease.length_scale" => sc.crease = CreaseStiffness::LengthScale(x),
+                "crease.stiffness_per_length" => sc.crease = CreaseStiffness::PerLength(x),
+                "damping.alpha" => sc.damping.alpha = x,
+                "damping.beta" => sc.damping.beta = x,
+                "damping.crease" => sc.damping.crease = x,
+                "gravity.x" | "gravity.y" | "gravity.z" => {
+                    let c = match spec.name.as_bytes()[8] {
+                        b'x' => 0,
+                        b'y' => 1,
+                        _ => 2,
+                    };
+                    if let Some(g) = sc.gravity.as_mut() {
+                        g[c] = x;
+                    }
+                }
+                "solver.rho_inf" => sc.solver.rho_inf = x,
+                "solver.max_step" => sc.solver.max_step = x,
+                "solver.tolerance" => sc.solver.tolerance = x,
+                _ => {}
+            }
+        }
+    }
+
+    fn build(&mut self) -> Result<(), Error> {
+        let sc = &self.scene;
+        let mesh = &sc.mesh;
+        let layout = crate::dofs::DofLayout::new(mesh);
+        let q_ref = layout.reference_state(mesh);
+        let mut fixed = Vec::new();
+        let mut supported = Vec::new();
+        for sup in &sc.supports {
+            for &v in &sup.vertices {
+                let slots = match sup.fix {
+                    Fix::Position => vec![layout.position_slot[v]],
+                    Fix::Clamped => layout.vertex_slots(v),
+                };
+                for s in slots {
+                    if !fixed.contains(&s) {
+                        fixed.push(s);
+                        for c in 0..3 {
+                            supported.push((3 * s + c, q_ref[3 * s + c]));
+                        }
+                    }
+                }
+            }
+        }
+        let n_act = sc.actuators.len();
+        let mut motion = Vec::new();
+        let mut idx = n_act + 3 * sc.vertex_forces.len();
+        for m in &sc.vertex_motions {
+            let s = layout.position_slot[m.vertex];
+            if !fixed.contains(&s) {
+                fixed.push(s);
+            }
+            for c in 0..3 {
+                motion.push((idx + c, 3 * s + c));
+            }
+            idx += 3;
+        }
+        let mut force = Vec::new();
+        for (k, f) in sc.vertex_forces.iter().enumerate() {
+            let s = layout.position_slot[f.vertex];
+            for c in 0..3 {
+                force.push((n_act + 3 * k + c, 3 * s + c));
+            }
+        }
+        let material = sc.material;
+        let d = material.bending_stiffness();
+        let k_pl = match sc.crease {
+            CreaseStiffness::LengthScale(l) => d / l,
+            CreaseStiffness::PerLength(k) => k,
+        };
+        let mut physics = Physics {
+            material,
+            crease_k_per_length: k_pl,
+            crease_c_per_length: sc.damping.crease,
+            alpha: sc.damping.alpha,
+            beta: sc.damping.beta,
+        };
+        if sc.auto_damping {
+            physics.alpha = auto_alpha(sc, k_pl);
+        }
+        let asm = Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
+        let solver = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
+            .map_err(Error::Scene)?;
+        let nends = asm.creases.len();
+        let mut rest = vec![Vec::new(); nends];
+        let mut torque = vec![Vec::new(); nends];
+        for (i, ce) in asm.creases.iter().enumerate() {
+            for (a, act) in sc.actuators.iter().enumerate() {
+                if act.edges.contains(&ce.edge) {
+                    match act.mode {
+                        ActuatorMode::RestAngle => rest[i].push((a, mesh.edges[ce.edge].fold_target)),
+                        ActuatorMode::Torque => torque[i].push(a),
+                    }
+                }
+            }
+        }
+        let gravity = sc.gravity.map(|g| {
+            let mut qg = vec![0.0; asm.n_dofs()];
+            for v in 0..mesh.n_vertices() {
+                let s = asm.position_slot(v);
+                qg[3 * s..3 * s + 3].copy_from_slice(&g);
+            }
+            let mut f = vec![0.0; asm.n_dofs()];
+            asm.mass_mul(&qg, &mut f);
+            f
+        });
+        let angle_ends = fold_edges(sc)
+            .into_iter()
+            .map(|fe| {
+                (0..nends).filter(|&i| mesh.edges[asm.creases[i].edge].fold_edge == Some(fe)).collect()
+            })
+            .collect();
+        let length = sheet_size(mesh);
+        let scales = asm.scales(length);
+        let tol = sc.solver.tolerance;
+        let sys = System {
+            scales,
+            solver,
+            coeffs: ga::Coefficients::new(sc.solver.rho_inf),
+            settings: ga::Settings {
+                tolerance: tol,
+                newton_tolerance: (1e-3 * tol).max(1e-13),
+                max_newton: sc.solver.max_newton,
+            },
+            rest,
+            torque,
+            gravity,
+            supported,
+            motion,
+            force,
+            angle_ends,
+            ws: ga::Workspace::default(),
+            max_step: sc.solver.max_step,
+            min_step: sc.solver.min_step,
+            asm,
+        };
+        self.sys = Some(sys);
+        Ok(())
+    }
+}
+
+/// Inputs of one step turned into what the assembly needs.
+struct DriveValues {
+    theta0: Vec<f64>,
+    moment: Vec<f64>,
+    f_ext: Vec<f64>,
+    prescribed: Vec<(usize, f64)>,
+}
+
+fn drive(sys: &System, u: &[f64]) -> DriveValues {
+    let pi = std::f64::consts::PI;
+    let theta0 = sys.rest.iter().map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>()).collect();
+    let moment = sys
+        .torque
+        .iter()
+        .zip(&sys.asm.creases)
+        .map(|(t, ce)| t.iter().map(|&a| u[a]).sum::<f64>() * ce.length)
+        .collect();
+    let n = sys.asm.n_dofs();
+    let mut f_ext = match &sys.gravity {
+        Some(g) => g.clone(),
+        None => vec![0.0; n],
+    };
+    for &(k, i) in &sys.force {
+        f_ext[i] += u[k];
+    }
+    let mut prescribed = sys.supported.clone();
+    prescribed.extend(sys.motion.iter().map(|&(k, i)| (i, u[k])));
+    DriveValues { theta0, moment, f_ext, prescribed }
+}
+
+/// Diagonal of the sheet's bounding box (m): the length scale of position errors.
+fn sheet_size(mesh: &crate::mesh::Mesh) -> f64 {
+    let (mut lo, mut hi) = (mesh.coords[0], mesh.coords[0]);
+    for c in &mesh.coords {
+        lo = lo.inf(c);
+        hi = hi.sup(c);
+    }
+    (hi - lo).norm().max(f64::MIN_POSITIVE)
+}
+
+/// Default mass-proportional damping: damping ratio 0.2 on the folding mode
+/// of a panel of the mean facet size hinged on its crease,
+/// omega = sqrt(3 k / (rho h w^3)) per unit crease length.
+fn auto_alpha(sc: &Scene, k_per_length: f64) -> f64 {
+    let mesh = &sc.mesh;
+    let nt = mesh.triangles.len().max(1);
+    let mean_area: f64 = (0..mesh.triangles.len()).map(|t| mesh.area(t)).sum::<f64>() / nt as f64;
+    let w = (2.0 * mean_area).sqrt();
+    let m = &sc.material;
+    let omega = (3.0 * k_per_length / (m.density * m.thickness * w.powi(3))).sqrt();
+    2.0 * 0.2 * omega
 }
 
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`

@@ -224,6 +224,10 @@ pub struct Scene {
     pub crease: CreaseStiffness,
     /// Damping.
     pub damping: Damping,
+    /// When true (a scene that sets no damping), the model picks a
+    /// mass-proportional damping under which a fold settles within a few
+    /// of its natural periods, replacing `damping.alpha`.
+    pub auto_damping: bool,
     /// Actuators (one input each).
     pub actuators: Vec<Actuator>,
     /// Supports.
@@ -258,6 +262,7 @@ impl Scene {
             material: Material::default(),
             crease: CreaseStiffness::default(),
             damping: Damping::default(),
+            auto_damping: true,
             actuators: vec![Actuator {
                 name: "fold".into(),
                 edges: creases,

@@ -1,0 +1,545 @@
+//! Global assembly: the sparsity pattern and scatter maps built once, then
+//! residual forces, energies and the combined matrix
+//! `k K + m M + c C` (exactly what an implicit integrator's Newton step
+//! needs) assembled without allocation per call.
+//!
+//! Terms and what they cost: shell elements always; crease springs always;
+//! damping (Rayleigh `alpha M + beta K`, crease dashpots) only when its
+//! coefficients are non-zero; gravity is a constant force computed once.
+
+use crate::crease;
+use crate::dofs::{Combo, DofLayout, SlotKind};
+use crate::element::{ElemVec, MASS_HAT, Rule, ShellElement};
+use crate::mesh::{EdgeKind, Mesh};
+use crate::scene::Material;
+use nalgebra::{SMatrix, SVector, Vector2};
+use std::collections::{BTreeSet, HashMap};
+
+/// Marker for "not a free scalar".
+pub const FIXED: usize = usize::MAX;
+
+/// One rotational spring at one end of a crease edge (MATH.md section 5).
+#[derive(Clone, Debug)]
+pub struct CreaseEnd {
+    /// Mesh edge.
+    pub edge: usize,
+    /// Crease length share of this end (half the edge length), m.
+    pub length: f64,
+    /// Gradient into the facet to the right of `t`, into the left facet, and
+    /// the crease tangent: `[a, b, t]`.
+    pub combos: [Combo; 3],
+}
+
+/// Scatter map of one term (element or spring): its distinct slots and,
+/// for each ordered pair of them, the offsets of the 3 columns of the 3x3
+/// block in the matrix values (`FIXED` when either slot is not free).
+#[derive(Clone, Debug, Default)]
+struct BlockMap {
+    slots: Vec<usize>,
+    /// For each local vector: terms as (index into `slots`, coefficient).
+    terms: Vec<[(usize, f64); 2]>,
+    nterms: Vec<u8>,
+    offsets: Vec<[usize; 3]>,
+}
+
+/// Physical coefficients the assembly needs (may change between
+/// initializations, so kept apart from the topology).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Physics {
+    /// Sheet material.
+    pub material: Material,
+    /// Rotational stiffness per unit crease length of each crease, N/rad
+    /// (the rule `k = (L/L*) D` is per unit length too).
+    pub crease_k_per_length: f64,
+    /// Crease dashpot per unit length, N s/rad.
+    pub crease_c_per_length: f64,
+    /// Rayleigh alpha (1/s).
+    pub alpha: f64,
+    /// Rayleigh beta (s).
+    pub beta: f64,
+}
+
+/// Inputs of one evaluation.
+pub struct State<'a> {
+    /// Positions/gradients (all slots).
+    pub q: &'a [f64],
+    /// Velocities (all slots); only read when damping is on.
+    pub v: &'a [f64],
+    /// Rest angle theta0 (rad, pi = flat) of each crease end.
+    pub theta0: &'a [f64],
+    /// Applied moment of each crease end (N m), folding positive.
+    pub moment: &'a [f64],
+    /// Unwrapped angle of each end at the last accepted state.
+    pub theta_prev: &'a [f64],
+}
+
+/// Results of one evaluation.
+#[derive(Clone, Debug, Default)]
+pub struct Evaluation {
+    /// Internal force: dU/dq plus damping forces, all slots.
+    pub force: Vec<f64>,
+    /// Membrane + bending energy.
+    pub strain_energy: f64,
+    /// Crease spring energy.
+    pub crease_energy: f64,
+    /// Unwrapped angle theta of every crease end.
+    pub theta: Vec<f64>,
+}
+
+/// Coefficients of the requested matrix `k K + m M + c C`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatrixCoeffs {
+    /// Stiffness coefficient.
+    pub k: f64,
+    /// Mass coefficient.
+    pub m: f64,
+    /// Damping coefficient.
+    pub c: f64,
+}
+
+/// The assembled system of one mesh.
+pub struct Assembler {
+    /// DOF layout.
+    pub layout: DofLayout,
+    /// One shell element per facet.
+    pub elements: Vec<ShellElement>,
+    /// Crease springs.
+    pub creases: Vec<CreaseEnd>,
+    /// Free index of each scalar DOF, or [`FIXED`].
+    pub free: Vec<usize>,
+    /// Number of free scalars.
+    pub n_free: usize,
+    /// CSC column pointers of the free-DOF matrix pattern.
+    pub col_ptr: Vec<usize>,
+    /// CSC row indices (sorted per column; both triangles).
+    pub row_idx: Vec<usize>,
+    face_maps: Vec<BlockMap>,
+    crease_maps: Vec<BlockMap>,
+    /// Mass matrix by slots: for each slot, (other slot, coefficient of I3).
+    pub mass_rows: Vec<Vec<(usize, f64)>>,
+    mass_values: Vec<f64>,
+    /// Physics in force.
+    pub physics: Physics,
+}
+
+impl Assembler {
+    /// Build layout, elements, springs and the pattern. `fixed_slots` are
+    /// supported or prescribed slots (not unknowns).
+    pub fn new(
+        mesh: &Mesh,
+        physics: Physics,
+        rule: Rule,
+        fixed_slots: &[usize],
+    ) -> Result<Assembler, String> {
+        let layout = DofLayout::new(mesh);
+        let elements = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(f, &[a, b, c])| {
+                ShellElement::new([mesh.coords[a], mesh.coords[b], mesh.coords[c]], rule)
+                    .map_err(|e| format!("face {f}: {e}"))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let creases = crease_ends(mesh, &layout);
+
+        let n_slots = layout.n_slots();
+        let mut is_fixed = vec![false; n_slots];
+        for &s in fixed_slots {
+            is_fixed[s] = true;
+        }
+        let mut free = vec![FIXED; 3 * n_slots];
+        let mut n_free = 0;
+        for s in 0..n_slots {
+            if !is_fixed[s] {
+                for c in 0..3 {
+                    free[3 * s + c] = n_free;
+                    n_free += 1;
+                }
+            }
+        }
+        let block_map_of = |combos: &[Combo]| {
+            let mut slots: Vec<usize> = Vec::new();
+            let mut terms = Vec::new();
+            let mut nterms = Vec::new();
+            for cb in combos {
+                let mut t = [(0usize, 0.0); 2];
+                for (k, (s, c)) in cb.terms().enumerate() {
+                    let i = slots.iter().position(|&x| x == s).unwrap_or_else(|| {
+                        slots.push(s);
+                        slots.len() - 1
+                    });
+                    t[k] = (i, c);
+                }
+                terms.push(t);
+                nterms.push(cb.len);
+            }
+            BlockMap { slots, terms, nterms, offsets: Vec::new() }
+        };
+        let mut face_maps: Vec<BlockMap> = layout.local.iter().map(|l| block_map_of(l)).collect();
+        let mut crease_maps: Vec<BlockMap> =
+            creases.iter().map(|c| block_map_of(&c.combos)).collect();
+
+        // Slot-level adjacency -> scalar pattern over free DOFs.
+        let mut adj: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n_slots];
+        for bm in face_maps.iter().chain(crease_maps.iter()) {
+            for &a in &bm.slots {
+                for &b in &bm.slots {
+                    adj[a].insert(b);
+                }
+            }
+        }
+        let mut col_ptr = vec![0usize];
+        let mut row_idx = Vec::new();
+        for sb in 0..n_slots {
+            if is_fixed[sb] {
+                continue;
+            }
+            for _cb in 0..3 {
+                for &sa in &adj[sb] {
+                    if !is_fixed[sa] {
+                        for ca in 0..3 {
+                            row_idx.push(free[3 * sa + ca]);
+                        }
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let offset = |sa: usize, sb: usize| -> [usize; 3] {
+            if is_fixed[sa] || is_fixed[sb] {
+                return [FIXED; 3];
+            }
+            let r0 = free[3 * sa];
+            let mut o = [0; 3];
+            for (cb, oc) in o.iter_mut().enumerate() {
+                let col = free[3 * sb + cb];
+                let rows = &row_idx[col_ptr[col]..col_ptr[col + 1]];
+                *oc = col_ptr[col] + rows.binary_search(&r0).expect("pattern has the block");
+            }
+            o
+        };
+        for bm in face_maps.iter_mut().chain(crease_maps.iter_mut()) {
+            let ns = bm.slots.len();
+            bm.offsets = Vec::with_capacity(ns * ns);
+            for i in 0..ns {
+                for j in 0..ns {
+                    bm.offsets.push(offset(bm.slots[i], bm.slots[j]));
+                }
+            }
+        }
+
+        let mut asm = Assembler {
+            layout,
+            elements,
+            creases,
+            free,
+            n_free,
+            col_ptr,
+            row_idx,
+            face_maps,
+            crease_maps,
+            mass_rows: Vec::new(),
+            mass_values: Vec::new(),
+            physics,
+        };
+        asm.set_physics(physics);
+        Ok(asm)
+    }
+
+    /// Change the physical coefficients (rebuilds the mass matrix).
+    pub fn set_physics(&mut self, physics: Physics) {
+        self.physics = physics;
+        let n_slots = self.layout.n_slots();
+        let rho_h = physics.material.density * physics.material.thickness;
+        let mut mass: HashMap<(usize, usize), f64> = HashMap::new();
+        for (f, el) in self.elements.iter().enumerate() {
+            let scale = rho_h * el.area();
+            let bm = &self.face_maps[f];
+            for i in 0..9 {
+                for j in 0..9 {
+                    let mij = scale * MASS_HAT[i][j];
+                    for ti in 0..bm.nterms[i] as usize {
+                        for tj in 0..bm.nterms[j] as usize {
+                            let (a, ca) = bm.terms[i][ti];
+                            let (b, cb) = bm.terms[j][tj];
+                            *mass.entry((bm.slots[a], bm.slots[b])).or_insert(0.0) += ca * cb * mij;
+                        }
+                    }
+                }
+            }
+        }
+        let mut rows = vec![Vec::new(); n_slots];
+        for (&(a, b), &m) in &mass {
+            rows[a].push((b, m));
+        }
+        for r in &mut rows {
+            r.sort_by_key(|x| x.0);
+        }
+        let mut vals = vec![0.0; self.row_idx.len()];
+        for (a, row) in rows.iter().enumerate() {
+            for &(b, m) in row {
+                if self.free[3 * a] == FIXED || self.free[3 * b] == FIXED {
+                    continue;
+                }
+                for c in 0..3 {
+                    let col = self.free[3 * b + c];
+                    let r = self.free[3 * a + c];
+                    let range = self.col_ptr[col]..self.col_ptr[col + 1];
+                    let k = self.row_idx[range.clone()].binary_search(&r).expect("mass in pattern");
+                    vals[range.start + k] += m;
+                }
+            }
+        }
+        self.mass_rows = rows;
+        self.mass_values = vals;
+    }
+
+    /// Number of scalar DOFs (free and fixed).
+    pub fn n_dofs(&self) -> usize {
+        self.layout.n_dofs()
+    }
+
+    /// Number of stored matrix entries.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// `y = M x` over all slots.
+    pub fn mass_mul(&self, x: &[f64], y: &mut [f64]) {
+        for (a, row) in self.mass_rows.iter().enumerate() {
+            let mut acc = [0.0; 3];
+            for &(b, m) in row {
+                for c in 0..3 {
+                    acc[c] += m * x[3 * b + c];
+                }
+            }
+            y[3 * a..3 * a + 3].copy_from_slice(&acc);
+        }
+    }
+
+    /// The mass matrix restricted to the free DOFs, in pattern order.
+    pub fn mass_values(&self) -> &[f64] {
+        &self.mass_values
+    }
+
+    /// Whether damping terms are active.
+    pub fn has_damping(&self) -> bool {
+        let p = &self.physics;
+        p.alpha != 0.0 || p.beta != 0.0 || p.crease_c_per_length != 0.0
+    }
+
+    /// Evaluate internal forces and energies, and, if `matrix` is given,
+    /// write `k K + m M + c C` (free DOFs, pattern order) into it.
+    /// Fails (without panicking) on a configuration where a crease angle
+    /// is undefined or a value is not finite.
+    pub fn evaluate(
+        &self,
+        st: &State,
+        out: &mut Evaluation,
+        mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String> {
+        let n = self.n_dofs();
+        out.force.clear();
+        out.force.resize(n, 0.0);
+        out.theta.clear();
+        out.strain_energy = 0.0;
+        out.crease_energy = 0.0;
+        let p = self.physics;
+        let damping = self.has_damping();
+        if let Some((vals, co)) = matrix.as_mut() {
+            for (v, m) in vals.iter_mut().zip(&self.mass_values) {
+                *v = (co.m + co.c * p.alpha) * m;
+            }
+        }
+        // Stiffness weight in the matrix, and whether element tangents are needed.
+        let kw = matrix.as_ref().map(|(_, co)| co.k + co.c * p.beta).unwrap_or(0.0);
+        let need_tangent = matrix.is_some() || p.beta != 0.0;
+
+        let mut fe = SVector::<f64, 27>::zeros();
+        let mut ke = SMatrix::<f64, 27, 27>::zeros();
+        for (f, el) in self.elements.iter().enumerate() {
+            let bm = &self.face_maps[f];
+            let e = local_vector(&self.layout.local[f], st.q);
+            let en = el.eval(&p.material, &e, &mut fe, if need_tangent { Some(&mut ke) } else { None });
+            out.strain_energy += en.membrane + en.bending;
+            if p.beta != 0.0 {
+                let ve = local_vector(&self.layout.local[f], st.v);
+                let mut vv = SVector::<f64, 27>::zeros();
+                for k in 0..9 {
+                    vv.fixed_rows_mut::<3>(3 * k).copy_from(&ve[k]);
+                }
+                fe += p.beta * (ke * vv);
+            }
+            scatter_force(bm, fe.as_slice(), &mut out.force);
+            if let Some((vals, _)) = matrix.as_mut() {
+                scatter_matrix::<27>(bm, &ke, kw, vals);
+            }
+        }
+
+        let mut f9 = SVector::<f64, 9>::zeros();
+        let mut k9 = SMatrix::<f64, 9, 9>::zeros();
+        for (i, ce) in self.creases.iter().enumerate() {
+            let [a, b, t] = [ce.combos[0].eval(st.q), ce.combos[1].eval(st.q), ce.combos[2].eval(st.q)];
+            let d = crease::theta_derivatives(&a, &b, &t, matrix.is_some());
+            if !d.theta.is_finite() || a.cross(&t).norm() == 0.0 || b.cross(&t).norm() == 0.0 {
+                return Err(format!("crease on edge {} has an undefined fold angle", ce.edge));
+            }
+            let theta = crease::unwrap(d.theta, st.theta_prev[i]);
+            out.theta.push(theta);
+            let k = p.crease_k_per_length * ce.length;
+            f9.fill(0.0);
+            let want_k = matrix.is_some();
+            out.crease_energy +=
+                crease::spring(k, theta, st.theta0[i], &d, &mut f9, if want_k { Some(&mut k9) } else { None });
+            let g = SVector::<f64, 9>::from_iterator(d.grad.iter().flat_map(|x| x.iter().copied()));
+            let mom = st.moment[i];
+            if mom != 0.0 {
+                f9 -= mom * g;
+                if want_k && let Some(h) = &d.hess {
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            let blk = h[r][c];
+                            for x in 0..3 {
+                                for y in 0..3 {
+                                    k9[(3 * r + x, 3 * c + y)] -= mom * blk[(x, y)];
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            let cdamp = p.crease_c_per_length * ce.length;
+            let mut cmat_w = 0.0;
+            if damping && cdamp != 0.0 {
+                let vl = [ce.combos[0].eval(st.v), ce.combos[1].eval(st.v), ce.combos[2].eval(st.v)];
+                let rate: f64 = (0..3).map(|j| d.grad[j].dot(&vl[j])).sum();
+                f9 += cdamp * rate * g;
+                cmat_w = matrix.as_ref().map(|(_, co)| co.c * cdamp).unwrap_or(0.0);
+            }
+            let bm = &self.crease_maps[i];
+            scatter_force(bm, f9.as_slice(), &mut out.force);
+            if let Some((vals, co)) = matrix.as_mut() {
+                let mut kk = (co.k + co.c * p.beta) * k9;
+                if cmat_w != 0.0 {
+                    kk += cmat_w * g * g.transpose();
+                }
+                scatter_matrix::<9>(bm, &kk, 1.0, vals);
+            }
+        }
+        if p.alpha != 0.0 {
+            let mut mv = vec![0.0; n];
+            self.mass_mul(st.v, &mut mv);
+            for (f, x) in out.force.iter_mut().zip(mv) {
+                *f += p.alpha * x;
+            }
+        }
+        if out.force.iter().any(|x| !x.is_finite()) || !out.strain_energy.is_finite() {
+            return Err("internal forces are not finite".into());
+        }
+        Ok(())
+    }
+
+    /// Position slots and their vertices.
+    pub fn position_slot(&self, v: usize) -> usize {
+        self.layout.position_slot[v]
+    }
+
+    /// Slots of vertex `v` that a clamp fixes (position and gradients).
+    pub fn clamp_slots(layout: &DofLayout, v: usize) -> Vec<usize> {
+        layout.vertex_slots(v)
+    }
+
+    /// Characteristic size of each scalar DOF for error norms: `length`
+    /// for positions, 1 for gradients.
+    pub fn scales(&self, length: f64) -> Vec<f64> {
+        let mut s = vec![1.0; self.n_dofs()];
+        for (slot, kind) in self.layout.slot_kind.iter().enumerate() {
+            if *kind == SlotKind::Position {
+                for c in 0..3 {
+                    s[3 * slot + c] = length;
+                }
+            }
+        }
+        s
+    }
+}
+
+/// The 9 local nodal vectors of a facet from the slot vector.
+pub fn local_vector(map: &[Combo; 9], q: &[f64]) -> ElemVec {
+    std::array::from_fn(|k| map[k].eval(q))
+}
+
+fn scatter_force(bm: &BlockMap, f: &[f64], out: &mut [f64]) {
+    for (i, terms) in bm.terms.iter().enumerate() {
+        for &(a, c) in &terms[..bm.nterms[i] as usize] {
+            let s = bm.slots[a];
+            for x in 0..3 {
+                out[3 * s + x] += c * f[3 * i + x];
+            }
+        }
+    }
+}
+
+fn scatter_matrix<const N: usize>(
+    bm: &BlockMap,
+    k: &SMatrix<f64, N, N>,
+    w: f64,
+    vals: &mut [f64],
+) {
+    let ns = bm.slots.len();
+    let nv = N / 3;
+    for i in 0..nv {
+        for &(a, ca) in &bm.terms[i][..bm.nterms[i] as usize] {
+            for j in 0..nv {
+                for &(b, cb) in &bm.terms[j][..bm.nterms[j] as usize] {
+                    let off = bm.offsets[a * ns + b];
+                    if off[0] == FIXED {
+                        continue;
+                    }
+                    let s = w * ca * cb;
+                    for y in 0..3 {
+                        for x in 0..3 {
+                            vals[off[y] + x] += s * k[(3 * i + x, 3 * j + y)];
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The springs at both ends of every crease edge, with the right/left
+/// facet convention of [`crate::crease`].
+fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
+    let mut out = Vec::new();
+    for (e, edge) in mesh.edges.iter().enumerate() {
+        if edge.kind != EdgeKind::Crease {
+            continue;
+        }
+        let len = mesh.edge_length(e);
+        for (v, w) in [(edge.v[0], edge.v[1]), (edge.v[1], edge.v[0])] {
+            let d: Vector2<f64> = (mesh.coords[w] - mesh.coords[v]) / len;
+            let mut right = None;
+            let mut left = None;
+            for &f in &mesh.edge_faces[e] {
+                let third = *mesh.triangles[f].iter().find(|&&x| x != v && x != w).expect("triangle");
+                let x = mesh.coords[third] - mesh.coords[v];
+                let side = d.x * x.y - d.y * x.x;
+                let g = layout.gradient_along(v, f, x);
+                if side < 0.0 {
+                    right = Some(g);
+                } else {
+                    left = Some(g);
+                }
+            }
+            let t = layout.gradient_along(v, mesh.edge_faces[e][0], d);
+            out.push(CreaseEnd {
+                edge: e,
+                length: 0.5 * len,
+                combos: [right.expect("right facet"), left.expect("left facet"), t],
+            });
+        }
+    }
+    out
+}

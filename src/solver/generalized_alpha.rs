@@ -1,0 +1,215 @@
+//! Generalized-alpha (Chung & Hulbert 1993) in the form of Arnold & Brüls
+//! (2007): the equation of motion holds exactly at t_{n+1},
+//!
+//! ```text
+//! M qdd_{n+1} + f(q_{n+1}, v_{n+1}) = f_ext(t_{n+1})
+//! (1 - am) abar_{n+1} + am abar_n = (1 - af) qdd_{n+1} + af qdd_n
+//! q_{n+1} = q_n + h v_n + h^2 (1/2 - beta) abar_n + h^2 beta abar_{n+1}
+//! v_{n+1} = v_n + h (1 - gamma) abar_n + h gamma abar_{n+1}
+//! ```
+//!
+//! with am = (2 rho - 1)/(rho + 1), af = rho/(rho + 1), gamma = 1/2 + af - am,
+//! beta = (1 + af - am)^2 / 4: second order, unconditionally stable,
+//! rho_inf = 1 is the trapezoidal rule. Newton on q_{n+1} with the matrix
+//! `K + gamma/(beta h) C + (1 - am)/((1 - af) beta h^2) M`. Prescribed DOFs
+//! follow the same update with q_{n+1} given, so their inertia couples in.
+
+use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
+use crate::solver::SparseSolver;
+
+/// The four coefficients of the scheme.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coefficients {
+    /// alpha_m.
+    pub am: f64,
+    /// alpha_f.
+    pub af: f64,
+    /// Newmark beta.
+    pub beta: f64,
+    /// Newmark gamma.
+    pub gamma: f64,
+}
+
+impl Coefficients {
+    /// Coefficients for spectral radius `rho_inf` in [0, 1].
+    pub fn new(rho_inf: f64) -> Self {
+        let r = rho_inf.clamp(0.0, 1.0);
+        let am = (2.0 * r - 1.0) / (r + 1.0);
+        let af = r / (r + 1.0);
+        let gamma = 0.5 + af - am;
+        let beta = 0.25 * (1.0 + af - am).powi(2);
+        Coefficients { am, af, beta, gamma }
+    }
+}
+
+/// Dynamic state: positions, velocities, accelerations and the algorithmic
+/// acceleration (all DOFs).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Dynamics {
+    /// Positions.
+    pub q: Vec<f64>,
+    /// Velocities.
+    pub v: Vec<f64>,
+    /// Accelerations.
+    pub qdd: Vec<f64>,
+    /// Algorithmic accelerations.
+    pub abar: Vec<f64>,
+}
+
+/// What drives one step, evaluated at its end t_{n+1}.
+pub struct Drive<'a> {
+    /// Rest angle of each crease end.
+    pub theta0: &'a [f64],
+    /// Applied moment of each crease end.
+    pub moment: &'a [f64],
+    /// External force, all DOFs.
+    pub f_ext: &'a [f64],
+    /// Values of the fixed DOFs at t_{n+1}: (scalar index, value).
+    pub prescribed: &'a [(usize, f64)],
+    /// Unwrapped crease angles at t_n.
+    pub theta_prev: &'a [f64],
+}
+
+/// Result of one successful step.
+#[derive(Clone, Debug, Default)]
+pub struct Outcome {
+    /// Newton iterations.
+    pub iterations: usize,
+    /// Numeric factorizations.
+    pub factorizations: usize,
+    /// Scaled local error estimate (accept when <= 1).
+    pub error: f64,
+}
+
+/// Reusable work vectors.
+#[derive(Default)]
+pub struct Workspace {
+    eval: Evaluation,
+    matrix: Vec<f64>,
+    rhs: Vec<f64>,
+    mqdd: Vec<f64>,
+}
+
+impl Workspace {
+    /// The last evaluation (energies and crease angles at the accepted state).
+    pub fn evaluation(&self) -> &Evaluation {
+        &self.eval
+    }
+}
+
+/// Settings of the Newton iteration and error estimate.
+#[derive(Clone, Copy, Debug)]
+pub struct Settings {
+    /// Relative tolerance for the local error.
+    pub tolerance: f64,
+    /// Newton stops when every scaled correction is below this.
+    pub newton_tolerance: f64,
+    /// Maximum Newton iterations.
+    pub max_newton: usize,
+}
+
+/// Take one step of size `h` from `cur`. Fails with a reason when Newton
+/// does not converge or the state becomes invalid; `cur` is untouched.
+#[allow(clippy::too_many_arguments)]
+pub fn step(
+    asm: &Assembler,
+    solver: &mut SparseSolver,
+    co: Coefficients,
+    cur: &Dynamics,
+    h: f64,
+    drive: &Drive,
+    scales: &[f64],
+    settings: Settings,
+    ws: &mut Workspace,
+) -> Result<(Dynamics, Outcome), String> {
+    let n = asm.n_dofs();
+    let Coefficients { am, af, beta, gamma } = co;
+    let bh2 = beta * h * h;
+    // Predictor: qdd_{n+1} = qdd_n.
+    let mut next = cur.clone();
+    for i in 0..n {
+        next.abar[i] = (cur.qdd[i] - am * cur.abar[i]) / (1.0 - am);
+        next.q[i] = cur.q[i] + h * cur.v[i] + h * h * (0.5 - beta) * cur.abar[i] + bh2 * next.abar[i];
+    }
+    for &(i, x) in drive.prescribed {
+        next.q[i] = x;
+    }
+    let coeffs = MatrixCoeffs { k: 1.0, c: gamma / (beta * h), m: (1.0 - am) / ((1.0 - af) * bh2) };
+    ws.matrix.resize(asm.nnz(), 0.0);
+    ws.rhs.resize(asm.n_free, 0.0);
+    ws.mqdd.resize(n, 0.0);
+    let mut out = Outcome::default();
+    let mut last_norm = f64::INFINITY;
+    for it in 0..settings.max_newton {
+        for i in 0..n {
+            next.abar[i] = (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
+            next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
+            next.qdd[i] = ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
+        }
+        let st = State {
+            q: &next.q,
+            v: &next.v,
+            theta0: drive.theta0,
+            moment: drive.moment,
+            theta_prev: drive.theta_prev,
+        };
+        asm.evaluate(&st, &mut ws.eval, Some((&mut ws.matrix, coeffs)))?;
+        asm.mass_mul(&next.qdd, &mut ws.mqdd);
+        for i in 0..n {
+            let fi = asm.free[i];
+            if fi != FIXED {
+                ws.rhs[fi] = -(ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]);
+            }
+        }
+        solver.factor(&ws.matrix)?;
+        out.factorizations += 1;
+        solver.solve_in_place(&mut ws.rhs)?;
+        out.iterations = it + 1;
+        let mut norm: f64 = 0.0;
+        for i in 0..n {
+            let fi = asm.free[i];
+            if fi != FIXED {
+                next.q[i] += ws.rhs[fi];
+                norm = norm.max(ws.rhs[fi].abs() / scales[i]);
+            }
+        }
+        if !norm.is_finite() {
+            return Err("Newton produced non-finite values".into());
+        }
+        if norm <= settings.newton_tolerance {
+            // Final consistent update and evaluation at the converged state.
+            for i in 0..n {
+                next.abar[i] = (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
+                next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
+                next.qdd[i] =
+                    ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
+            }
+            let st = State {
+                q: &next.q,
+                v: &next.v,
+                theta0: drive.theta0,
+                moment: drive.moment,
+                theta_prev: drive.theta_prev,
+            };
+            asm.evaluate(&st, &mut ws.eval, None)?;
+            // Local error estimate h^2 (beta - 1/6) (qdd_{n+1} - qdd_n), RMS over free DOFs.
+            let c = h * h * (beta - 1.0 / 6.0).abs().max(1.0 / 24.0);
+            let mut sum = 0.0;
+            let mut cnt = 0usize;
+            for i in 0..n {
+                if asm.free[i] != FIXED {
+                    let e = c * (next.qdd[i] - cur.qdd[i]) / (settings.tolerance * scales[i]);
+                    sum += e * e;
+                    cnt += 1;
+                }
+            }
+            out.error = if cnt > 0 { (sum / cnt as f64).sqrt() } else { 0.0 };
+            return Ok((next, out));
+        }
+        if it >= 3 && norm > 2.0 * last_norm {
+            return Err(format!("Newton diverged (correction {norm:.3e} after {} iterations)", it + 1));
+        }
+        last_norm = norm;
+    }
+    Err(format!("Newton did not converge in {} iterations", settings.max_newton))
+}
