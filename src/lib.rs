@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod crease;
 pub mod mesh;
 pub mod model;
 pub mod scene;
