@@ -13,6 +13,7 @@
 
 pub mod assembly;
 pub mod cli;
+pub mod crease;
 pub mod dofs;
 pub mod mesh;
 pub mod model;
