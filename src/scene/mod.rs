@@ -248,7 +248,14 @@ impl Scene {
     /// A scene around `mesh` with every default of a plain FOLD file: paper
     /// material, no supports, no gravity, one rest-angle actuator `fold`
     /// over every crease.
-    pub fn with_defaults(name: &str, mesh: Mesh) -> Scene {
+    pub fn with_defaults(name: &str, mut mesh: Mesh) -> Scene {
+        // A mesh built in code has no FOLD file behind it: its edge indices
+        // are the FOLD edge indices.
+        for (e, edge) in mesh.edges.iter_mut().enumerate() {
+            if edge.fold_edge.is_none() && edge.kind == crate::mesh::EdgeKind::Crease {
+                edge.fold_edge = Some(e);
+            }
+        }
         let creases: Vec<usize> = (0..mesh.edges.len())
             .filter(|&e| mesh.edges[e].kind == crate::mesh::EdgeKind::Crease)
             .collect();
