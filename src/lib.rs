@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod element;
 pub mod mesh;
 pub mod model;
 pub mod scene;
