@@ -9,12 +9,15 @@
 //!
 //! - [`shape`]: the nine shape functions and their derivatives,
 //! - [`quadrature`]: Dunavant rules ([`Rule`]),
-//! - `shell` (next): the element energy, force and tangent,
+//! - [`shell`]: [`ShellElement`], energy, internal force and exact tangent,
 //! - [`mass`]: the closed-form mass matrix [`MASS_HAT`].
+// Numerical kernels index several parallel per-node arrays with one loop index.
+#![allow(clippy::needless_range_loop)]
 
 pub mod mass;
 pub mod quadrature;
 pub mod shape;
+pub mod shell;
 
 use nalgebra::{Vector2, Vector3};
 
@@ -24,6 +27,7 @@ pub type ElemVec = [Vector3<f64>; 9];
 
 pub use mass::{MASS_HAT, element_mass};
 pub use quadrature::Rule;
+pub use shell::{ShellElement, ShellEnergy};
 
 /// The element vector `e0` of a flat straight-edged reference triangle in the
 /// plane `z = 0`: positions `X_i` and, at node `i`, the gradient DOF towards

@@ -116,7 +116,10 @@ mod tests {
                 for b in 0..=(deg - a) {
                     let q = quad_mean(rule, a as i32, b as i32);
                     let x = exact_mean(a, b);
-                    assert!((q - x).abs() < 1e-15, "{rule:?} eta^{a} zeta^{b}: {q} vs {x}");
+                    assert!(
+                        (q - x).abs() < 1e-15,
+                        "{rule:?} eta^{a} zeta^{b}: {q} vs {x}"
+                    );
                 }
             }
             // One degree higher is not exact for every monomial.
@@ -126,7 +129,11 @@ mod tests {
                     (quad_mean(rule, a as i32, b as i32) - exact_mean(a, b)).abs()
                 })
                 .fold(0.0, f64::max);
-            assert!(worst > 1e-7, "{rule:?} unexpectedly exact at degree {}", deg + 1);
+            assert!(
+                worst > 1e-7,
+                "{rule:?} unexpectedly exact at degree {}",
+                deg + 1
+            );
         }
     }
 }

@@ -15,12 +15,15 @@ use nalgebra::Vector3;
 /// gradient DOFs point towards, in element order.
 const TOWARDS: [[usize; 2]; 3] = [[1, 2], [2, 0], [0, 1]];
 
+/// Values, area-coordinate gradients and Hessians of the nine functions.
+type AreaPartials = ([f64; 9], [[f64; 3]; 9], [[[f64; 3]; 3]; 9]);
+
 /// Values, gradients and Hessians of all nine shape functions with respect to
 /// the three area coordinates treated as independent variables.
 ///
 /// Any polynomial extension off the plane `xi + eta + zeta = 1` gives the same
 /// tangential derivatives, so these project to the `(eta, zeta)` derivatives.
-fn area_partials(l: [f64; 3]) -> ([f64; 9], [[f64; 3]; 9], [[[f64; 3]; 3]; 9]) {
+fn area_partials(l: [f64; 3]) -> AreaPartials {
     let b = l[0] * l[1] * l[2];
     let db = [l[1] * l[2], l[0] * l[2], l[0] * l[1]];
     let hb = [[0.0, l[2], l[1]], [l[2], 0.0, l[0]], [l[1], l[0], 0.0]];
@@ -176,10 +179,7 @@ mod tests {
     #[test]
     fn nodal_interpolation_is_identity() {
         for k in 0..9 {
-            let n = nodal(
-                |e, z| values([1.0 - e - z, e, z])[k],
-                |e, z| d1(e, z)[k],
-            );
+            let n = nodal(|e, z| values([1.0 - e - z, e, z])[k], |e, z| d1(e, z)[k]);
             for (m, &v) in n.iter().enumerate() {
                 let want = if m == k { 1.0 } else { 0.0 };
                 assert!((v - want).abs() < 1e-14, "functional {m} of s{k}: {v}");
@@ -240,7 +240,8 @@ mod tests {
     fn c0_on_edges() {
         // Edge (node a, node b): the DOFs that may be nonzero on it are the two
         // positions and the two gradients along the edge.
-        let edges: [([usize; 4], fn(f64) -> [f64; 3]); 3] = [
+        type Edge = ([usize; 4], fn(f64) -> [f64; 3]);
+        let edges: [Edge; 3] = [
             ([0, 1, 3, 5], |t| [1.0 - t, t, 0.0]), // edge 1-2, zeta = 0
             ([3, 4, 6, 8], |t| [0.0, 1.0 - t, t]), // edge 2-3, xi = 0
             ([6, 7, 0, 2], |t| [t, 0.0, 1.0 - t]), // edge 3-1, eta = 0
@@ -299,7 +300,17 @@ mod tests {
         let x1 = v3(0.0, 0.0, 0.0);
         let x2 = v3(1.0, 0.0, 0.0);
         let x3 = v3(0.0, 1.0, 0.0);
-        let e0: ElemVec = [x1, x2 - x1, x3 - x1, x2, x3 - x2, x1 - x2, x3, x1 - x3, x2 - x3];
+        let e0: ElemVec = [
+            x1,
+            x2 - x1,
+            x3 - x1,
+            x2,
+            x3 - x2,
+            x1 - x2,
+            x3,
+            x1 - x3,
+            x2 - x3,
+        ];
         for l in sample_points() {
             let r = position(&e0, l);
             assert!((r - (x2 * l[1] + x3 * l[2])).norm() < 1e-14);
@@ -321,11 +332,17 @@ mod tests {
             v3(1.0, -0.8, 0.1),
         ];
         let r = position(&e, [1.0 / 3.0; 3]);
-        assert!((r - v3(13.0 / 36.0, 7.0 / 20.0, 1.0 / 9.0)).norm() < 1e-14, "{r}");
+        assert!(
+            (r - v3(13.0 / 36.0, 7.0 / 20.0, 1.0 / 9.0)).norm() < 1e-14,
+            "{r}"
+        );
         let r = position(&e, [0.2, 0.5, 0.3]);
         assert!((r - v3(0.5451, 0.3225, 0.1159)).norm() < 1e-14, "{r}");
         let [re, rz] = tangents(&e, 1.0 / 3.0, 1.0 / 3.0);
-        assert!((re - v3(1.111111, 0.066667, 0.077778)).norm() < 1e-6, "{re}");
+        assert!(
+            (re - v3(1.111111, 0.066667, 0.077778)).norm() < 1e-6,
+            "{re}"
+        );
         assert!((rz - v3(-0.011111, 1.0, 0.188889)).norm() < 1e-6, "{rz}");
     }
 }
