@@ -20,10 +20,19 @@
 //! `s = n_hat . v`, the Hessian of `n_hat . v` with respect to `n` is
 //! `H_n = -(w n_hat^T + n_hat w^T)/|n| - s (I - n_hat n_hat^T)/|n|^2`, and the
 //! bilinear map `n = F_1 x F_2` adds `-[w]x` to the `F_1 F_2` block.
+//!
+//! The curvature gradient
+//! `d kappa_ij/de_k = N_k,ij n_hat + N_k,2 (w_ij x F_1) - N_k,1 (w_ij x F_2)`,
+//! `w_ij = (I - n_hat n_hat^T) r_,ij/|n|`, is parallel to `n_hat` (both
+//! cross products are of tangent vectors), so the bending material part of
+//! every 3x3 block is a scalar times `n_hat n_hat^T`; the kernel uses this. Only the upper 3x3 blocks are computed, then mirrored:
+//! the tangent is exactly symmetric.
 
 use super::{ElemVec, quadrature::Rule, shape};
 use crate::scene::Material;
-use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
+#[cfg(test)]
+use nalgebra::Matrix3;
+use nalgebra::{Matrix2, SMatrix, SVector, Vector2, Vector3};
 
 /// Largest number of quadrature points of any [`Rule`].
 const MAX_QP: usize = 12;
@@ -99,16 +108,6 @@ impl Plane {
             c * 0.5 * (1.0 - self.nu) * v[2],
         ]
     }
-    /// `s * C` applied to a Voigt triple of vectors.
-    #[inline(always)]
-    fn apply_vec(&self, s: f64, v: &[Vector3<f64>; 3]) -> [Vector3<f64>; 3] {
-        let c = s * self.c;
-        [
-            (v[0] + v[1] * self.nu) * c,
-            (v[0] * self.nu + v[1]) * c,
-            v[2] * (c * 0.5 * (1.0 - self.nu)),
-        ]
-    }
 }
 
 /// Deformation measures at one quadrature point.
@@ -159,12 +158,6 @@ fn kinematics(q: &QuadPoint, e: &ElemVec) -> Kinematics {
 #[inline(always)]
 fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Skew matrix `[a]x` with `[a]x b = a x b`.
-#[inline(always)]
-fn skew(a: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
 }
 
 impl ShellElement {
@@ -274,15 +267,49 @@ impl ShellElement {
         mat: &Material,
         e: &ElemVec,
         force: &mut SVector<f64, 27>,
-        mut tangent: Option<&mut SMatrix<f64, 27, 27>>,
+        tangent: Option<&mut SMatrix<f64, 27, 27>>,
+    ) -> ShellEnergy {
+        match tangent {
+            None => self.accumulate(mat, e, force, None),
+            Some(kt) => {
+                let mut blocks = [[ZERO3; 9]; 9];
+                let out = self.accumulate(mat, e, force, Some(&mut blocks));
+                // Write the upper blocks and their mirror images; the
+                // diagonal blocks are symmetrised.
+                for k in 0..9 {
+                    for l in k..9 {
+                        let b = &blocks[k][l];
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                let v = if k == l {
+                                    0.5 * (b[i][j] + b[j][i])
+                                } else {
+                                    b[i][j]
+                                };
+                                kt[(3 * k + i, 3 * l + j)] = v;
+                                kt[(3 * l + j, 3 * k + i)] = v;
+                            }
+                        }
+                    }
+                }
+                out
+            }
+        }
+    }
+
+    /// Energy and force, plus the upper tangent blocks `(k, l)`, `k <= l`, if asked.
+    #[inline(always)]
+    fn accumulate(
+        &self,
+        mat: &Material,
+        e: &ElemVec,
+        force: &mut SVector<f64, 27>,
+        mut blocks: Option<&mut [[M3; 9]; 9]>,
     ) -> ShellEnergy {
         let pl = Plane::new(mat);
         let h = mat.thickness;
         let (hm, hb) = (h, h * h * h / 12.0);
         force.fill(0.0);
-        if let Some(kt) = tangent.as_deref_mut() {
-            kt.fill(0.0);
-        }
         let mut out = ShellEnergy::default();
         for q in &self.qp[..self.nq] {
             let kin = kinematics(q, e);
@@ -311,116 +338,214 @@ impl ShellElement {
                 seg += fk;
             }
 
-            if let Some(kt) = tangent.as_deref_mut() {
-                add_tangent_upper(kt, q, &kin, &pl, h, nm, &nt, w, s);
-            }
-        }
-        if let Some(kt) = tangent {
-            // Mirror the upper blocks; symmetrise the diagonal blocks.
-            for i in 0..27 {
-                for j in (i + 1)..27 {
-                    if i / 3 == j / 3 {
-                        let m = 0.5 * (kt[(i, j)] + kt[(j, i)]);
-                        kt[(i, j)] = m;
-                        kt[(j, i)] = m;
-                    } else {
-                        kt[(j, i)] = kt[(i, j)];
-                    }
-                }
+            if let Some(bl) = blocks.as_deref_mut() {
+                let stress = Stress {
+                    nm,
+                    nt: &nt,
+                    w,
+                    s,
+                    a,
+                    c,
+                };
+                add_tangent_upper(bl, q, &kin, &pl, h, &stress);
             }
         }
         out
     }
 }
 
+/// A 3x3 block, row-major.
+type M3 = [[f64; 3]; 3];
+const ZERO3: M3 = [[0.0; 3]; 3];
+
+#[inline(always)]
+fn outer(a: &Vector3<f64>, b: &Vector3<f64>) -> M3 {
+    [
+        [a.x * b.x, a.x * b.y, a.x * b.z],
+        [a.y * b.x, a.y * b.y, a.y * b.z],
+        [a.z * b.x, a.z * b.y, a.z * b.z],
+    ]
+}
+
+/// `y += s x`.
+#[inline(always)]
+fn axpy(y: &mut M3, s: f64, x: &M3) {
+    for i in 0..3 {
+        for j in 0..3 {
+            y[i][j] += s * x[i][j];
+        }
+    }
+}
+
+/// `y += s a b^T`.
+#[inline(always)]
+fn add_outer(y: &mut M3, s: f64, a: &Vector3<f64>, b: &Vector3<f64>) {
+    for i in 0..3 {
+        for j in 0..3 {
+            y[i][j] += s * a[i] * b[j];
+        }
+    }
+}
+
+#[inline(always)]
+fn transpose(x: &M3) -> M3 {
+    [
+        [x[0][0], x[1][0], x[2][0]],
+        [x[0][1], x[1][1], x[2][1]],
+        [x[0][2], x[1][2], x[2][2]],
+    ]
+}
+
+/// Per-point stress quantities shared by the force and the tangent.
+struct Stress<'a> {
+    /// Weighted membrane resultants `wa h C eps`.
+    nm: [f64; 3],
+    /// `nt_k = sum_V m_V N_k,V`: the coefficient of `n_hat` in the bending force.
+    nt: &'a [f64; 9],
+    /// `w = (I - n_hat n_hat^T) v / |n|`, `v = sum_V m_V r_,V`.
+    w: Vector3<f64>,
+    /// `s = n_hat . v`.
+    s: f64,
+    /// `F_2 x w`.
+    a: Vector3<f64>,
+    /// `w x F_1`.
+    c: Vector3<f64>,
+}
+
 /// Adds one quadrature point's tangent to the blocks `(k, l)`, `k <= l`.
 ///
-/// Every block has the form `n1_k Y1_l + n2_k Y2_l + nt_k Yv_l + n_hat t_kl^T`,
-/// which folds the material and geometric parts of both energies together.
-#[allow(clippy::too_many_arguments)]
+/// Per node the derivatives enter through `N_k,1`, `N_k,2` and the Voigt
+/// second derivatives `N_k,V`, so every block is a bilinear form in those
+/// coefficients with 3x3 matrices fixed at the point. Material and geometric
+/// parts of both energies are folded into them first:
+/// `block(k,l) = N_k,1 Y1_l + N_k,2 Y2_l + nt_k Yv_l + (beta_k . D beta_l) n_hat n_hat^T`.
 #[inline(always)]
 fn add_tangent_upper(
-    kt: &mut SMatrix<f64, 27, 27>,
+    bl: &mut [[M3; 9]; 9],
     q: &QuadPoint,
     kin: &Kinematics,
     pl: &Plane,
     h: f64,
-    nm: [f64; 3],
-    nt: &[f64; 9],
-    w: Vector3<f64>,
-    s: f64,
+    st: &Stress,
 ) {
-    let (f1, f2, n_hat, n_len) = (kin.f1, kin.f2, kin.n_hat, kin.n_len);
-    let eye = Matrix3::identity();
-    let proj = eye - n_hat * n_hat.transpose();
+    let (f1, f2, nh) = (&kin.f1, &kin.f2, &kin.n_hat);
+    let inv = 1.0 / kin.n_len;
+    let nm = st.nm;
 
-    // Bending B vectors per Voigt component V: N_V,k n_hat + n1_k a_V + n2_k c_V.
-    let mut av = [Vector3::zeros(); 3];
-    let mut cv = [Vector3::zeros(); 3];
-    for vi in 0..3 {
-        let wv = proj * kin.rv[vi] / n_len;
-        av[vi] = f2.cross(&wv);
-        cv[vi] = wv.cross(&f1);
-    }
-
-    // Geometric bending blocks (Hessian of n_hat . v in F1, F2, v).
-    let h_n =
-        -(w * n_hat.transpose() + n_hat * w.transpose()) / n_len - proj * (s / (n_len * n_len));
-    let x1 = skew(&f1);
-    let x2 = skew(&f2);
-    let g11 = -(x2 * h_n * x2);
-    let g22 = -(x1 * h_n * x1);
-    let g12 = x2 * h_n * x1 - skew(&w);
-    let g21 = g12.transpose();
-    let g1v = x2 * proj / n_len;
-    let g2v = -(x1 * proj) / n_len;
-    let gv1 = g1v.transpose();
-    let gv2 = g2v.transpose();
-
+    // d kappa_V / d e_k = beta_kV n_hat with beta_kV = N_k,V + N_k,1 p_V + N_k,2 q_V:
+    // the in-plane parts F_2 x w_V and w_V x F_1 (w_V tangent) are normal.
+    let t2 = nh.cross(f2) * inv;
+    let t1 = f1.cross(nh) * inv;
+    let pv = [t2.dot(&kin.rv[0]), t2.dot(&kin.rv[1]), t2.dot(&kin.rv[2])];
+    let qv = [t1.dot(&kin.rv[0]), t1.dot(&kin.rv[1]), t1.dot(&kin.rv[2])];
     let sm = q.wa * h;
     let sb = q.wa * h * h * h / 12.0;
-    let mut y1 = [Matrix3::zeros(); 9];
-    let mut y2 = [Matrix3::zeros(); 9];
-    let mut yv = [Matrix3::zeros(); 9];
-    let mut dbb = [[Vector3::zeros(); 3]; 9];
-    for l in 0..9 {
-        let (n1, n2) = (q.n1[l], q.n2[l]);
-        let bm = [f1 * n1, f2 * n2, f2 * n1 + f1 * n2];
-        let dbm = pl.apply_vec(sm, &bm);
-        let nv = [q.n11[l], q.n22[l], 2.0 * q.n12[l]];
-        let bb = [
-            n_hat * nv[0] + av[0] * n1 + cv[0] * n2,
-            n_hat * nv[1] + av[1] * n1 + cv[1] * n2,
-            n_hat * nv[2] + av[2] * n1 + cv[2] * n2,
-        ];
-        let db = pl.apply_vec(sb, &bb);
-        let mut m1 = g11 * n1 + g12 * n2 + g1v * nt[l];
-        m1 += f1 * dbm[0].transpose() + f2 * dbm[2].transpose();
-        m1 += av[0] * db[0].transpose() + av[1] * db[1].transpose() + av[2] * db[2].transpose();
-        let d1 = nm[0] * n1 + nm[2] * n2;
-        m1[(0, 0)] += d1;
-        m1[(1, 1)] += d1;
-        m1[(2, 2)] += d1;
-        let mut m2 = g21 * n1 + g22 * n2 + g2v * nt[l];
-        m2 += f2 * dbm[1].transpose() + f1 * dbm[2].transpose();
-        m2 += cv[0] * db[0].transpose() + cv[1] * db[1].transpose() + cv[2] * db[2].transpose();
-        let d2 = nm[2] * n1 + nm[1] * n2;
-        m2[(0, 0)] += d2;
-        m2[(1, 1)] += d2;
-        m2[(2, 2)] += d2;
-        y1[l] = m1;
-        y2[l] = m2;
-        yv[l] = gv1 * n1 + gv2 * n2;
-        dbb[l] = db;
+    let cm = sm * pl.c;
+    let cm_nu = cm * pl.nu;
+    let cm_g = cm * 0.5 * (1.0 - pl.nu);
+
+    // Hessian of n_hat . v with respect to F_1, F_2 (closed forms of
+    // -[F2]x H_n [F2]x, [F2]x H_n [F1]x - [w]x, -[F1]x H_n [F1]x).
+    let b1 = f1.cross(nh);
+    let b2 = f2.cross(nh);
+    let si = st.s * inv * inv;
+    let (a, c, w) = (&st.a, &st.c, &st.w);
+    let mut x11 = ZERO3;
+    add_outer(&mut x11, -inv, a, &b2);
+    add_outer(&mut x11, -inv, &b2, a);
+    add_outer(&mut x11, si, f2, f2);
+    add_outer(&mut x11, si, &b2, &b2);
+    let d11 = nm[0] - si * f2.norm_squared();
+    let mut x22 = ZERO3;
+    add_outer(&mut x22, inv, c, &b1);
+    add_outer(&mut x22, inv, &b1, c);
+    add_outer(&mut x22, si, f1, f1);
+    add_outer(&mut x22, si, &b1, &b1);
+    let d22 = nm[1] - si * f1.norm_squared();
+    let mut x12 = ZERO3;
+    add_outer(&mut x12, inv, a, &b1);
+    add_outer(&mut x12, -inv, &b2, c);
+    add_outer(&mut x12, -si, f1, f2);
+    add_outer(&mut x12, -si, &b2, &b1);
+    let d12 = nm[2] + si * f1.dot(f2);
+    // -[w]x
+    x12[0][1] += w.z;
+    x12[0][2] -= w.y;
+    x12[1][0] -= w.z;
+    x12[1][2] += w.x;
+    x12[2][0] += w.y;
+    x12[2][1] -= w.x;
+    for i in 0..3 {
+        x11[i][i] += d11;
+        x22[i][i] += d22;
+        x12[i][i] += d12;
     }
+    // Membrane material part.
+    add_outer(&mut x11, cm, f1, f1);
+    add_outer(&mut x11, cm_g, f2, f2);
+    add_outer(&mut x22, cm, f2, f2);
+    add_outer(&mut x22, cm_g, f1, f1);
+    add_outer(&mut x12, cm_nu, f1, f2);
+    add_outer(&mut x12, cm_g, f2, f1);
+    let x21 = transpose(&x12);
+    // Mixed F-v slots: d/dv (d/dF) of n_hat . v, i.e. [F2]x P/|n| and -[F1]x P/|n|.
+    let mut g1v = ZERO3;
+    add_outer(&mut g1v, -inv, &b2, nh);
+    g1v[0][1] -= f2.z * inv;
+    g1v[0][2] += f2.y * inv;
+    g1v[1][0] += f2.z * inv;
+    g1v[1][2] -= f2.x * inv;
+    g1v[2][0] -= f2.y * inv;
+    g1v[2][1] += f2.x * inv;
+    let mut g2v = ZERO3;
+    add_outer(&mut g2v, inv, &b1, nh);
+    g2v[0][1] += f1.z * inv;
+    g2v[0][2] -= f1.y * inv;
+    g2v[1][0] -= f1.z * inv;
+    g2v[1][2] += f1.x * inv;
+    g2v[2][0] += f1.y * inv;
+    g2v[2][1] -= f1.x * inv;
+    let gv1 = transpose(&g1v);
+    let gv2 = transpose(&g2v);
+
+    let mut y1 = [ZERO3; 9];
+    let mut y2 = [ZERO3; 9];
+    let mut yv = [ZERO3; 9];
+    let mut beta = [[0.0; 3]; 9];
+    let mut dbeta = [[0.0; 3]; 9];
+    for l in 0..9 {
+        let (n1, n2, ntl) = (q.n1[l], q.n2[l], st.nt[l]);
+        let nv = [q.n11[l], q.n22[l], 2.0 * q.n12[l]];
+        beta[l] = [0, 1, 2].map(|v| nv[v] + n1 * pv[v] + n2 * qv[v]);
+        dbeta[l] = pl.apply(sb, beta[l]);
+        let mut m = ZERO3;
+        axpy(&mut m, n1, &x11);
+        axpy(&mut m, n2, &x12);
+        axpy(&mut m, ntl, &g1v);
+        y1[l] = m;
+        let mut m = ZERO3;
+        axpy(&mut m, n1, &x21);
+        axpy(&mut m, n2, &x22);
+        axpy(&mut m, ntl, &g2v);
+        y2[l] = m;
+        let mut m = ZERO3;
+        axpy(&mut m, n1, &gv1);
+        axpy(&mut m, n2, &gv2);
+        yv[l] = m;
+    }
+    let nn = outer(nh, nh);
     for k in 0..9 {
-        let (n1, n2, ntk) = (q.n1[k], q.n2[k], nt[k]);
-        let nv = [q.n11[k], q.n22[k], 2.0 * q.n12[k]];
+        let (n1, n2, ntk) = (q.n1[k], q.n2[k], st.nt[k]);
         for l in k..9 {
-            let t = dbb[l][0] * nv[0] + dbb[l][1] * nv[1] + dbb[l][2] * nv[2];
-            let blk = y1[l] * n1 + y2[l] * n2 + yv[l] * ntk + n_hat * t.transpose();
-            let mut view = kt.fixed_view_mut::<3, 3>(3 * k, 3 * l);
-            view += blk;
+            // Bending material part: (beta_k . D beta_l) n_hat n_hat^T.
+            let d = dot3(beta[k], dbeta[l]);
+            let b = &mut bl[k][l];
+            for i in 0..3 {
+                for j in 0..3 {
+                    b[i][j] +=
+                        n1 * y1[l][i][j] + n2 * y2[l][i][j] + ntk * yv[l][i][j] + d * nn[i][j];
+                }
+            }
         }
     }
 }
