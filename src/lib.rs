@@ -15,6 +15,7 @@ pub mod assembly;
 pub mod cli;
 pub mod crease;
 pub mod dofs;
+pub mod element;
 pub mod mesh;
 pub mod model;
 pub mod scene;

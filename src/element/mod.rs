@@ -1,0 +1,48 @@
+//! The cubic triangular iso-ANCF shell element (MATH.md sections 1-3).
+//!
+//! Each facet is a reduced-cubic (BCIZ) triangle whose 27 DOFs are nine
+//! nodal vectors: at every corner the position and the two position
+//! gradients along the sides meeting there. Its strain energy is Kirchhoff-Love
+//! with Green-Lagrange membrane strain and the exact normal-projected
+//! curvature change against a flat reference, so it is valid for large
+//! rotations and displacements; the mass matrix is constant.
+//!
+//! - [`shape`]: the nine shape functions and their derivatives,
+//! - [`quadrature`]: Dunavant rules ([`Rule`]),
+//! - [`shell`]: [`ShellElement`], energy, internal force and exact tangent,
+//! - [`mass`]: the closed-form mass matrix [`MASS_HAT`].
+// Numerical kernels index several parallel per-node arrays with one loop index.
+#![allow(clippy::needless_range_loop)]
+
+pub mod mass;
+pub mod quadrature;
+pub mod shape;
+pub mod shell;
+
+use nalgebra::{Vector2, Vector3};
+
+/// Local element vector: 9 nodal vectors in MATH.md order
+/// `[r1, r1_eta, r1_zeta, r2, r2_zeta, r2_xi, r3, r3_xi, r3_eta]`.
+pub type ElemVec = [Vector3<f64>; 9];
+
+pub use mass::{MASS_HAT, element_mass};
+pub use quadrature::Rule;
+pub use shell::{ShellElement, ShellEnergy};
+
+/// The element vector `e0` of a flat straight-edged reference triangle in the
+/// plane `z = 0`: positions `X_i` and, at node `i`, the gradient DOF towards
+/// node `j` equal to `X_j - X_i`.
+pub fn reference_vector(x: &[Vector2<f64>; 3]) -> ElemVec {
+    let p = x.map(|v| Vector3::new(v.x, v.y, 0.0));
+    [
+        p[0],
+        p[1] - p[0],
+        p[2] - p[0],
+        p[1],
+        p[2] - p[1],
+        p[0] - p[1],
+        p[2],
+        p[0] - p[2],
+        p[1] - p[2],
+    ]
+}
