@@ -440,6 +440,23 @@ impl Assembler {
         Ok(())
     }
 
+    /// Add the 3x3 block `k` at slots (a, b) of the free-DOF matrix values
+    /// (nothing when either slot is fixed). For loads outside the elements.
+    pub fn add_block(&self, a: usize, b: usize, k: &nalgebra::Matrix3<f64>, vals: &mut [f64]) {
+        if self.free[3 * a] == FIXED || self.free[3 * b] == FIXED {
+            return;
+        }
+        for y in 0..3 {
+            let col = self.free[3 * b + y];
+            let range = self.col_ptr[col]..self.col_ptr[col + 1];
+            let r0 = self.free[3 * a];
+            let k0 = self.row_idx[range.clone()].binary_search(&r0).expect("block in pattern");
+            for x in 0..3 {
+                vals[range.start + k0 + x] += k[(x, y)];
+            }
+        }
+    }
+
     /// Position slots and their vertices.
     pub fn position_slot(&self, v: usize) -> usize {
         self.layout.position_slot[v]

@@ -475,6 +475,19 @@ pub mod builders {
     /// Like [`strip`], with the vertical grid lines at the listed column
     /// indices (1..nx) made creases folding to `fold_target`.
     pub fn grid(lx: f64, ly: f64, nx: usize, ny: usize, crease_cols: &[(usize, f64)]) -> Mesh {
+        grid_with(lx, ly, nx, ny, crease_cols, true)
+    }
+
+    /// Like [`grid`]; with `alternate` false every cell is split along the
+    /// same diagonal (a three-direction mesh).
+    pub fn grid_with(
+        lx: f64,
+        ly: f64,
+        nx: usize,
+        ny: usize,
+        crease_cols: &[(usize, f64)],
+        alternate: bool,
+    ) -> Mesh {
         let id = |i: usize, j: usize| j * (nx + 1) + i;
         let mut coords = Vec::new();
         for j in 0..=ny {
@@ -489,7 +502,7 @@ pub mod builders {
         for j in 0..ny {
             for i in 0..nx {
                 let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                if (i + j) % 2 == 0 {
+                if !alternate || (i + j) % 2 == 0 {
                     tris.push([a, b, c]);
                     tris.push([a, c, d]);
                 } else {

@@ -10,13 +10,19 @@ fn two_panels(target: f64) -> Scene {
     // Two 20 mm x 20 mm panels; crease along x = 20 mm; left edge clamped.
     let mesh = grid(0.04, 0.02, 2, 1, &[(1, target)]);
     let mut scene = Scene::with_defaults("two_panels", mesh);
-    scene.supports.push(Support { vertices: vec![0, 3], fix: Fix::Clamped });
+    scene.supports.push(Support {
+        vertices: vec![0, 3],
+        fix: Fix::Clamped,
+    });
     scene
 }
 
 fn angle(model: &Model) -> f64 {
     let names: Vec<&str> = model.outputs().iter().map(|v| v.name.as_str()).collect();
-    let i = names.iter().position(|n| n.starts_with("crease[")).expect("crease output");
+    let i = names
+        .iter()
+        .position(|n| n.starts_with("crease["))
+        .expect("crease output");
     model.output_values()[i]
 }
 
@@ -72,13 +78,18 @@ fn energy_conservation_and_decay() {
         for _ in 0..200 {
             m.advance(1e-3).unwrap();
             let e = total(&m);
-            if std::env::var("DBG").is_ok() { eprintln!("t {:.4} E {:?} tot {e:.6e}", m.time(), m.energies()); }
+            if std::env::var("DBG").is_ok() {
+                eprintln!("t {:.4} E {:?} tot {e:.6e}", m.time(), m.energies());
+            }
             worst = worst.max((e - e0).abs() / e0);
             window_max = window_max.max(e);
             step += 1;
             if step % 10 == 0 {
                 if !conserve {
-                    assert!(window_max < last_window, "window peak grew: {last_window} -> {window_max}");
+                    assert!(
+                        window_max < last_window,
+                        "window peak grew: {last_window} -> {window_max}"
+                    );
                 }
                 last_window = window_max;
                 window_max = 0.0;
@@ -90,6 +101,9 @@ fn energy_conservation_and_decay() {
         } else {
             assert!(prev < 0.9 * e0, "energy did not decay: {prev} vs {e0}");
         }
-        eprintln!("rho_inf {rho}: worst drift {worst:.3e}, final/initial {:.4}", prev / e0);
+        eprintln!(
+            "rho_inf {rho}: worst drift {worst:.3e}, final/initial {:.4}",
+            prev / e0
+        );
     }
 }

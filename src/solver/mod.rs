@@ -2,5 +2,6 @@
 
 pub mod generalized_alpha;
 pub mod linear;
+pub mod statics;
 
 pub use linear::SparseSolver;
