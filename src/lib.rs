@@ -8,10 +8,12 @@
 //!
 //! Layers, bottom up: [`mesh`] (crease pattern as data), [`scene`] (FOLD
 //! scenes with physics keys), and [`model`] (the plain Rust API that the FMU
-//! and the CLI drive).
+//! and the CLI drive), with [`fmi`] on top: the FMI 2.0 co-simulation
+//! functions exported from the cdylib.
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod fmi;
 pub mod mesh;
 pub mod model;
 pub mod scene;
