@@ -8,7 +8,8 @@
 //!
 //! Layers, bottom up: [`mesh`] (crease pattern as data), [`scene`] (FOLD
 //! scenes with physics keys), and [`model`] (the plain Rust API that the FMU
-//! and the CLI drive).
+//! and the CLI drive), with [`fmi`] on top: the FMI 2.0 co-simulation
+//! functions exported from the cdylib.
 #![warn(missing_docs)]
 
 pub mod assembly;
@@ -16,6 +17,7 @@ pub mod cli;
 pub mod crease;
 pub mod dofs;
 pub mod element;
+pub mod fmi;
 pub mod mesh;
 pub mod model;
 pub mod scene;

@@ -1,6 +1,8 @@
 //! Command-line interface. Each subcommand lives in its own file and
 //! returns `Result<(), String>`; errors print to stderr with a non-zero exit.
 
+pub mod build;
+
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -13,12 +15,17 @@ pub struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Build an FMI 2.0 co-simulation FMU of a scene.
+    Build(build::BuildArgs),
+}
 
 /// Run the CLI with the process arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), String> = match cli.command {};
+    let result: Result<(), String> = match cli.command {
+        Command::Build(args) => build::run(&args),
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {

@@ -1,0 +1,117 @@
+//! `origami-fmu build SCENE -o X.fmu`: pack a scene as an FMI 2.0
+//! co-simulation FMU.
+//!
+//! The FMU holds `modelDescription.xml` (generated from the scene),
+//! `binaries/linux64/origami_fmu.so` (a copy of this crate's cdylib, found
+//! next to the running executable unless `--library` names it) and the
+//! scene in `resources/`.
+
+use crate::fmi::{self, MODEL_IDENTIFIER, SCENE_FILE};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `origami-fmu build`.
+#[derive(clap::Args, Debug)]
+pub struct BuildArgs {
+    /// The scene file (for now: JSON of the scene data).
+    pub scene: PathBuf,
+    /// Where to write the FMU.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The shared library to pack (default: liborigami_fmu.so next to this
+    /// executable, as cargo builds it).
+    #[arg(long)]
+    pub library: Option<PathBuf>,
+}
+
+/// The platform folder of the binary inside the FMU.
+const PLATFORM: &str = "linux64";
+
+/// Load a scene file given on the command line. The one place that knows
+/// which scene formats the CLI reads.
+pub fn load_scene(path: &Path) -> Result<crate::scene::Scene, String> {
+    fmi::resources::load_scene_file(path)
+}
+
+/// The cdylib next to the running executable.
+fn default_library() -> Result<PathBuf, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot locate this executable: {e}"))?;
+    let dir = exe.parent().ok_or("the executable has no parent folder")?;
+    let lib = dir.join(format!("lib{MODEL_IDENTIFIER}.so"));
+    if lib.is_file() {
+        Ok(lib)
+    } else {
+        Err(format!(
+            "the FMU library {} is missing; build it with `cargo build --release` (it is built with \
+             the executable), or name it with --library",
+            lib.display()
+        ))
+    }
+}
+
+/// Run `origami-fmu build`.
+pub fn run(args: &BuildArgs) -> Result<(), String> {
+    let scene = load_scene(&args.scene)?;
+    let contents = fmi::fmu_contents(&scene)?;
+    let library = match &args.library {
+        Some(l) => l.clone(),
+        None => default_library()?,
+    };
+    let so = std::fs::read(&library)
+        .map_err(|e| format!("cannot read the FMU library {}: {e}", library.display()))?;
+    let model = crate::model::Model::new(contents.scene.clone()).map_err(|e| e.to_string())?;
+    let binary = format!("binaries/{PLATFORM}/{MODEL_IDENTIFIER}.so");
+    let resource = format!("resources/{SCENE_FILE}");
+    write_zip(
+        &args.output,
+        &[
+            (
+                "modelDescription.xml",
+                contents.model_description.as_bytes(),
+                0o644,
+            ),
+            (&binary, &so, 0o755),
+            (&resource, &contents.scene_file, 0o644),
+        ],
+    )?;
+    println!(
+        "built {}: scene {:?}, FMI 2.0 co-simulation, modelIdentifier {MODEL_IDENTIFIER}, guid {}",
+        args.output.display(),
+        contents.scene.name,
+        contents.guid
+    );
+    println!(
+        "  variables: {} parameters, {} inputs, {} outputs",
+        model.parameters().len(),
+        model.inputs().len(),
+        model.outputs().len()
+    );
+    println!(
+        "  modelDescription.xml ({} bytes)",
+        contents.model_description.len()
+    );
+    println!(
+        "  {binary} ({} bytes, from {})",
+        so.len(),
+        library.display()
+    );
+    println!("  {resource} ({} bytes)", contents.scene_file.len());
+    Ok(())
+}
+
+fn write_zip(path: &Path, files: &[(&str, &[u8], u32)]) -> Result<(), String> {
+    use zip::write::SimpleFileOptions;
+    let err = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
+    let file = std::fs::File::create(path).map_err(|e| err(&e))?;
+    let mut zip = zip::ZipWriter::new(file);
+    for (name, bytes, mode) in files {
+        let options = SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated)
+            .last_modified_time(zip::DateTime::default())
+            .unix_permissions(*mode);
+        zip.start_file(*name, options).map_err(|e| err(&e))?;
+        zip.write_all(bytes).map_err(|e| err(&e))?;
+    }
+    zip.finish().map_err(|e| err(&e))?;
+    Ok(())
+}

@@ -1,0 +1,755 @@
+//! One FMU instance: the FMI 2.0 co-simulation state machine around a
+//! [`Model`], the value-reference map, the logger, and saved FMU states.
+//!
+//! Everything here is safe Rust on Rust slices; `exports.rs` turns the C
+//! pointers into those slices. Each method returns the FMI status and logs
+//! the reason of anything that is not `fmi2OK`.
+//!
+//! Value references are contiguous: parameters `0..P`, inputs `P..P+I`,
+//! outputs `P+I..P+I+O`, each block in the order of the Model's tables.
+//!
+//! A rejected call (bad argument, wrong order) changes nothing and leaves
+//! the instance in the phase it was in, so the master may go on. Only a
+//! failure inside the model that leaves no consistent state (initialization
+//! failed, non-finite outputs) moves it to [`Phase::Error`], from which
+//! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
+
+use super::resources::{self, SCENE_FILE};
+use super::types::{Fmi2Type, StatusKind, fmi2CallbackFunctions, fmi2Status};
+use crate::model::{Error as ModelError, Model, ModelState};
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+use std::ffi::CString;
+
+use fmi2Status::*;
+
+/// Phase of the FMI 2.0 co-simulation state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Phase {
+    /// After `fmi2Instantiate` (and `fmi2Reset`): parameters, inputs, setup.
+    Instantiated,
+    /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
+    InitializationMode,
+    /// Ready for `fmi2DoStep` (also after a discarded step: the state was
+    /// rolled back to the start of that step).
+    StepComplete,
+    /// After `fmi2Terminate`: values may be read; reset or free.
+    Terminated,
+    /// The model failed in a way that left no usable state: read values for
+    /// debugging, `fmi2SetFMUstate`, `fmi2Reset` or free.
+    Error,
+}
+
+impl Phase {
+    /// Human name used in log lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "instantiated",
+            Phase::InitializationMode => "initialization mode",
+            Phase::StepComplete => "step complete",
+            Phase::Terminated => "terminated",
+            Phase::Error => "error",
+        }
+    }
+}
+
+/// Log categories (declared in modelDescription.xml). Status messages
+/// (warning, discard, error, fatal) are always passed to the logger;
+/// `logEvents` lines only when debug logging is on for that category.
+pub const LOG_CATEGORIES: [(&str, &str); 5] = [
+    (
+        "logEvents",
+        "Life-cycle events and a line per communication step",
+    ),
+    ("logStatusWarning", "Calls that returned fmi2Warning"),
+    (
+        "logStatusDiscard",
+        "Steps that returned fmi2Discard (state rolled back)",
+    ),
+    (
+        "logStatusError",
+        "Calls that returned fmi2Error, with the reason",
+    ),
+    ("logStatusFatal", "Calls that returned fmi2Fatal"),
+];
+
+/// The host's logger, copied at instantiation, with the debug settings.
+pub struct Logger {
+    callbacks: fmi2CallbackFunctions,
+    instance_name: CString,
+    logging_on: bool,
+    /// Enabled `logEvents` etc. (indices into [`LOG_CATEGORIES`]).
+    enabled: [bool; LOG_CATEGORIES.len()],
+}
+
+impl Logger {
+    /// A logger for instance `name` with the host's callbacks.
+    pub fn new(callbacks: fmi2CallbackFunctions, name: &str, logging_on: bool) -> Logger {
+        Logger {
+            callbacks,
+            instance_name: c_string(name),
+            logging_on,
+            enabled: [true; LOG_CATEGORIES.len()],
+        }
+    }
+
+    /// Log `msg` with `status`. Status messages always go out; `fmi2OK`
+    /// messages only with debug logging on and `logEvents` enabled.
+    pub fn log(&self, status: fmi2Status, msg: &str) {
+        let category = match status {
+            fmi2OK | fmi2Pending => 0,
+            fmi2Warning => 1,
+            fmi2Discard => 2,
+            fmi2Error => 3,
+            fmi2Fatal => 4,
+        };
+        if category == 0 && !(self.logging_on && self.enabled[0]) {
+            return;
+        }
+        let Some(logger) = self.callbacks.logger else {
+            return;
+        };
+        let cat = c_string(LOG_CATEGORIES[category].0);
+        let msg = c_string(msg);
+        // SAFETY: the host gave us this logger; every pointer is a valid
+        // NUL-terminated string that outlives the call, and the format
+        // "%s" consumes exactly the one string argument passed.
+        unsafe {
+            logger(
+                self.callbacks.componentEnvironment,
+                self.instance_name.as_ptr(),
+                status,
+                cat.as_ptr(),
+                c"%s".as_ptr(),
+                msg.as_ptr(),
+            );
+        }
+    }
+
+    /// `fmi2SetDebugLogging`: switch debug logging and select categories
+    /// (none listed = all). Unknown names are an error and change nothing.
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> fmi2Status {
+        let mut enabled = [categories.is_empty(); LOG_CATEGORIES.len()];
+        for c in categories {
+            match LOG_CATEGORIES.iter().position(|(n, _)| n == c) {
+                Some(k) => enabled[k] = true,
+                None => {
+                    let known: Vec<&str> = LOG_CATEGORIES.iter().map(|c| c.0).collect();
+                    self.log(
+                        fmi2Error,
+                        &format!(
+                            "fmi2SetDebugLogging: unknown log category {c:?}; known: {}",
+                            known.join(", ")
+                        ),
+                    );
+                    return fmi2Error;
+                }
+            }
+        }
+        self.logging_on = on;
+        self.enabled = enabled;
+        fmi2OK
+    }
+}
+
+fn c_string(s: &str) -> CString {
+    CString::new(s.replace('\0', "\\0")).expect("NULs replaced")
+}
+
+/// Which variable a value reference designates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VarRef {
+    /// Parameter index.
+    Parameter(usize),
+    /// Input index.
+    Input(usize),
+    /// Output index.
+    Output(usize),
+}
+
+/// A saved FMU state: the model state plus what the FMI layer adds. This
+/// is what `fmi2SerializeFMUstate` writes (as JSON).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SavedState {
+    /// GUID of the FMU that saved it (checked on restore).
+    pub guid: String,
+    /// Phase of the state machine.
+    pub phase: Phase,
+    /// Start time from `fmi2SetupExperiment`.
+    pub start_time: f64,
+    /// Stop time from `fmi2SetupExperiment`, if defined.
+    pub stop_time: Option<f64>,
+    /// The model's complete state.
+    pub model: ModelState,
+}
+
+/// Relative tolerance with which `currentCommunicationPoint` must match
+/// the FMU's time in `fmi2DoStep`.
+pub const TIME_TOLERANCE: f64 = 1e-9;
+
+/// One FMU instance.
+pub struct Instance {
+    /// Logger and debug settings.
+    pub log: Logger,
+    /// Set after a panic: every later call but `fmi2FreeInstance` fails.
+    pub dead: bool,
+    guid: String,
+    scene: Scene,
+    model: Model,
+    phase: Phase,
+    start_time: f64,
+    stop_time: Option<f64>,
+    outputs: Option<Vec<f64>>,
+    n_par: usize,
+    n_in: usize,
+    n_out: usize,
+}
+
+impl Instance {
+    /// `fmi2Instantiate`: check the FMU type, read and validate the scene
+    /// from the resource location, check the GUID, build the model. On
+    /// failure the reason has been logged and `None` is returned.
+    pub fn instantiate(
+        log: Logger,
+        fmu_type: i32,
+        guid: Option<&str>,
+        resource_location: Option<&str>,
+    ) -> Option<Instance> {
+        match Self::try_instantiate(&log, fmu_type, guid, resource_location) {
+            Ok((guid, scene, model)) => {
+                let (n_par, n_in, n_out) = (
+                    model.parameters().len(),
+                    model.inputs().len(),
+                    model.outputs().len(),
+                );
+                log.log(
+                    fmi2OK,
+                    &format!(
+                        "fmi2Instantiate: scene {:?}: {n_par} parameters, {n_in} inputs, {n_out} outputs",
+                        scene.name
+                    ),
+                );
+                Some(Instance {
+                    log,
+                    dead: false,
+                    guid,
+                    scene,
+                    model,
+                    phase: Phase::Instantiated,
+                    start_time: 0.0,
+                    stop_time: None,
+                    outputs: None,
+                    n_par,
+                    n_in,
+                    n_out,
+                })
+            }
+            Err(msg) => {
+                log.log(fmi2Error, &format!("fmi2Instantiate failed: {msg}"));
+                None
+            }
+        }
+    }
+
+    fn try_instantiate(
+        _log: &Logger,
+        fmu_type: i32,
+        guid: Option<&str>,
+        resource_location: Option<&str>,
+    ) -> Result<(String, Scene, Model), String> {
+        match Fmi2Type::from_c(fmu_type) {
+            Some(Fmi2Type::CoSimulation) => {}
+            Some(Fmi2Type::ModelExchange) => {
+                return Err(
+                    "fmuType is fmi2ModelExchange; this FMU supports co-simulation only".into(),
+                );
+            }
+            None => return Err(format!("fmuType {fmu_type} is not a valid fmi2Type")),
+        }
+        let guid = guid.ok_or("fmuGUID is NULL")?;
+        let uri = resource_location.ok_or("fmuResourceLocation is NULL")?;
+        let dir = resources::resource_dir_from_uri(uri)?;
+        let path = dir.join(SCENE_FILE);
+        let bytes = std::fs::read(&path)
+            .map_err(|e| format!("cannot read the scene {}: {e}", path.display()))?;
+        // Validate before the GUID so that a broken scene reports why.
+        let scene = resources::parse_scene(&bytes)
+            .map_err(|e| format!("invalid scene {}: {e}", path.display()))?;
+        let expected = resources::guid(&bytes);
+        if guid != expected {
+            return Err(format!(
+                "GUID mismatch: the host passed {guid} but the scene in {} and library version {} give {expected}; \
+                 the modelDescription.xml does not belong to this scene or library",
+                path.display(),
+                resources::VERSION
+            ));
+        }
+        let model = Model::new(scene.clone()).map_err(|e| e.to_string())?;
+        Ok((expected, scene, model))
+    }
+
+    /// The model (read-only).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+    /// Current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    fn error(&self, msg: impl AsRef<str>) -> fmi2Status {
+        self.log.log(fmi2Error, msg.as_ref());
+        fmi2Error
+    }
+
+    /// Reject a call outside the phases it is allowed in.
+    fn require(&self, function: &str, allowed: &[Phase]) -> Result<(), fmi2Status> {
+        if allowed.contains(&self.phase) {
+            return Ok(());
+        }
+        let hint = match self.phase {
+            Phase::Instantiated => {
+                "; call fmi2EnterInitializationMode and fmi2ExitInitializationMode first"
+            }
+            Phase::InitializationMode => "; call fmi2ExitInitializationMode first",
+            Phase::Terminated => "; the instance is terminated (fmi2Reset to start again)",
+            Phase::Error => "; the instance is in the error state (fmi2SetFMUstate or fmi2Reset)",
+            Phase::StepComplete => "",
+        };
+        let allowed: Vec<&str> = allowed.iter().map(|p| p.name()).collect();
+        Err(self.error(format!(
+            "{function} is not allowed in state '{}' (only in: {}){hint}",
+            self.phase.name(),
+            allowed.join(", ")
+        )))
+    }
+
+    /// Map a value reference to a variable.
+    pub fn resolve(&self, vr: u32) -> Option<VarRef> {
+        let vr = vr as usize;
+        if vr < self.n_par {
+            Some(VarRef::Parameter(vr))
+        } else if vr < self.n_par + self.n_in {
+            Some(VarRef::Input(vr - self.n_par))
+        } else if vr < self.n_par + self.n_in + self.n_out {
+            Some(VarRef::Output(vr - self.n_par - self.n_in))
+        } else {
+            None
+        }
+    }
+
+    fn var_name(&self, r: VarRef) -> &str {
+        match r {
+            VarRef::Parameter(i) => &self.model.parameters()[i].name,
+            VarRef::Input(i) => &self.model.inputs()[i].name,
+            VarRef::Output(i) => &self.model.outputs()[i].name,
+        }
+    }
+
+    /// `fmi2SetupExperiment`: record start and stop time. The tolerance is
+    /// not used (the scene's `solver.tolerance` parameter sets it).
+    pub fn setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start: f64,
+        stop: Option<f64>,
+    ) -> fmi2Status {
+        if let Err(s) = self.require("fmi2SetupExperiment", &[Phase::Instantiated]) {
+            return s;
+        }
+        if !start.is_finite() {
+            return self.error(format!(
+                "fmi2SetupExperiment: startTime {start} is not finite"
+            ));
+        }
+        if let Some(stop) = stop
+            && !(stop.is_finite() && stop >= start)
+        {
+            return self.error(format!(
+                "fmi2SetupExperiment: stopTime {stop} must be finite and >= startTime {start}"
+            ));
+        }
+        if let Some(tol) = tolerance {
+            self.log.log(
+                fmi2OK,
+                &format!(
+                    "fmi2SetupExperiment: tolerance {tol} ignored; set the parameter solver.tolerance"
+                ),
+            );
+        }
+        self.start_time = start;
+        self.stop_time = stop;
+        fmi2OK
+    }
+
+    /// `fmi2EnterInitializationMode`.
+    pub fn enter_initialization_mode(&mut self) -> fmi2Status {
+        if let Err(s) = self.require("fmi2EnterInitializationMode", &[Phase::Instantiated]) {
+            return s;
+        }
+        self.phase = Phase::InitializationMode;
+        fmi2OK
+    }
+
+    /// `fmi2ExitInitializationMode`: the model computes its initial state
+    /// at the start time.
+    pub fn exit_initialization_mode(&mut self) -> fmi2Status {
+        if let Err(s) = self.require("fmi2ExitInitializationMode", &[Phase::InitializationMode]) {
+            return s;
+        }
+        let r =
+            set_model_time(&mut self.model, self.start_time).and_then(|_| self.model.initialize());
+        self.outputs = None;
+        match r {
+            Ok(()) => {
+                self.phase = Phase::StepComplete;
+                self.log
+                    .log(fmi2OK, &format!("initialized at t = {}", self.model.time()));
+                fmi2OK
+            }
+            Err(e) => {
+                self.phase = Phase::Error;
+                self.error(format!(
+                    "fmi2ExitInitializationMode: the model failed to initialize: {e}"
+                ))
+            }
+        }
+    }
+
+    /// `fmi2Terminate`.
+    pub fn terminate(&mut self) -> fmi2Status {
+        if let Err(s) = self.require("fmi2Terminate", &[Phase::StepComplete, Phase::Error]) {
+            return s;
+        }
+        self.phase = Phase::Terminated;
+        fmi2OK
+    }
+
+    /// `fmi2Reset`: back to the freshly instantiated model of the scene.
+    pub fn reset(&mut self) -> fmi2Status {
+        match Model::new(self.scene.clone()) {
+            Ok(m) => {
+                self.model = m;
+                self.phase = Phase::Instantiated;
+                self.start_time = 0.0;
+                self.stop_time = None;
+                self.outputs = None;
+                fmi2OK
+            }
+            Err(e) => {
+                self.phase = Phase::Error;
+                self.error(format!("fmi2Reset: {e}"))
+            }
+        }
+    }
+
+    fn output_values(&mut self) -> Result<&[f64], fmi2Status> {
+        if self.outputs.is_none() {
+            let v = self.model.output_values();
+            if v.len() != self.n_out {
+                return Err(self.error(format!(
+                    "internal error: the model gave {} output values for {} outputs",
+                    v.len(),
+                    self.n_out
+                )));
+            }
+            self.outputs = Some(v);
+        }
+        Ok(self.outputs.as_deref().expect("just set"))
+    }
+
+    /// `fmi2GetReal`: parameters and inputs as set, outputs at the current
+    /// time. Never hands out a non-finite value (that is an fmi2Error).
+    pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> fmi2Status {
+        let mut refs = Vec::with_capacity(vrs.len());
+        for &vr in vrs {
+            match self.resolve(vr) {
+                Some(r) => refs.push(r),
+                None => {
+                    return self.error(format!(
+                        "fmi2GetReal: no Real variable with value reference {vr}"
+                    ));
+                }
+            }
+        }
+        for (k, r) in refs.into_iter().enumerate() {
+            let v = match r {
+                VarRef::Parameter(i) => self.model.parameter(i).map_err(|e| e.to_string()),
+                VarRef::Input(i) => self.model.input(i).map_err(|e| e.to_string()),
+                VarRef::Output(i) => match self.output_values() {
+                    Ok(o) => Ok(o[i]),
+                    Err(s) => return s,
+                },
+            };
+            match v {
+                Ok(x) if x.is_finite() => values[k] = x,
+                Ok(x) => {
+                    return self.error(format!(
+                        "fmi2GetReal: {} is {x} at t = {}; the model state is broken",
+                        self.var_name(r),
+                        self.model.time()
+                    ));
+                }
+                Err(e) => return self.error(format!("fmi2GetReal: {e}")),
+            }
+        }
+        fmi2OK
+    }
+
+    /// `fmi2SetReal`: all values are checked before any is applied; on any
+    /// problem nothing changes. Parameters (variability fixed) only before
+    /// `fmi2ExitInitializationMode`; outputs never.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> fmi2Status {
+        if let Err(s) = self.require(
+            "fmi2SetReal",
+            &[
+                Phase::Instantiated,
+                Phase::InitializationMode,
+                Phase::StepComplete,
+            ],
+        ) {
+            return s;
+        }
+        let mut refs = Vec::with_capacity(vrs.len());
+        for (&vr, &v) in vrs.iter().zip(values) {
+            let Some(r) = self.resolve(vr) else {
+                return self.error(format!(
+                    "fmi2SetReal: no Real variable with value reference {vr}"
+                ));
+            };
+            match r {
+                VarRef::Output(_) => {
+                    return self.error(format!(
+                        "fmi2SetReal: {} (value reference {vr}) is an output and cannot be set",
+                        self.var_name(r)
+                    ));
+                }
+                VarRef::Parameter(_) if self.phase == Phase::StepComplete => {
+                    return self.error(format!(
+                        "fmi2SetReal: {} (value reference {vr}) is a fixed parameter; it can only be set \
+                         before fmi2ExitInitializationMode",
+                        self.var_name(r)
+                    ));
+                }
+                _ => {}
+            }
+            if !v.is_finite() {
+                return self.error(format!(
+                    "fmi2SetReal: {} = {v} is not a finite number; nothing was changed",
+                    self.var_name(r)
+                ));
+            }
+            refs.push(r);
+        }
+        // Apply; should the model reject one (range checks), undo the rest.
+        let mut undo: Vec<(VarRef, f64)> = Vec::with_capacity(refs.len());
+        for (r, &v) in refs.iter().zip(values) {
+            let old = match *r {
+                VarRef::Parameter(i) => self.model.parameter(i),
+                VarRef::Input(i) => self.model.input(i),
+                VarRef::Output(_) => unreachable!("rejected above"),
+            };
+            let old = match old {
+                Ok(o) => o,
+                Err(e) => return self.error(format!("fmi2SetReal: {e}")),
+            };
+            let applied = match *r {
+                VarRef::Parameter(i) => self.model.set_parameter(i, v),
+                VarRef::Input(i) => self.model.set_input(i, v),
+                VarRef::Output(_) => unreachable!(),
+            };
+            if let Err(e) = applied {
+                for (r, old) in undo.into_iter().rev() {
+                    // Restoring a value the model accepted before cannot fail.
+                    let _ = match r {
+                        VarRef::Parameter(i) => self.model.set_parameter(i, old),
+                        VarRef::Input(i) => self.model.set_input(i, old),
+                        VarRef::Output(_) => Ok(()),
+                    };
+                }
+                return self.error(format!("fmi2SetReal: {e}; nothing was changed"));
+            }
+            undo.push((*r, old));
+        }
+        if !refs.is_empty() {
+            self.outputs = None;
+        }
+        fmi2OK
+    }
+
+    /// `fmi2DoStep`: advance from `t` (which must be the FMU's time) by
+    /// `h`. On a solver failure the state is rolled back and the result is
+    /// `fmi2Discard`; the master may retry from `t` with a smaller step.
+    pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
+        if let Err(s) = self.require("fmi2DoStep", &[Phase::StepComplete]) {
+            return s;
+        }
+        if !(h.is_finite() && h > 0.0) {
+            return self.error(format!(
+                "fmi2DoStep: communicationStepSize {h} must be a positive finite number"
+            ));
+        }
+        let now = self.model.time();
+        if !t.is_finite() || (t - now).abs() > TIME_TOLERANCE * now.abs().max(1.0) {
+            return self.error(format!(
+                "fmi2DoStep: currentCommunicationPoint {t} does not match the FMU's time {now}; \
+                 use fmi2SetFMUstate to go back in time"
+            ));
+        }
+        if let Err(e) = set_model_time(&mut self.model, t) {
+            return self.error(format!("fmi2DoStep: {e}"));
+        }
+        let target = t + h;
+        match self.model.advance(h) {
+            Ok(report) => {
+                if let Err(e) = set_model_time(&mut self.model, target) {
+                    self.phase = Phase::Error;
+                    return self.error(format!("fmi2DoStep: {e}"));
+                }
+                self.outputs = None;
+                let bad = match self.output_values() {
+                    Ok(o) => o.iter().position(|x| !x.is_finite()),
+                    Err(s) => {
+                        self.phase = Phase::Error;
+                        return s;
+                    }
+                };
+                if let Some(k) = bad {
+                    self.phase = Phase::Error;
+                    return self.error(format!(
+                        "fmi2DoStep: output {} is not finite at t = {target}; the instance is in the \
+                         error state (restore a saved state with fmi2SetFMUstate, or fmi2Reset)",
+                        self.model.outputs()[k].name
+                    ));
+                }
+                self.log.log(
+                    fmi2OK,
+                    &format!(
+                        "fmi2DoStep: t = {t} + {h}: {} internal steps ({} rejected), {} Newton iterations, smallest step {:e}",
+                        report.steps, report.rejected, report.newton_iterations, report.min_step
+                    ),
+                );
+                fmi2OK
+            }
+            Err(ModelError::StepFailed { time, reason }) => {
+                self.outputs = None;
+                self.log.log(
+                    fmi2Discard,
+                    &format!(
+                        "fmi2DoStep: the step from t = {t} by {h} could not be completed (failed at t = {time}: {reason}); \
+                         the state is rolled back to t = {}; retry with a smaller step",
+                        self.model.time()
+                    ),
+                );
+                fmi2Discard
+            }
+            Err(e) => {
+                self.outputs = None;
+                self.error(format!("fmi2DoStep: {e}"))
+            }
+        }
+    }
+
+    /// `fmi2GetStatus` and friends: the value for `kind`, or the status to
+    /// return (`fmi2Discard` for kinds this FMU does not provide).
+    pub fn status_real(&self, kind: StatusKind) -> Result<f64, fmi2Status> {
+        match kind {
+            StatusKind::LastSuccessfulTime => Ok(self.model.time()),
+            _ => Err(self.unsupported_status("fmi2GetRealStatus", kind)),
+        }
+    }
+
+    /// `fmi2GetBooleanStatus`: only `fmi2Terminated` (always false).
+    pub fn status_boolean(&self, kind: StatusKind) -> Result<bool, fmi2Status> {
+        match kind {
+            StatusKind::Terminated => Ok(false),
+            _ => Err(self.unsupported_status("fmi2GetBooleanStatus", kind)),
+        }
+    }
+
+    /// `fmi2GetStatus`: only `fmi2DoStepStatus` (steps are synchronous,
+    /// so the last step's status is final: fmi2OK).
+    pub fn status(&self, kind: StatusKind) -> Result<fmi2Status, fmi2Status> {
+        match kind {
+            StatusKind::DoStepStatus => Ok(fmi2OK),
+            _ => Err(self.unsupported_status("fmi2GetStatus", kind)),
+        }
+    }
+
+    /// Log and return the status for a status kind a function does not offer.
+    pub fn unsupported_status(&self, function: &str, kind: StatusKind) -> fmi2Status {
+        self.log.log(
+            fmi2Discard,
+            &format!("{function}: status kind {kind:?} is not provided by this FMU (steps are synchronous)"),
+        );
+        fmi2Discard
+    }
+
+    /// Log and return `fmi2Error` for an unsupported function.
+    pub fn unsupported(&self, function: &str, why: &str) -> fmi2Status {
+        self.error(format!("{function} is not supported: {why}"))
+    }
+
+    /// `fmi2GetFMUstate`: a copy of everything needed to continue.
+    pub fn save(&self) -> SavedState {
+        SavedState {
+            guid: self.guid.clone(),
+            phase: self.phase,
+            start_time: self.start_time,
+            stop_time: self.stop_time,
+            model: self.model.save_state(),
+        }
+    }
+
+    /// `fmi2SetFMUstate`: restore a state saved by an instance of the same
+    /// FMU. On failure nothing changes.
+    pub fn restore(&mut self, s: &SavedState) -> fmi2Status {
+        if s.guid != self.guid {
+            return self.error(format!(
+                "fmi2SetFMUstate: the state belongs to FMU {} but this is {}",
+                s.guid, self.guid
+            ));
+        }
+        if let Err(e) = self.model.restore_state(&s.model) {
+            return self.error(format!("fmi2SetFMUstate: {e}"));
+        }
+        self.phase = s.phase;
+        self.start_time = s.start_time;
+        self.stop_time = s.stop_time;
+        self.outputs = None;
+        fmi2OK
+    }
+
+    /// The bytes of `fmi2SerializeFMUstate` (JSON).
+    pub fn serialize(s: &SavedState) -> Vec<u8> {
+        serde_json::to_vec(s).expect("a saved state always serializes")
+    }
+
+    /// `fmi2DeSerializeFMUstate`: parse and check a serialized state.
+    pub fn deserialize(&self, bytes: &[u8]) -> Result<SavedState, fmi2Status> {
+        let s: SavedState = serde_json::from_slice(bytes).map_err(|e| {
+            self.error(format!(
+                "fmi2DeSerializeFMUstate: not a state of this FMU: {e}"
+            ))
+        })?;
+        if s.guid != self.guid {
+            return Err(self.error(format!(
+                "fmi2DeSerializeFMUstate: the state belongs to FMU {} but this is {}",
+                s.guid, self.guid
+            )));
+        }
+        Ok(s)
+    }
+}
+
+/// Put the model's clock at exactly `t` (so that communication points
+/// never drift). Works through save/restore until the Model API has a
+/// time setter; a no-op when the clock already reads `t`.
+fn set_model_time(model: &mut Model, t: f64) -> Result<(), ModelError> {
+    if model.time().to_bits() == t.to_bits() {
+        return Ok(());
+    }
+    let mut s = model.save_state();
+    s.time = t;
+    model.restore_state(&s)
+}

@@ -1,0 +1,56 @@
+//! The FMI 2.0 co-simulation layer: the only module with `unsafe` code.
+//!
+//! - [`types`]: the C types of the standard (`#[repr(C)]`).
+//! - [`exports`]: every `fmi2*` function, exported with its C name; each
+//!   body under `catch_unwind`, null pointers rejected, enum arguments
+//!   validated from integers.
+//! - [`instance`]: the state machine around a [`crate::model::Model`]
+//!   and the value-reference map (parameters, inputs, outputs; contiguous).
+//! - [`xml`]: the modelDescription.xml writer.
+//! - [`resources`]: the scene file in `resources/`, the GUID derived from
+//!   it, and resource-location URIs.
+//!
+//! One shared library (`modelIdentifier` [`MODEL_IDENTIFIER`]) serves every
+//! scene: the scene travels in the FMU's `resources/` folder and the GUID
+//! (a hash of the scene file and the crate version) ties the XML, the scene
+//! and the library together.
+
+pub mod exports;
+pub mod instance;
+pub mod resources;
+pub mod types;
+pub mod xml;
+
+pub use resources::{MODEL_IDENTIFIER, SCENE_FILE};
+
+use crate::model::Model;
+use crate::scene::Scene;
+
+/// Everything an FMU of one scene is made of, apart from the binary.
+#[derive(Clone, Debug)]
+pub struct FmuContents {
+    /// The scene (validated).
+    pub scene: Scene,
+    /// Bytes of `resources/`[`SCENE_FILE`].
+    pub scene_file: Vec<u8>,
+    /// The GUID.
+    pub guid: String,
+    /// modelDescription.xml.
+    pub model_description: String,
+}
+
+/// The modelDescription.xml, scene file and GUID of the FMU of `scene`.
+pub fn fmu_contents(scene: &Scene) -> Result<FmuContents, String> {
+    let scene_file = resources::scene_bytes(scene);
+    // Read back exactly what the FMU will read at instantiation.
+    let scene = resources::parse_scene(&scene_file)?;
+    let guid = resources::guid(&scene_file);
+    let model = Model::new(scene.clone()).map_err(|e| e.to_string())?;
+    let model_description = xml::model_description(&model, &guid);
+    Ok(FmuContents {
+        scene,
+        scene_file,
+        guid,
+        model_description,
+    })
+}

@@ -1,0 +1,136 @@
+"""Helpers shared by the fmpy suite: find the CLI, build FMUs, open
+instances with a capturing logger, and drive them step by step."""
+
+import ctypes
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import (
+    FMU2Slave,
+    calloc,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    free,
+)
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+SCENES = ROOT / "tests" / "fmpy" / "scenes"
+EXAMPLES = sorted(p.stem for p in SCENES.glob("*.json"))
+
+
+def cli() -> pathlib.Path:
+    """The release CLI as `cargo build --release` leaves it."""
+    target = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    if not target.is_absolute():
+        target = ROOT / target
+    exe = target / "release" / "origami-fmu"
+    if not exe.is_file():
+        raise RuntimeError(f"{exe} is missing: run `cargo build --release` first")
+    return exe
+
+
+def build(scene: pathlib.Path, out: pathlib.Path) -> subprocess.CompletedProcess:
+    """`origami-fmu build SCENE -o OUT` (not checked: callers look at it)."""
+    return subprocess.run(
+        [str(cli()), "build", str(scene), "-o", str(out)],
+        capture_output=True,
+        text=True,
+    )
+
+
+class LogCapture:
+    """An FMI logger that records (status, category, message) tuples."""
+
+    def __init__(self):
+        self.lines = []
+
+        def log(env, instance, status, category, message):
+            self.lines.append((status, category.decode(), message.decode()))
+
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(log)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        # fmpy's proxy formats the C-variadic message before calling `log`.
+        from fmpy.logging import addLoggerProxy
+
+        addLoggerProxy(ctypes.byref(self.callbacks))
+
+    def messages(self):
+        return [m for _, _, m in self.lines]
+
+
+class Instance:
+    """One FMU2Slave with its model description, value references and log."""
+
+    def __init__(self, unzipdir, name="instance", logging_on=False):
+        self.md = read_model_description(unzipdir)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.by_causality = {}
+        for v in self.md.modelVariables:
+            self.by_causality.setdefault(v.causality, []).append(v.valueReference)
+        self.log = LogCapture()
+        self.slave = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=unzipdir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        self.slave.instantiate(callbacks=self.log.callbacks, loggingOn=logging_on)
+        self.time = 0.0
+
+    @property
+    def inputs(self):
+        return self.by_causality.get("input", [])
+
+    @property
+    def outputs(self):
+        return self.by_causality.get("output", [])
+
+    def initialize(self, start_values=None, start_time=0.0):
+        self.slave.setupExperiment(startTime=start_time)
+        self.slave.enterInitializationMode()
+        for name, value in (start_values or {}).items():
+            self.slave.setReal([self.vr[name]], [value])
+        self.slave.exitInitializationMode()
+        self.time = start_time
+        return self
+
+    def step(self, h, inputs=None):
+        """Set `inputs` (name -> value at the end of the step) and step."""
+        for name, value in (inputs or {}).items():
+            self.slave.setReal([self.vr[name]], [value])
+        self.slave.doStep(currentCommunicationPoint=self.time, communicationStepSize=h)
+        self.time += h
+
+    def get(self, vrs=None):
+        vrs = self.outputs if vrs is None else vrs
+        return np.array(self.slave.getReal(list(vrs)))
+
+    def close(self):
+        try:
+            self.slave.terminate()
+        except Exception:
+            pass
+        self.slave.freeInstance()
+
+
+def unzip(fmu, where) -> str:
+    return extract(str(fmu), unzipdir=str(where))
+
+
+def run_ramp(inst, steps, ramp_time=1.0, input_name=None):
+    """Drive the first input from 0 to 1 linearly over `ramp_time` through the
+    given communication steps; return the output rows after each step."""
+    name = input_name or inst.md.modelVariables[inst.inputs[0]].name
+    rows = []
+    for h in steps:
+        t_end = inst.time + h
+        inst.step(h, {name: min(t_end / ramp_time, 1.0)})
+        rows.append(inst.get())
+    return np.array(rows)

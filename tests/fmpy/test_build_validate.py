@@ -1,0 +1,36 @@
+"""Every example FMU builds, has the expected layout, passes `fmpy validate`,
+and carries exactly the checked-in modelDescription.xml."""
+
+import zipfile
+
+from fmpy.validation import validate_fmu
+
+from fmu_helpers import ROOT, build
+
+
+def test_fmpy_validate_reports_no_problems(fmu, example):
+    assert validate_fmu(str(fmu(example))) == []
+
+
+def test_fmu_layout(fmu, example):
+    with zipfile.ZipFile(fmu(example)) as z:
+        assert sorted(z.namelist()) == [
+            "binaries/linux64/origami_fmu.so",
+            "modelDescription.xml",
+            "resources/scene.json",
+        ]
+
+
+def test_model_description_is_the_checked_in_one(fmu, example):
+    with zipfile.ZipFile(fmu(example)) as z:
+        built = z.read("modelDescription.xml")
+    assert built == (ROOT / "modelDescription" / f"{example}.xml").read_bytes()
+
+
+def test_build_refuses_a_bad_scene_with_the_reason(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"name": "x"}')
+    r = build(bad, tmp_path / "bad.fmu")
+    assert r.returncode != 0
+    assert "missing field" in r.stderr and "bad.json" in r.stderr
+    assert not (tmp_path / "bad.fmu").exists()

@@ -1,0 +1,209 @@
+//! The checked-in example FMU descriptions must match the generator.
+//!
+//! For every example scene this test regenerates
+//! - `tests/fmpy/scenes/<name>.json`: the scene file the fmpy suite builds
+//!   FMUs from (exactly the bytes that go into the FMU's resources), and
+//! - `modelDescription/<name>.xml`: the generated modelDescription.xml,
+//!
+//! and fails when they differ from the files in the repository. After an
+//! intended change, regenerate them with
+//! `UPDATE_MODEL_DESCRIPTIONS=1 cargo test --test model_description`
+//! and review the diff.
+
+use nalgebra::Vector2;
+use origami_fmu::fmi::{self, resources::scene_bytes};
+use origami_fmu::mesh::{Edge, Mesh, builders};
+use origami_fmu::scene::{
+    Actuator, ActuatorMode, CreaseStiffness, Fix, Scene, Support, VertexInput,
+};
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Tag every mesh edge with its own index as FOLD edge (the examples are
+/// built without a FOLD file), so creases get `crease[e].angle` outputs.
+fn tag_fold_edges(mut s: Scene) -> Scene {
+    for (e, edge) in s.mesh.edges.iter_mut().enumerate() {
+        edge.fold_edge = Some(e);
+    }
+    s.fold_edge_count = s.mesh.edges.len();
+    s
+}
+
+/// One crease along the diagonal of a 0.1 m paper square, all defaults.
+fn square() -> Scene {
+    tag_fold_edges(Scene::with_defaults(
+        "square",
+        builders::square_with_diagonal(0.1, true, PI / 2.0),
+    ))
+}
+
+/// A 0.2 m x 0.05 m strip clamped at its left end with a crease across the
+/// middle, gravity and a force input at the free corner: every kind of
+/// variable.
+fn strip() -> Scene {
+    let mesh = builders::grid(0.2, 0.05, 4, 1, &[(2, PI / 2.0)]);
+    let mut s = tag_fold_edges(Scene::with_defaults("strip", mesh));
+    s.supports.push(Support {
+        vertices: vec![0, 5],
+        fix: Fix::Clamped,
+    });
+    s.gravity = Some([0.0, 0.0, -9.81]);
+    s.vertex_forces.push(VertexInput {
+        name: "tip".into(),
+        vertex: 4,
+    });
+    s.damping.crease = 1e-4;
+    s
+}
+
+/// BENCHMARKS case C: two 1 mm thick triangular panels on one crease of
+/// stiffness 1e-3 N/rad per metre, panel 0 held (vertex 1 clamped, the
+/// crease ends pinned), a torque input per unit crease length, damped near
+/// critically (period about 1 s). Static angle = torque / 1e-3.
+fn case_c() -> Scene {
+    let mut s = tag_fold_edges(Scene::with_defaults(
+        "case_c",
+        builders::square_with_diagonal(0.1, true, PI / 2.0),
+    ));
+    s.material.thickness = 1e-3;
+    s.crease = CreaseStiffness::PerLength(1e-3);
+    s.damping.crease = 3e-4;
+    s.actuators = vec![Actuator {
+        name: "torque".into(),
+        edges: vec![0],
+        mode: ActuatorMode::Torque,
+        start: 0.0,
+    }];
+    s.supports = vec![
+        Support {
+            vertices: vec![1],
+            fix: Fix::Clamped,
+        },
+        Support {
+            vertices: vec![0, 2],
+            fix: Fix::Position,
+        },
+    ];
+    s.solver.stop_time = 5.0;
+    s
+}
+
+/// One degree-4 Miura-ori vertex (sector angle 60 degrees, creases 50 mm)
+/// with rigid-foldable targets: the straight crease line at +60 / -60
+/// degrees, the zig-zag pair at -2 atan(tan(30 deg) / cos(60 deg)).
+fn miura() -> Scene {
+    let (l, a) = (0.05, PI / 3.0);
+    let (s_, c_) = (a.sin(), a.cos());
+    let p = |x: f64, y: f64| Vector2::new(l * x, l * y);
+    let coords = vec![
+        p(-s_, c_ - 1.0),
+        p(0.0, -1.0),
+        p(s_, c_ - 1.0),
+        p(-s_, c_),
+        p(0.0, 0.0),
+        p(s_, c_),
+        p(-s_, c_ + 1.0),
+        p(0.0, 1.0),
+        p(s_, c_ + 1.0),
+    ];
+    let tris = vec![
+        [0, 1, 4],
+        [0, 4, 3],
+        [1, 2, 5],
+        [1, 5, 4],
+        [3, 4, 7],
+        [3, 7, 6],
+        [4, 5, 8],
+        [4, 8, 7],
+    ];
+    let straight = PI / 3.0;
+    let zigzag = -2.0 * ((straight / 2.0).tan() / c_).atan();
+    let edges = vec![
+        Edge::crease(4, 7, straight),
+        Edge::crease(4, 1, -straight),
+        Edge::crease(4, 5, zigzag),
+        Edge::crease(4, 3, zigzag),
+    ];
+    let mesh = Mesh::new(coords, tris, edges).expect("valid Miura vertex");
+    let mut s = tag_fold_edges(Scene::with_defaults("miura", mesh));
+    s.damping.alpha = 20.0;
+    s.damping.crease = 1e-4;
+    s.solver.stop_time = 2.0;
+    s
+}
+
+fn examples() -> Vec<Scene> {
+    vec![square(), strip(), case_c(), miura()]
+}
+
+fn check(path: &Path, want: &[u8], update: bool, drift: &mut Vec<String>) {
+    let have = std::fs::read(path).unwrap_or_default();
+    if have != want {
+        if update {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, want).unwrap();
+        } else {
+            drift.push(path.display().to_string());
+        }
+    }
+}
+
+#[test]
+fn checked_in_model_descriptions_match_the_generator() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let update = std::env::var_os("UPDATE_MODEL_DESCRIPTIONS").is_some();
+    let mut drift = Vec::new();
+    for scene in examples() {
+        let c = fmi::fmu_contents(&scene).expect("example scenes are valid");
+        let name = &scene.name;
+        check(
+            &root.join(format!("tests/fmpy/scenes/{name}.json")),
+            &scene_bytes(&scene),
+            update,
+            &mut drift,
+        );
+        check(
+            &root.join(format!("modelDescription/{name}.xml")),
+            c.model_description.as_bytes(),
+            update,
+            &mut drift,
+        );
+    }
+    assert!(
+        drift.is_empty(),
+        "generated files differ from the checked-in ones: {drift:?}\n\
+         regenerate with `UPDATE_MODEL_DESCRIPTIONS=1 cargo test --test model_description` and review the diff"
+    );
+}
+
+#[test]
+fn model_description_has_the_required_structure() {
+    let c = fmi::fmu_contents(&strip()).unwrap();
+    let x = &c.model_description;
+    for needle in [
+        r#"fmiVersion="2.0""#,
+        r#"variableNamingConvention="structured""#,
+        r#"modelIdentifier="origami_fmu""#,
+        r#"canHandleVariableCommunicationStepSize="true""#,
+        r#"canGetAndSetFMUstate="true""#,
+        r#"canSerializeFMUstate="true""#,
+        r#"canNotUseMemoryManagementFunctions="true""#,
+        r#"<Unit name="m"><BaseUnit m="1"/></Unit>"#,
+        r#"<Unit name="J"><BaseUnit kg="1" m="2" s="-2"/></Unit>"#,
+        r#"name="material.youngs_modulus" valueReference="0""#,
+        r#"causality="parameter" variability="fixed" initial="exact"><Real unit="Pa" start="3e9"/>"#,
+        r#"name="fold" valueReference="#,
+        r#"name="tip.z""#,
+        r#"name="vertex[4].x""#,
+        r#"name="crease[0].angle""#,
+        r#"name="energy.crease""#,
+        r#"<DefaultExperiment startTime="0" stopTime="1" tolerance="1e-6" stepSize="1e-3"/>"#,
+        &format!(r#"guid="{}""#, c.guid),
+    ] {
+        assert!(x.contains(needle), "missing {needle}\n{x}");
+    }
+    // every output listed once in Outputs and in InitialUnknowns
+    let n_out = x.matches(r#"causality="output""#).count();
+    assert_eq!(x.matches(r#"dependencies="""#).count(), n_out);
+    assert_eq!(x.matches("<Unknown ").count(), 2 * n_out);
+}
