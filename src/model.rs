@@ -161,6 +161,8 @@ pub struct Model {
     outputs: Vec<VariableSpec>,
     state: ModelState,
     sys: Option<System>,
+    /// Parameter values the current `sys` was built with.
+    built_with: Option<Vec<f64>>,
 }
 
 impl Model {
@@ -181,7 +183,7 @@ impl Model {
             outputs: outputs.iter().map(|v| v.start).collect(),
         };
         // Build once now so that a bad scene fails at instantiation.
-        let mut m = Model { scene, parameters, inputs, outputs, state, sys: None };
+        let mut m = Model { scene, parameters, inputs, outputs, state, sys: None, built_with: None };
         m.build()?;
         Ok(m)
     }
@@ -511,12 +513,34 @@ impl Model {
 
     /// Restore a state saved from a model of the same scene.
     pub fn restore_state(&mut self, s: &ModelState) -> Result<(), Error> {
-        let ok = s.dynamics.q.len() == self.state.dynamics.q.len()
+        let n = self.sys.as_ref().map(|s| s.asm.n_dofs()).unwrap_or(0);
+        let dyn_ok = match s.phase {
+            Phase::Setup => true,
+            Phase::Running => {
+                let d = &s.dynamics;
+                [d.q.len(), d.v.len(), d.qdd.len(), d.abar.len()].iter().all(|&l| l == n)
+                    && s.crease_theta.len()
+                        == self.sys.as_ref().map(|s| s.asm.creases.len()).unwrap_or(0)
+            }
+        };
+        let ok = dyn_ok
+            && s.inputs_now.len() == self.inputs.len()
             && s.inputs_next.len() == self.inputs.len()
             && s.parameters.len() == self.parameters.len()
             && s.outputs.len() == self.outputs.len();
-        if !ok || s.phase != self.state.phase {
-            return Err(Error::State("its sizes or phase do not match this model".into()));
+        if !ok {
+            return Err(Error::State("its sizes do not match this model".into()));
+        }
+        if s.phase == Phase::Running && self.built_with.as_deref() != Some(&s.parameters[..]) {
+            // The saved state ran with other parameters: rebuild for them.
+            let keep = std::mem::replace(&mut self.state.parameters, s.parameters.clone());
+            self.apply_parameters();
+            if let Err(e) = self.build() {
+                self.state.parameters = keep;
+                self.apply_parameters();
+                self.build()?;
+                return Err(e);
+            }
         }
         self.state = s.clone();
         Ok(())
@@ -669,6 +693,7 @@ impl Model {
             asm,
         };
         self.sys = Some(sys);
+        self.built_with = Some(self.state.parameters.clone());
         Ok(())
     }
 }
