@@ -174,7 +174,12 @@ impl Assembler {
                 terms.push(t);
                 nterms.push(cb.len);
             }
-            BlockMap { slots, terms, nterms, offsets: Vec::new() }
+            BlockMap {
+                slots,
+                terms,
+                nterms,
+                offsets: Vec::new(),
+            }
         };
         let mut face_maps: Vec<BlockMap> = layout.local.iter().map(|l| block_map_of(l)).collect();
         let mut crease_maps: Vec<BlockMap> =
@@ -286,7 +291,9 @@ impl Assembler {
                     let col = self.free[3 * b + c];
                     let r = self.free[3 * a + c];
                     let range = self.col_ptr[col]..self.col_ptr[col + 1];
-                    let k = self.row_idx[range.clone()].binary_search(&r).expect("mass in pattern");
+                    let k = self.row_idx[range.clone()]
+                        .binary_search(&r)
+                        .expect("mass in pattern");
                     vals[range.start + k] += m;
                 }
             }
@@ -353,7 +360,10 @@ impl Assembler {
             }
         }
         // Stiffness weight in the matrix, and whether element tangents are needed.
-        let kw = matrix.as_ref().map(|(_, co)| co.k + co.c * p.beta).unwrap_or(0.0);
+        let kw = matrix
+            .as_ref()
+            .map(|(_, co)| co.k + co.c * p.beta)
+            .unwrap_or(0.0);
         let need_tangent = matrix.is_some() || p.beta != 0.0;
 
         let mut fe = SVector::<f64, 27>::zeros();
@@ -361,7 +371,12 @@ impl Assembler {
         for (f, el) in self.elements.iter().enumerate() {
             let bm = &self.face_maps[f];
             let e = local_vector(&self.layout.local[f], st.q);
-            let en = el.eval(&p.material, &e, &mut fe, if need_tangent { Some(&mut ke) } else { None });
+            let en = el.eval(
+                &p.material,
+                &e,
+                &mut fe,
+                if need_tangent { Some(&mut ke) } else { None },
+            );
             out.strain_energy += en.membrane + en.bending;
             if p.beta != 0.0 {
                 let ve = local_vector(&self.layout.local[f], st.v);
@@ -380,18 +395,31 @@ impl Assembler {
         let mut f9 = SVector::<f64, 9>::zeros();
         let mut k9 = SMatrix::<f64, 9, 9>::zeros();
         for (i, ce) in self.creases.iter().enumerate() {
-            let [a, b, t] = [ce.combos[0].eval(st.q), ce.combos[1].eval(st.q), ce.combos[2].eval(st.q)];
+            let [a, b, t] = [
+                ce.combos[0].eval(st.q),
+                ce.combos[1].eval(st.q),
+                ce.combos[2].eval(st.q),
+            ];
             let d = crease::theta_derivatives(&a, &b, &t, matrix.is_some());
             if !d.theta.is_finite() || a.cross(&t).norm() == 0.0 || b.cross(&t).norm() == 0.0 {
-                return Err(format!("crease on edge {} has an undefined fold angle", ce.edge));
+                return Err(format!(
+                    "crease on edge {} has an undefined fold angle",
+                    ce.edge
+                ));
             }
             let theta = crease::unwrap(d.theta, st.theta_prev[i]);
             out.theta.push(theta);
             let k = p.crease_k_per_length * ce.length;
             f9.fill(0.0);
             let want_k = matrix.is_some();
-            out.crease_energy +=
-                crease::spring(k, theta, st.theta0[i], &d, &mut f9, if want_k { Some(&mut k9) } else { None });
+            out.crease_energy += crease::spring(
+                k,
+                theta,
+                st.theta0[i],
+                &d,
+                &mut f9,
+                if want_k { Some(&mut k9) } else { None },
+            );
             let g = SVector::<f64, 9>::from_iterator(d.grad.iter().flat_map(|x| x.iter().copied()));
             let mom = st.moment[i];
             if mom != 0.0 {
@@ -412,7 +440,11 @@ impl Assembler {
             let cdamp = p.crease_c_per_length * ce.length;
             let mut cmat_w = 0.0;
             if damping && cdamp != 0.0 {
-                let vl = [ce.combos[0].eval(st.v), ce.combos[1].eval(st.v), ce.combos[2].eval(st.v)];
+                let vl = [
+                    ce.combos[0].eval(st.v),
+                    ce.combos[1].eval(st.v),
+                    ce.combos[2].eval(st.v),
+                ];
                 let rate: f64 = (0..3).map(|j| d.grad[j].dot(&vl[j])).sum();
                 f9 += cdamp * rate * g;
                 cmat_w = matrix.as_ref().map(|(_, co)| co.c * cdamp).unwrap_or(0.0);
@@ -450,7 +482,9 @@ impl Assembler {
             let col = self.free[3 * b + y];
             let range = self.col_ptr[col]..self.col_ptr[col + 1];
             let r0 = self.free[3 * a];
-            let k0 = self.row_idx[range.clone()].binary_search(&r0).expect("block in pattern");
+            let k0 = self.row_idx[range.clone()]
+                .binary_search(&r0)
+                .expect("block in pattern");
             for x in 0..3 {
                 vals[range.start + k0 + x] += k[(x, y)];
             }
@@ -498,12 +532,7 @@ fn scatter_force(bm: &BlockMap, f: &[f64], out: &mut [f64]) {
     }
 }
 
-fn scatter_matrix<const N: usize>(
-    bm: &BlockMap,
-    k: &SMatrix<f64, N, N>,
-    w: f64,
-    vals: &mut [f64],
-) {
+fn scatter_matrix<const N: usize>(bm: &BlockMap, k: &SMatrix<f64, N, N>, w: f64, vals: &mut [f64]) {
     let ns = bm.slots.len();
     let nv = N / 3;
     for i in 0..nv {
@@ -540,7 +569,10 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
             let mut right = None;
             let mut left = None;
             for &f in &mesh.edge_faces[e] {
-                let third = *mesh.triangles[f].iter().find(|&&x| x != v && x != w).expect("triangle");
+                let third = *mesh.triangles[f]
+                    .iter()
+                    .find(|&&x| x != v && x != w)
+                    .expect("triangle");
                 let x = mesh.coords[third] - mesh.coords[v];
                 let side = d.x * x.y - d.y * x.x;
                 let g = layout.gradient_along(v, f, x);

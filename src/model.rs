@@ -173,7 +173,12 @@ impl Model {
         let outputs = output_table(&scene);
         let state = ModelState {
             time: 0.0,
-            dynamics: Dynamics { q: vec![], v: vec![], qdd: vec![], abar: vec![] },
+            dynamics: Dynamics {
+                q: vec![],
+                v: vec![],
+                qdd: vec![],
+                abar: vec![],
+            },
             crease_theta: vec![],
             inputs_now: inputs.iter().map(|v| v.start).collect(),
             inputs_next: inputs.iter().map(|v| v.start).collect(),
@@ -183,7 +188,15 @@ impl Model {
             outputs: outputs.iter().map(|v| v.start).collect(),
         };
         // Build once now so that a bad scene fails at instantiation.
-        let mut m = Model { scene, parameters, inputs, outputs, state, sys: None, built_with: None };
+        let mut m = Model {
+            scene,
+            parameters,
+            inputs,
+            outputs,
+            state,
+            sys: None,
+            built_with: None,
+        };
         m.build()?;
         Ok(m)
     }
@@ -223,14 +236,19 @@ impl Model {
             .parameters
             .get(i)
             .copied()
-            .ok_or(Error::NoSuchVariable { kind: "parameter", index: i })
+            .ok_or(Error::NoSuchVariable {
+                kind: "parameter",
+                index: i,
+            })
     }
 
     /// Set parameter `i`; only before [`Model::initialize`]. A non-finite or
     /// out-of-range value is rejected and nothing changes.
     pub fn set_parameter(&mut self, i: usize, value: f64) -> Result<(), Error> {
-        let spec =
-            self.parameters.get(i).ok_or(Error::NoSuchVariable { kind: "parameter", index: i })?;
+        let spec = self.parameters.get(i).ok_or(Error::NoSuchVariable {
+            kind: "parameter",
+            index: i,
+        })?;
         if self.state.phase != Phase::Setup {
             return Err(Error::Phase(format!(
                 "parameter {} can only be set before initialization",
@@ -246,8 +264,12 @@ impl Model {
             return Err(bad("not a finite number"));
         }
         match spec.name.as_str() {
-            "material.youngs_modulus" | "material.thickness" | "material.density"
-            | "crease.length_scale" | "solver.max_step" | "solver.tolerance"
+            "material.youngs_modulus"
+            | "material.thickness"
+            | "material.density"
+            | "crease.length_scale"
+            | "solver.max_step"
+            | "solver.tolerance"
                 if value <= 0.0 =>
             {
                 return Err(bad("must be positive"));
@@ -275,13 +297,19 @@ impl Model {
             .inputs_next
             .get(i)
             .copied()
-            .ok_or(Error::NoSuchVariable { kind: "input", index: i })
+            .ok_or(Error::NoSuchVariable {
+                kind: "input",
+                index: i,
+            })
     }
 
     /// Set input `i`: the value reached at the end of the next step (ramped
     /// from the value in force now). Non-finite values are rejected.
     pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
-        let spec = self.inputs.get(i).ok_or(Error::NoSuchVariable { kind: "input", index: i })?;
+        let spec = self.inputs.get(i).ok_or(Error::NoSuchVariable {
+            kind: "input",
+            index: i,
+        })?;
         if !value.is_finite() {
             return Err(Error::BadValue {
                 name: spec.name.clone(),
@@ -317,7 +345,13 @@ impl Model {
         let mut ev = Evaluation::default();
         sys.asm
             .evaluate(
-                &State { q: &q, v: &v, theta0: &d.theta0, moment: &d.moment, theta_prev: &theta_prev },
+                &State {
+                    q: &q,
+                    v: &v,
+                    theta0: &d.theta0,
+                    moment: &d.moment,
+                    theta_prev: &theta_prev,
+                },
                 &mut ev,
                 None,
             )
@@ -331,8 +365,12 @@ impl Model {
             }
         }
         let mvals = sys.asm.mass_values().to_vec();
-        sys.solver.factor(&mvals).map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
-        sys.solver.solve_in_place(&mut rhs).map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+        sys.solver
+            .factor(&mvals)
+            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+        sys.solver
+            .solve_in_place(&mut rhs)
+            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
         let mut qdd = vec![0.0; n];
         for i in 0..n {
             let fi = sys.asm.free[i];
@@ -340,7 +378,12 @@ impl Model {
                 qdd[i] = rhs[fi];
             }
         }
-        self.state.dynamics = Dynamics { q, v, abar: qdd.clone(), qdd };
+        self.state.dynamics = Dynamics {
+            q,
+            v,
+            abar: qdd.clone(),
+            qdd,
+        };
         self.state.crease_theta = ev.theta.clone();
         self.state.h_next = sys.max_step;
         self.state.phase = Phase::Running;
@@ -375,7 +418,10 @@ impl Model {
     fn advance_inner(&mut self, big_h: f64) -> Result<StepReport, Error> {
         let t0 = self.state.time;
         let sys = self.sys.as_mut().expect("initialized");
-        let mut report = StepReport { min_step: f64::INFINITY, ..Default::default() };
+        let mut report = StepReport {
+            min_step: f64::INFINITY,
+            ..Default::default()
+        };
         let mut s = 0.0; // elapsed within the advance
         let mut h = self.state.h_next.min(sys.max_step);
         let u0 = self.state.inputs_now.clone();
@@ -416,27 +462,41 @@ impl Model {
                     let at_min = h <= sys.min_step * 1.000001;
                     if out.error <= 1.0 || at_min {
                         self.state.dynamics = next;
-                        self.state.crease_theta.clone_from(&sys.ws.evaluation().theta);
+                        self.state
+                            .crease_theta
+                            .clone_from(&sys.ws.evaluation().theta);
                         s += h;
                         report.steps += 1;
                         report.min_step = report.min_step.min(h);
-                        let grow = if out.error > 0.0 { 0.9 * out.error.powf(-1.0 / 3.0) } else { 2.0 };
+                        let grow = if out.error > 0.0 {
+                            0.9 * out.error.powf(-1.0 / 3.0)
+                        } else {
+                            2.0
+                        };
                         let hn = (h * grow.clamp(0.2, 2.0)).min(sys.max_step);
                         if h < remaining || s >= big_h {
                             // do not let a short final step shrink the next advance's step
-                            self.state.h_next = if h < remaining { hn } else { hn.max(self.state.h_next) };
+                            self.state.h_next = if h < remaining {
+                                hn
+                            } else {
+                                hn.max(self.state.h_next)
+                            };
                         }
                         h = hn;
                     } else {
                         report.rejected += 1;
-                        h = (h * (0.9 * out.error.powf(-1.0 / 3.0)).clamp(0.2, 0.9)).max(sys.min_step);
+                        h = (h * (0.9 * out.error.powf(-1.0 / 3.0)).clamp(0.2, 0.9))
+                            .max(sys.min_step);
                     }
                 }
                 Err(reason) => {
                     report.rejected += 1;
                     h *= 0.25;
                     if h < sys.min_step {
-                        return Err(Error::StepFailed { time: t0 + s, reason });
+                        return Err(Error::StepFailed {
+                            time: t0 + s,
+                            reason,
+                        });
                     }
                 }
             }
@@ -446,7 +506,10 @@ impl Model {
         self.state.inputs_now = u1;
         self.state.outputs = self.compute_outputs(&ev);
         if self.state.outputs.iter().any(|x| !x.is_finite()) {
-            return Err(Error::StepFailed { time: t0, reason: "outputs are not finite".into() });
+            return Err(Error::StepFailed {
+                time: t0,
+                reason: "outputs are not finite".into(),
+            });
         }
         Ok(report)
     }
@@ -492,7 +555,10 @@ impl Model {
         }
         if o.fold_angles {
             for ends in &sys.angle_ends {
-                let sum: f64 = ends.iter().map(|&i| ev.theta[i] - std::f64::consts::PI).sum();
+                let sum: f64 = ends
+                    .iter()
+                    .map(|&i| ev.theta[i] - std::f64::consts::PI)
+                    .sum();
                 out.push(sum / ends.len().max(1) as f64);
             }
         }
@@ -518,7 +584,9 @@ impl Model {
             Phase::Setup => true,
             Phase::Running => {
                 let d = &s.dynamics;
-                [d.q.len(), d.v.len(), d.qdd.len(), d.abar.len()].iter().all(|&l| l == n)
+                [d.q.len(), d.v.len(), d.qdd.len(), d.abar.len()]
+                    .iter()
+                    .all(|&l| l == n)
                     && s.crease_theta.len()
                         == self.sys.as_ref().map(|s| s.asm.creases.len()).unwrap_or(0)
             }
@@ -646,7 +714,9 @@ impl Model {
             for (a, act) in sc.actuators.iter().enumerate() {
                 if act.edges.contains(&ce.edge) {
                     match act.mode {
-                        ActuatorMode::RestAngle => rest[i].push((a, mesh.edges[ce.edge].fold_target)),
+                        ActuatorMode::RestAngle => {
+                            rest[i].push((a, mesh.edges[ce.edge].fold_target))
+                        }
                         ActuatorMode::Torque => torque[i].push(a),
                     }
                 }
@@ -665,7 +735,9 @@ impl Model {
         let angle_ends = fold_edges(sc)
             .into_iter()
             .map(|fe| {
-                (0..nends).filter(|&i| mesh.edges[asm.creases[i].edge].fold_edge == Some(fe)).collect()
+                (0..nends)
+                    .filter(|&i| mesh.edges[asm.creases[i].edge].fold_edge == Some(fe))
+                    .collect()
             })
             .collect();
         let length = sheet_size(mesh);
@@ -708,7 +780,11 @@ struct DriveValues {
 
 fn drive(sys: &System, u: &[f64]) -> DriveValues {
     let pi = std::f64::consts::PI;
-    let theta0 = sys.rest.iter().map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>()).collect();
+    let theta0 = sys
+        .rest
+        .iter()
+        .map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>())
+        .collect();
     let moment = sys
         .torque
         .iter()
@@ -725,7 +801,12 @@ fn drive(sys: &System, u: &[f64]) -> DriveValues {
     }
     let mut prescribed = sys.supported.clone();
     prescribed.extend(sys.motion.iter().map(|&(k, i)| (i, u[k])));
-    DriveValues { theta0, moment, f_ext, prescribed }
+    DriveValues {
+        theta0,
+        moment,
+        f_ext,
+        prescribed,
+    }
 }
 
 /// Diagonal of the sheet's bounding box (m): the length scale of position errors.

@@ -38,7 +38,12 @@ impl Coefficients {
         let af = r / (r + 1.0);
         let gamma = 0.5 + af - am;
         let beta = 0.25 * (1.0 + af - am).powi(2);
-        Coefficients { am, af, beta, gamma }
+        Coefficients {
+            am,
+            af,
+            beta,
+            gamma,
+        }
     }
 }
 
@@ -123,18 +128,28 @@ pub fn step(
     ws: &mut Workspace,
 ) -> Result<(Dynamics, Outcome), String> {
     let n = asm.n_dofs();
-    let Coefficients { am, af, beta, gamma } = co;
+    let Coefficients {
+        am,
+        af,
+        beta,
+        gamma,
+    } = co;
     let bh2 = beta * h * h;
     // Predictor: qdd_{n+1} = qdd_n.
     let mut next = cur.clone();
     for i in 0..n {
         next.abar[i] = (cur.qdd[i] - am * cur.abar[i]) / (1.0 - am);
-        next.q[i] = cur.q[i] + h * cur.v[i] + h * h * (0.5 - beta) * cur.abar[i] + bh2 * next.abar[i];
+        next.q[i] =
+            cur.q[i] + h * cur.v[i] + h * h * (0.5 - beta) * cur.abar[i] + bh2 * next.abar[i];
     }
     for &(i, x) in drive.prescribed {
         next.q[i] = x;
     }
-    let coeffs = MatrixCoeffs { k: 1.0, c: gamma / (beta * h), m: (1.0 - am) / ((1.0 - af) * bh2) };
+    let coeffs = MatrixCoeffs {
+        k: 1.0,
+        c: gamma / (beta * h),
+        m: (1.0 - am) / ((1.0 - af) * bh2),
+    };
     ws.matrix.resize(asm.nnz(), 0.0);
     ws.rhs.resize(asm.n_free, 0.0);
     ws.mqdd.resize(n, 0.0);
@@ -142,9 +157,11 @@ pub fn step(
     let mut last_norm = f64::INFINITY;
     for it in 0..settings.max_newton {
         for i in 0..n {
-            next.abar[i] = (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
+            next.abar[i] =
+                (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
             next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
-            next.qdd[i] = ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
+            next.qdd[i] =
+                ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
         }
         let st = State {
             q: &next.q,
@@ -179,7 +196,9 @@ pub fn step(
         if norm <= settings.newton_tolerance {
             // Final consistent update and evaluation at the converged state.
             for i in 0..n {
-                next.abar[i] = (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
+                next.abar[i] =
+                    (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i])
+                        / bh2;
                 next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
                 next.qdd[i] =
                     ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
@@ -203,13 +222,23 @@ pub fn step(
                     cnt += 1;
                 }
             }
-            out.error = if cnt > 0 { (sum / cnt as f64).sqrt() } else { 0.0 };
+            out.error = if cnt > 0 {
+                (sum / cnt as f64).sqrt()
+            } else {
+                0.0
+            };
             return Ok((next, out));
         }
         if it >= 3 && norm > 2.0 * last_norm {
-            return Err(format!("Newton diverged (correction {norm:.3e} after {} iterations)", it + 1));
+            return Err(format!(
+                "Newton diverged (correction {norm:.3e} after {} iterations)",
+                it + 1
+            ));
         }
         last_norm = norm;
     }
-    Err(format!("Newton did not converge in {} iterations", settings.max_newton))
+    Err(format!(
+        "Newton did not converge in {} iterations",
+        settings.max_newton
+    ))
 }

@@ -10,7 +10,14 @@ use crate::solver::SparseSolver;
 /// given, the matching `d2V/dq2` to the matrix values.
 pub trait Load {
     /// Add `lambda * (-dV/dq)` to `force_ext` and `lambda * d2V/dq2` to `matrix`.
-    fn apply(&self, asm: &Assembler, q: &[f64], lambda: f64, force_ext: &mut [f64], matrix: Option<&mut [f64]>);
+    fn apply(
+        &self,
+        asm: &Assembler,
+        q: &[f64],
+        lambda: f64,
+        force_ext: &mut [f64],
+        matrix: Option<&mut [f64]>,
+    );
 }
 
 /// Settings of the static solve.
@@ -21,13 +28,18 @@ pub struct StaticSettings {
     /// Maximum Newton iterations per increment.
     pub max_iterations: usize,
     /// Converged when the residual norm is below `tolerance` times the
-    /// reference force norm (and the update is small).
+    /// external force norm, or when the work of a Newton correction is
+    /// below 1e-16 of the increment's first (the round-off floor).
     pub tolerance: f64,
 }
 
 impl Default for StaticSettings {
     fn default() -> Self {
-        StaticSettings { load_steps: 10, max_iterations: 50, tolerance: 1e-9 }
+        StaticSettings {
+            load_steps: 10,
+            max_iterations: 50,
+            tolerance: 1e-9,
+        }
     }
 }
 
@@ -60,9 +72,25 @@ pub fn solve(
     let mut fext = vec![0.0; n];
     let mut rhs = vec![0.0; asm.n_free];
     let mut report = StaticReport::default();
-    let co = MatrixCoeffs { k: 1.0, m: 0.0, c: 0.0 };
-    let residual = |q: &[f64], lambda: f64, theta_prev: &[f64], ev: &mut Evaluation, fext: &mut Vec<f64>, mat: Option<&mut [f64]>| -> Result<f64, String> {
-        let st = State { q, v: &zeros, theta0, moment: &moment, theta_prev };
+    let co = MatrixCoeffs {
+        k: 1.0,
+        m: 0.0,
+        c: 0.0,
+    };
+    let residual = |q: &[f64],
+                    lambda: f64,
+                    theta_prev: &[f64],
+                    ev: &mut Evaluation,
+                    fext: &mut Vec<f64>,
+                    mat: Option<&mut [f64]>|
+     -> Result<f64, String> {
+        let st = State {
+            q,
+            v: &zeros,
+            theta0,
+            moment: &moment,
+            theta_prev,
+        };
         match mat {
             Some(m) => {
                 asm.evaluate(&st, ev, Some((&mut *m, co)))?;
@@ -90,6 +118,7 @@ pub fn solve(
         let mut converged = false;
         let mut it = 0;
         let mut rnorm = 0.0;
+        let mut first_work = 0.0;
         while it < settings.max_iterations {
             it += 1;
             rnorm = residual(q, lambda, &theta_prev, &mut ev, &mut fext, Some(&mut mat))?;
@@ -105,12 +134,28 @@ pub fn solve(
                 }
             }
             solver.factor(&mat)?;
+            let b = rhs.clone();
             solver.solve_in_place(&mut rhs)?;
+            // Energy criterion (Bathe): the work of the correction against the
+            // residual, relative to the first one of this increment. It stays
+            // meaningful where the force residual hits its round-off floor
+            // (thin sheets: membrane stiffness >> load).
+            let work = rhs.iter().zip(&b).map(|(x, y)| x * y).sum::<f64>().abs();
+            if it == 1 {
+                first_work = work;
+            } else if work <= 1e-16 * first_work {
+                converged = true;
+                break;
+            }
             // Line search on the energy slope along the step (Crisfield):
             // s(alpha) = dq . R(q + alpha dq) should vanish; accept the full
             // step when |s(1)| <= 0.8 |s(0)|, else take secant steps.
             let q0: Vec<f64> = q.to_vec();
-            let slope = |q: &mut [f64], alpha: f64, ev: &mut Evaluation, fext: &mut Vec<f64>| -> Option<f64> {
+            let slope = |q: &mut [f64],
+                         alpha: f64,
+                         ev: &mut Evaluation,
+                         fext: &mut Vec<f64>|
+             -> Option<f64> {
                 for i in 0..n {
                     let fi = asm.free[i];
                     if fi != FIXED {
@@ -138,7 +183,11 @@ pub fn solve(
                     Some(s) if s.abs() <= 0.8 * s0.abs() => break,
                     Some(s) => {
                         // secant between (a_lo, s_lo) and (alpha, s)
-                        let next = if (s_lo - s).abs() > 0.0 { alpha - s * (alpha - a_lo) / (s - s_lo) } else { 0.5 * alpha };
+                        let next = if (s_lo - s).abs() > 0.0 {
+                            alpha - s * (alpha - a_lo) / (s - s_lo)
+                        } else {
+                            0.5 * alpha
+                        };
                         a_lo = alpha;
                         s_lo = s;
                         alpha = next.clamp(0.05, 4.0);
@@ -147,7 +196,9 @@ pub fn solve(
                 }
             }
             if slope(q, alpha, &mut ev, &mut fext).is_none() {
-                return Err(format!("static solve reached an invalid configuration at load factor {lambda:.3}"));
+                return Err(format!(
+                    "static solve reached an invalid configuration at load factor {lambda:.3}"
+                ));
             }
         }
         if !converged {
