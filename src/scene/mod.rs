@@ -39,6 +39,7 @@ pub mod build;
 mod error;
 pub mod fold;
 pub mod keys;
+pub mod patterns;
 pub mod refine;
 pub mod triangulate;
 
