@@ -1,12 +1,100 @@
 //! A scene: the crease pattern plus everything physical about it (material,
 //! crease stiffness, actuators, supports, loads, solver settings, outputs).
 //!
-//! This module holds the scene as plain data with documented SI defaults.
-//! The FOLD reader, validation, refinement and pattern generators live in
-//! submodules and produce a [`Scene`].
+//! This module holds the scene as plain data with documented SI defaults,
+//! and the front door that makes one from a FOLD file:
+//!
+//! ```
+//! let text = r#"{
+//!   "frame_unit": "mm",
+//!   "vertices_coords": [[0,0],[10,0],[20,0],[20,10],[10,10],[0,10]],
+//!   "edges_vertices": [[1,4]], "edges_assignment": ["V"], "edges_foldAngle": [90],
+//!   "faces_vertices": [[0,1,4,5],[1,2,3,4]],
+//!   "ancf:supports": [{"vertices": [0, 5], "fix": "position"}]
+//! }"#;
+//! let (scene, warnings) = origami_fmu::scene::from_str(text).unwrap();
+//! assert_eq!(scene.fold_vertex_count, 6);
+//! assert_eq!(scene.mesh.triangles.len(), 4);
+//! assert_eq!(scene.actuators[0].name, "fold");
+//! assert!(warnings.is_empty());
+//! ```
+//!
+//! Submodules: [`fold`] (FOLD 1.2 reading and writing), [`keys`] (the
+//! `ancf:` physics keys), [`build`] (validation and the mesh), [`refine`],
+//! [`patterns`] (generators). The key reference with a complete example is
+//! `docs/scenes.md`.
+//!
+//! Conventions: the reference (stress-free) state is the flat crease
+//! pattern. 2D `vertices_coords` are used as they are; 3D ones with a single
+//! z as x, y; other 3D ones must be coplanar (within [`build::COPLANAR_TOLERANCE`]
+//! of the sheet size) and are expressed in their own plane, seen from the
+//! side where the faces are counter-clockwise. `frame_unit` scales to metres
+//! (`unit`, the FOLD default, is read as metres).
 
 use crate::mesh::Mesh;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub mod build;
+mod error;
+pub mod fold;
+pub mod keys;
+pub mod patterns;
+pub mod refine;
+pub mod triangulate;
+
+pub use build::from_fold;
+pub use error::SceneError;
+pub use fold::{FoldFile, FrameSelector};
+
+/// Options of [`load_with`] and [`from_str_with`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Which frame of a multi-frame file (default: the top level if it has
+    /// vertices, else the first of `file_frames`).
+    pub frame: Option<FrameSelector>,
+    /// Model name when the file has no `ancf:name` (e.g. the file stem).
+    pub name: Option<String>,
+}
+
+/// Load a FOLD scene file. Returns the validated scene and warnings; the
+/// model name defaults to the file stem.
+pub fn load(path: impl AsRef<Path>) -> Result<(Scene, Vec<String>), SceneError> {
+    load_with(path, &LoadOptions::default())
+}
+
+/// [`load`] with options.
+pub fn load_with(
+    path: impl AsRef<Path>,
+    options: &LoadOptions,
+) -> Result<(Scene, Vec<String>), SceneError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut options = options.clone();
+    if options.name.is_none() {
+        options.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+    }
+    from_str_with(&text, &options)
+}
+
+/// A scene from FOLD text (the first frame, default name).
+pub fn from_str(text: &str) -> Result<(Scene, Vec<String>), SceneError> {
+    from_str_with(text, &LoadOptions::default())
+}
+
+/// [`from_str`] with options.
+pub fn from_str_with(
+    text: &str,
+    options: &LoadOptions,
+) -> Result<(Scene, Vec<String>), SceneError> {
+    let (file, mut warnings) = fold::parse(text, options.frame.as_ref())?;
+    let (scene, more) = from_fold(&file, options.name.as_deref())?;
+    warnings.extend(more);
+    Ok((scene, warnings))
+}
 
 /// Sheet material, SI units.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -224,9 +312,11 @@ pub struct Scene {
     pub crease: CreaseStiffness,
     /// Damping.
     pub damping: Damping,
-    /// When true (a scene that sets no damping), the model picks a
-    /// mass-proportional damping under which a fold settles within a few
-    /// of its natural periods, replacing `damping.alpha`.
+    /// True when the scene does not set `ancf:damping`: the model then
+    /// chooses a mass-proportional damping from the facet size and crease
+    /// stiffness (damping ratio 0.2 on the folding mode of a mean facet) so
+    /// that a fold settles within a few of its periods, and `damping.alpha`
+    /// and `damping.beta` are not used. False when the scene sets them.
     pub auto_damping: bool,
     /// Actuators (one input each).
     pub actuators: Vec<Actuator>,
@@ -246,8 +336,8 @@ pub struct Scene {
 
 impl Scene {
     /// A scene around `mesh` with every default of a plain FOLD file: paper
-    /// material, no supports, no gravity, one rest-angle actuator `fold`
-    /// over every crease.
+    /// material, no supports, no gravity, automatic damping, one rest-angle
+    /// actuator `fold` over every crease.
     pub fn with_defaults(name: &str, mut mesh: Mesh) -> Scene {
         // A mesh built in code has no FOLD file behind it: its edge indices
         // are the FOLD edge indices.

@@ -1,0 +1,817 @@
+//! The `ancf:` physics keys of a FOLD scene (documented in `docs/scenes.md`).
+//!
+//! | key | value |
+//! |-----|-------|
+//! | `ancf:name` | model name (string) |
+//! | `ancf:material` | `{youngs_modulus, poisson_ratio, thickness, density}` |
+//! | `ancf:crease` | `{length_scale}` or `{stiffness_per_length}`, optional `damping_per_length` |
+//! | `ancf:damping` | `{alpha, beta}` or `"auto"` |
+//! | `ancf:actuators` | `[{name, edges, mode, start}]` |
+//! | `ancf:supports` | `[{vertices, fix}]` |
+//! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
+//! | `ancf:motions` | `[{name, vertex}]` |
+//! | `ancf:contact` | `{enabled: false, friction, stiffness, thickness}` |
+//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, stop_time}` |
+//! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
+//! | `ancf:refine` | levels of uniform refinement (integer) |
+//!
+//! This module checks each key on its own (types, ranges, names, unknown
+//! fields with a "did you mean"); checks against the mesh (indices, crease
+//! membership) happen when the scene is built.
+
+use super::error::{SceneError, suggestion};
+use super::fold::{
+    Assignment, expect_array, expect_index, expect_number, expect_string, type_name,
+};
+use super::{
+    ActuatorMode, CreaseStiffness, Fix, Integrator, Material, Outputs, SolverSettings, VertexInput,
+};
+use serde_json::{Map, Value};
+
+/// Every `ancf:` key this version understands.
+pub const KEYS: &[&str] = &[
+    "ancf:name",
+    "ancf:material",
+    "ancf:crease",
+    "ancf:damping",
+    "ancf:actuators",
+    "ancf:supports",
+    "ancf:loads",
+    "ancf:motions",
+    "ancf:contact",
+    "ancf:solver",
+    "ancf:outputs",
+    "ancf:refine",
+];
+
+/// First components of generated variable names; user-chosen input names
+/// may not use them.
+pub const RESERVED_NAMES: &[&str] = &[
+    "vertex", "crease", "energy", "material", "damping", "gravity", "solver", "contact", "time",
+];
+
+/// Most levels of `ancf:refine` (each multiplies the triangles by 4).
+pub const MAX_REFINE: usize = 6;
+
+/// Which creases an actuator drives, in FOLD terms.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EdgeSelection {
+    /// Every crease.
+    All,
+    /// Every crease with this assignment (M, V or U).
+    Assignment(Assignment),
+    /// These FOLD edge indices.
+    List(Vec<usize>),
+}
+
+/// An actuator as written in the file (edges not yet resolved).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActuatorSpec {
+    /// Input name.
+    pub name: String,
+    /// Creases driven.
+    pub edges: EdgeSelection,
+    /// Rest-angle or torque.
+    pub mode: ActuatorMode,
+    /// Input value at t = 0.
+    pub start: f64,
+    /// `ancf:actuators[i]`, for messages.
+    pub key: String,
+}
+
+/// A support as written in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SupportSpec {
+    /// FOLD vertex indices.
+    pub vertices: Vec<usize>,
+    /// What is fixed.
+    pub fix: Fix,
+    /// `ancf:supports[i]`, for messages.
+    pub key: String,
+}
+
+/// Everything the `ancf:` keys say, checked key by key; defaults filled in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Physics {
+    /// `ancf:name`.
+    pub name: Option<String>,
+    /// `ancf:material`.
+    pub material: Material,
+    /// `ancf:crease` stiffness rule.
+    pub crease: CreaseStiffness,
+    /// `ancf:crease.damping_per_length`.
+    pub crease_damping: f64,
+    /// `ancf:damping` (alpha, beta); `None`: automatic damping.
+    pub damping: Option<(f64, f64)>,
+    /// `ancf:actuators`; `None`: the default actuator `fold`.
+    pub actuators: Option<Vec<ActuatorSpec>>,
+    /// `ancf:supports`.
+    pub supports: Vec<SupportSpec>,
+    /// `ancf:loads.gravity`.
+    pub gravity: Option<[f64; 3]>,
+    /// `ancf:loads.vertex_forces` with their keys.
+    pub vertex_forces: Vec<(VertexInput, String)>,
+    /// `ancf:motions` with their keys.
+    pub vertex_motions: Vec<(VertexInput, String)>,
+    /// `ancf:solver`.
+    pub solver: SolverSettings,
+    /// `ancf:outputs`.
+    pub outputs: Outputs,
+    /// `ancf:refine`.
+    pub refine: usize,
+}
+
+/// A JSON object with a fixed set of allowed fields.
+struct Obj<'a> {
+    key: String,
+    map: &'a Map<String, Value>,
+}
+
+impl<'a> Obj<'a> {
+    fn new(key: &str, v: &'a Value, fields: &[&str]) -> Result<Obj<'a>, SceneError> {
+        let map = v.as_object().ok_or_else(|| {
+            SceneError::invalid(key, format!("expected an object, found {}", type_name(v)))
+        })?;
+        let mut names: Vec<&String> = map.keys().collect();
+        names.sort();
+        for f in names {
+            if !fields.contains(&f.as_str()) {
+                return Err(SceneError::invalid(
+                    key,
+                    format!(
+                        "unknown field '{f}'{}; allowed: {}",
+                        suggestion(f, fields),
+                        fields.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(Obj {
+            key: key.to_string(),
+            map,
+        })
+    }
+    fn path(&self, f: &str) -> String {
+        format!("{}.{f}", self.key)
+    }
+    fn get(&self, f: &str) -> Option<&'a Value> {
+        self.map.get(f)
+    }
+    fn num(&self, f: &str) -> Result<Option<f64>, SceneError> {
+        self.get(f)
+            .map(|v| expect_number(v, &self.path(f)))
+            .transpose()
+    }
+    /// A number satisfying `ok`, described by `what` in the error.
+    fn num_where(
+        &self,
+        f: &str,
+        ok: impl Fn(f64) -> bool,
+        what: &str,
+    ) -> Result<Option<f64>, SceneError> {
+        match self.num(f)? {
+            Some(x) if !ok(x) => Err(SceneError::invalid(
+                self.path(f),
+                format!("{x} is out of range; it must be {what}"),
+            )),
+            x => Ok(x),
+        }
+    }
+    fn string(&self, f: &str) -> Result<Option<&'a str>, SceneError> {
+        self.get(f)
+            .map(|v| expect_string(v, &self.path(f)))
+            .transpose()
+    }
+    fn required(&self, f: &str) -> Result<&'a Value, SceneError> {
+        self.get(f)
+            .ok_or_else(|| SceneError::invalid(self.path(f), "missing (required)"))
+    }
+}
+
+/// Check an input name: a C-like identifier that does not start a
+/// generated variable name.
+pub fn check_name(key: &str, name: &str) -> Result<(), SceneError> {
+    let mut chars = name.chars();
+    let ok = match chars.next() {
+        Some(c) if c.is_ascii_alphabetic() || c == '_' => {
+            chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+        }
+        _ => false,
+    };
+    if !ok {
+        return Err(SceneError::invalid(
+            key,
+            format!(
+                "'{name}' is not a valid variable name: use letters, digits and '_', \
+                 starting with a letter or '_'"
+            ),
+        ));
+    }
+    if RESERVED_NAMES.contains(&name) {
+        return Err(SceneError::invalid(
+            key,
+            format!(
+                "'{name}' clashes with generated variable names ({}.*); choose another name",
+                name
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn enum_value<T: Copy>(key: &str, s: &str, options: &[(&str, T)]) -> Result<T, SceneError> {
+    options
+        .iter()
+        .find(|(n, _)| *n == s)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let names: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+            SceneError::invalid(
+                key,
+                format!(
+                    "unknown value \"{s}\"{}; expected one of {}",
+                    suggestion(s, &names),
+                    names.join(", ")
+                ),
+            )
+        })
+}
+
+fn index_list(v: &Value, key: &str) -> Result<Vec<usize>, SceneError> {
+    expect_array(v, key)?
+        .iter()
+        .enumerate()
+        .map(|(i, x)| expect_index(x, &format!("{key}[{i}]")))
+        .collect()
+}
+
+fn vertex_inputs(v: &Value, key: &str) -> Result<Vec<(VertexInput, String)>, SceneError> {
+    let mut out = Vec::new();
+    for (i, item) in expect_array(v, key)?.iter().enumerate() {
+        let k = format!("{key}[{i}]");
+        let o = Obj::new(&k, item, &["name", "vertex"])?;
+        let name = expect_string(o.required("name")?, &o.path("name"))?;
+        check_name(&o.path("name"), name)?;
+        let vertex = expect_index(o.required("vertex")?, &o.path("vertex"))?;
+        out.push((
+            VertexInput {
+                name: name.to_string(),
+                vertex,
+            },
+            k,
+        ));
+    }
+    Ok(out)
+}
+
+/// Read all `ancf:` keys. Unknown `ancf:` keys and unknown fields are errors
+/// with a suggestion; notes for the user go to `warnings`.
+pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Physics, SceneError> {
+    let mut keys: Vec<&String> = ancf.keys().collect();
+    keys.sort();
+    for k in keys {
+        if !KEYS.contains(&k.as_str()) {
+            return Err(SceneError::invalid(
+                k.as_str(),
+                format!(
+                    "unknown key{}; known keys: {}",
+                    suggestion(k, KEYS),
+                    KEYS.join(", ")
+                ),
+            ));
+        }
+    }
+    let mut p = Physics {
+        name: None,
+        material: Material::default(),
+        crease: CreaseStiffness::default(),
+        crease_damping: 0.0,
+        damping: None,
+        actuators: None,
+        supports: vec![],
+        gravity: None,
+        vertex_forces: vec![],
+        vertex_motions: vec![],
+        solver: SolverSettings::default(),
+        outputs: Outputs::default(),
+        refine: 0,
+    };
+    let positive = |x: f64| x > 0.0;
+    let non_negative = |x: f64| x >= 0.0;
+
+    if let Some(v) = ancf.get("ancf:name") {
+        let s = expect_string(v, "ancf:name")?;
+        if s.trim().is_empty() {
+            return Err(SceneError::invalid("ancf:name", "must not be empty"));
+        }
+        p.name = Some(s.to_string());
+    }
+
+    if let Some(v) = ancf.get("ancf:material") {
+        let o = Obj::new(
+            "ancf:material",
+            v,
+            &["youngs_modulus", "poisson_ratio", "thickness", "density"],
+        )?;
+        let m = &mut p.material;
+        if let Some(x) = o.num_where("youngs_modulus", positive, "positive (Pa)")? {
+            m.youngs_modulus = x;
+        }
+        if let Some(x) = o.num_where(
+            "poisson_ratio",
+            |x| x > -1.0 && x < 0.5,
+            "in the open interval (-1, 0.5)",
+        )? {
+            m.poisson_ratio = x;
+        }
+        if let Some(x) = o.num_where("thickness", positive, "positive (m)")? {
+            m.thickness = x;
+        }
+        if let Some(x) = o.num_where("density", positive, "positive (kg/m^3)")? {
+            m.density = x;
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:crease") {
+        let o = Obj::new(
+            "ancf:crease",
+            v,
+            &["length_scale", "stiffness_per_length", "damping_per_length"],
+        )?;
+        let ls = o.num_where("length_scale", positive, "positive (m)")?;
+        let k = o.num_where(
+            "stiffness_per_length",
+            non_negative,
+            "zero or positive (N m/(rad m))",
+        )?;
+        p.crease = match (ls, k) {
+            (Some(_), Some(_)) => {
+                return Err(SceneError::invalid(
+                    "ancf:crease",
+                    "give either length_scale or stiffness_per_length, not both",
+                ));
+            }
+            (Some(l), None) => CreaseStiffness::LengthScale(l),
+            (None, Some(k)) => CreaseStiffness::PerLength(k),
+            (None, None) => CreaseStiffness::default(),
+        };
+        if let Some(c) = o.num_where(
+            "damping_per_length",
+            non_negative,
+            "zero or positive (N m s/(rad m))",
+        )? {
+            p.crease_damping = c;
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:damping") {
+        if v.as_str() == Some("auto") {
+            p.damping = None;
+        } else if v.is_string() {
+            return Err(SceneError::invalid(
+                "ancf:damping",
+                "expected \"auto\" or an object {alpha, beta}",
+            ));
+        } else {
+            let o = Obj::new("ancf:damping", v, &["alpha", "beta"])?;
+            let a = o.num_where("alpha", non_negative, "zero or positive (1/s)")?;
+            let b = o.num_where("beta", non_negative, "zero or positive (s)")?;
+            p.damping = Some((a.unwrap_or(0.0), b.unwrap_or(0.0)));
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:actuators") {
+        let mut list = Vec::new();
+        for (i, item) in expect_array(v, "ancf:actuators")?.iter().enumerate() {
+            let key = format!("ancf:actuators[{i}]");
+            let o = Obj::new(&key, item, &["name", "edges", "mode", "start"])?;
+            let name = expect_string(o.required("name")?, &o.path("name"))?;
+            check_name(&o.path("name"), name)?;
+            let edges = match o.get("edges") {
+                None => EdgeSelection::All,
+                Some(Value::String(s)) => match s.as_str() {
+                    "all" => EdgeSelection::All,
+                    "M" => EdgeSelection::Assignment(Assignment::Mountain),
+                    "V" => EdgeSelection::Assignment(Assignment::Valley),
+                    "U" => EdgeSelection::Assignment(Assignment::Unassigned),
+                    other => {
+                        return Err(SceneError::invalid(
+                            o.path("edges"),
+                            format!(
+                                "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\" \
+                                 or a list of FOLD edge indices"
+                            ),
+                        ));
+                    }
+                },
+                Some(list @ Value::Array(_)) => {
+                    let l = index_list(list, &o.path("edges"))?;
+                    if l.is_empty() {
+                        return Err(SceneError::invalid(
+                            o.path("edges"),
+                            "the list is empty; an actuator needs at least one crease",
+                        ));
+                    }
+                    EdgeSelection::List(l)
+                }
+                Some(other) => {
+                    return Err(SceneError::invalid(
+                        o.path("edges"),
+                        format!(
+                            "expected \"all\", \"M\", \"V\", \"U\" or a list of FOLD edge indices, found {}",
+                            type_name(other)
+                        ),
+                    ));
+                }
+            };
+            let mode = match o.string("mode")? {
+                None => ActuatorMode::RestAngle,
+                Some(s) => enum_value(
+                    &o.path("mode"),
+                    s,
+                    &[
+                        ("rest_angle", ActuatorMode::RestAngle),
+                        ("torque", ActuatorMode::Torque),
+                    ],
+                )?,
+            };
+            let start = o.num("start")?.unwrap_or(0.0);
+            list.push(ActuatorSpec {
+                name: name.to_string(),
+                edges,
+                mode,
+                start,
+                key,
+            });
+        }
+        p.actuators = Some(list);
+    }
+
+    if let Some(v) = ancf.get("ancf:supports") {
+        for (i, item) in expect_array(v, "ancf:supports")?.iter().enumerate() {
+            let key = format!("ancf:supports[{i}]");
+            let o = Obj::new(&key, item, &["vertices", "fix"])?;
+            let vertices = index_list(o.required("vertices")?, &o.path("vertices"))?;
+            if vertices.is_empty() {
+                return Err(SceneError::invalid(o.path("vertices"), "the list is empty"));
+            }
+            let fix = match o.string("fix")? {
+                None => Fix::Position,
+                Some(s) => enum_value(
+                    &o.path("fix"),
+                    s,
+                    &[("position", Fix::Position), ("clamped", Fix::Clamped)],
+                )?,
+            };
+            p.supports.push(SupportSpec { vertices, fix, key });
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:loads") {
+        let o = Obj::new("ancf:loads", v, &["gravity", "vertex_forces"])?;
+        if let Some(g) = o.get("gravity") {
+            let key = o.path("gravity");
+            let arr = expect_array(g, &key)?;
+            if arr.len() != 3 {
+                return Err(SceneError::invalid(
+                    key,
+                    format!(
+                        "expected 3 components [x, y, z] in m/s^2, found {}",
+                        arr.len()
+                    ),
+                ));
+            }
+            let mut gv = [0.0; 3];
+            for (c, x) in arr.iter().enumerate() {
+                gv[c] = expect_number(x, &format!("{key}[{c}]"))?;
+            }
+            p.gravity = Some(gv);
+        }
+        if let Some(f) = o.get("vertex_forces") {
+            p.vertex_forces = vertex_inputs(f, &o.path("vertex_forces"))?;
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:motions") {
+        p.vertex_motions = vertex_inputs(v, "ancf:motions")?;
+    }
+
+    if let Some(v) = ancf.get("ancf:contact") {
+        let o = Obj::new(
+            "ancf:contact",
+            v,
+            &["enabled", "friction", "stiffness", "thickness"],
+        )?;
+        let enabled = match o.get("enabled") {
+            None => false,
+            Some(Value::Bool(b)) => *b,
+            Some(other) => {
+                return Err(SceneError::invalid(
+                    o.path("enabled"),
+                    format!("expected true or false, found {}", type_name(other)),
+                ));
+            }
+        };
+        o.num_where("friction", non_negative, "zero or positive")?;
+        o.num_where("stiffness", positive, "positive (N/m)")?;
+        o.num_where("thickness", non_negative, "zero or positive (m)")?;
+        if enabled {
+            return Err(SceneError::invalid(
+                o.path("enabled"),
+                "contact is not supported yet; set \"enabled\": false or remove ancf:contact",
+            ));
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:solver") {
+        let o = Obj::new(
+            "ancf:solver",
+            v,
+            &[
+                "integrator",
+                "rho_inf",
+                "max_step",
+                "min_step",
+                "tolerance",
+                "max_newton",
+                "stop_time",
+            ],
+        )?;
+        let s = &mut p.solver;
+        if let Some(name) = o.string("integrator")? {
+            s.integrator = enum_value(
+                &o.path("integrator"),
+                name,
+                &[
+                    ("generalized-alpha", Integrator::GeneralizedAlpha),
+                    ("central-difference", Integrator::CentralDifference),
+                ],
+            )?;
+        }
+        if let Some(x) = o.num_where("rho_inf", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
+            s.rho_inf = x;
+        }
+        if let Some(x) = o.num_where("max_step", positive, "positive (s)")? {
+            s.max_step = x;
+        }
+        if let Some(x) = o.num_where("min_step", positive, "positive (s)")? {
+            s.min_step = x;
+        }
+        if s.min_step > s.max_step {
+            return Err(SceneError::invalid(
+                o.path("min_step"),
+                format!(
+                    "min_step {} is larger than max_step {}",
+                    s.min_step, s.max_step
+                ),
+            ));
+        }
+        if let Some(x) = o.num_where("tolerance", |x| x > 0.0 && x < 1.0, "in (0, 1)")? {
+            s.tolerance = x;
+        }
+        if let Some(v) = o.get("max_newton") {
+            let n = expect_index(v, &o.path("max_newton"))?;
+            if n == 0 || n > 1000 {
+                return Err(SceneError::invalid(
+                    o.path("max_newton"),
+                    format!("{n} is out of range; it must be in 1..=1000"),
+                ));
+            }
+            s.max_newton = n;
+        }
+        if let Some(x) = o.num_where("stop_time", positive, "positive (s)")? {
+            s.stop_time = x;
+        }
+    }
+
+    if let Some(v) = ancf.get("ancf:outputs") {
+        let mut o = Outputs {
+            positions: false,
+            fold_angles: false,
+            energies: false,
+        };
+        const GROUPS: &[&str] = &["positions", "fold_angles", "energies"];
+        for (i, item) in expect_array(v, "ancf:outputs")?.iter().enumerate() {
+            let key = format!("ancf:outputs[{i}]");
+            let s = expect_string(item, &key)?;
+            let flag = match s {
+                "positions" => &mut o.positions,
+                "fold_angles" => &mut o.fold_angles,
+                "energies" => &mut o.energies,
+                other => {
+                    return Err(SceneError::invalid(
+                        key,
+                        format!(
+                            "unknown output group \"{other}\"{}; expected one of {}",
+                            suggestion(other, GROUPS),
+                            GROUPS.join(", ")
+                        ),
+                    ));
+                }
+            };
+            if *flag {
+                warnings.push(format!("{key}: \"{s}\" is listed twice"));
+            }
+            *flag = true;
+        }
+        if !(o.positions || o.fold_angles || o.energies) {
+            warnings.push("ancf:outputs: the list is empty; the model has no outputs".into());
+        }
+        p.outputs = o;
+    }
+
+    if let Some(v) = ancf.get("ancf:refine") {
+        let n = expect_index(v, "ancf:refine")?;
+        if n > MAX_REFINE {
+            return Err(SceneError::invalid(
+                "ancf:refine",
+                format!("{n} levels is too many; at most {MAX_REFINE}"),
+            ));
+        }
+        p.refine = n;
+    }
+
+    // Input names must be unique across actuators, forces and motions.
+    let mut seen: Vec<(&str, String)> = Vec::new();
+    let names = p
+        .actuators
+        .iter()
+        .flatten()
+        .map(|a| (a.name.as_str(), format!("{}.name", a.key)))
+        .chain(
+            p.vertex_forces
+                .iter()
+                .chain(&p.vertex_motions)
+                .map(|(vi, k)| (vi.name.as_str(), format!("{k}.name"))),
+        );
+    for (name, key) in names {
+        if let Some((_, first)) = seen.iter().find(|(n, _)| *n == name) {
+            return Err(SceneError::invalid(
+                key,
+                format!("the name '{name}' is already used by {first}"),
+            ));
+        }
+        seen.push((name, key));
+    }
+    Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn keys(json: &str) -> Result<Physics, SceneError> {
+        let map: Map<String, Value> = serde_json::from_str(json).unwrap();
+        parse(&map, &mut Vec::new())
+    }
+    fn err(json: &str) -> String {
+        keys(json).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn defaults_without_keys() {
+        let p = keys("{}").unwrap();
+        assert_eq!(p.material, Material::default());
+        assert_eq!(p.crease, CreaseStiffness::default());
+        assert_eq!(p.damping, None);
+        assert_eq!(p.actuators, None);
+        assert_eq!(p.outputs, Outputs::default());
+        assert_eq!(p.refine, 0);
+    }
+
+    #[test]
+    fn full_set_of_keys() {
+        let p = keys(
+            r#"{
+            "ancf:name": "sheet",
+            "ancf:material": {"youngs_modulus": 4e9, "poisson_ratio": 0.35, "thickness": 2e-4, "density": 1000},
+            "ancf:crease": {"stiffness_per_length": 0.02, "damping_per_length": 1e-5},
+            "ancf:damping": {"alpha": 0.5, "beta": 1e-4},
+            "ancf:actuators": [{"name": "m", "edges": "M", "mode": "torque", "start": 0.1},
+                               {"name": "v", "edges": [1, 2]}],
+            "ancf:supports": [{"vertices": [0, 1], "fix": "clamped"}],
+            "ancf:loads": {"gravity": [0, 0, -9.81], "vertex_forces": [{"name": "tip", "vertex": 3}]},
+            "ancf:motions": [{"name": "grip", "vertex": 2}],
+            "ancf:contact": {"enabled": false, "friction": 0.3},
+            "ancf:solver": {"integrator": "central-difference", "rho_inf": 0.5, "max_step": 1e-4,
+                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "stop_time": 2},
+            "ancf:outputs": ["positions", "energies"],
+            "ancf:refine": 2
+        }"#,
+        )
+        .unwrap();
+        assert_eq!(p.name.as_deref(), Some("sheet"));
+        assert_eq!(p.material.thickness, 2e-4);
+        assert_eq!(p.crease, CreaseStiffness::PerLength(0.02));
+        assert_eq!(p.crease_damping, 1e-5);
+        assert_eq!(p.damping, Some((0.5, 1e-4)));
+        let a = p.actuators.unwrap();
+        assert_eq!(a[0].edges, EdgeSelection::Assignment(Assignment::Mountain));
+        assert_eq!(a[0].mode, ActuatorMode::Torque);
+        assert_eq!(a[1].edges, EdgeSelection::List(vec![1, 2]));
+        assert_eq!(a[1].mode, ActuatorMode::RestAngle);
+        assert_eq!(p.supports[0].fix, Fix::Clamped);
+        assert_eq!(p.gravity, Some([0.0, 0.0, -9.81]));
+        assert_eq!(p.vertex_forces[0].0.vertex, 3);
+        assert_eq!(p.vertex_motions[0].0.name, "grip");
+        assert_eq!(p.solver.integrator, Integrator::CentralDifference);
+        assert_eq!(p.solver.max_newton, 30);
+        assert!(p.outputs.positions && !p.outputs.fold_angles && p.outputs.energies);
+        assert_eq!(p.refine, 2);
+    }
+
+    #[test]
+    fn unknown_keys_and_fields_suggest() {
+        let e = err(r#"{"ancf:materail": {}}"#);
+        assert!(
+            e.starts_with("ancf:materail: unknown key; did you mean 'ancf:material'?"),
+            "{e}"
+        );
+        let e = err(r#"{"ancf:material": {"thicknes": 1e-4}}"#);
+        assert!(
+            e.contains("unknown field 'thicknes'; did you mean 'thickness'?"),
+            "{e}"
+        );
+        let e = err(r#"{"ancf:solver": {"integrator": "generalised-alpha"}}"#);
+        assert!(e.contains("did you mean 'generalized-alpha'"), "{e}");
+        let e = err(r#"{"ancf:outputs": ["fold_angle"]}"#);
+        assert!(
+            e.starts_with("ancf:outputs[0]:") && e.contains("'fold_angles'"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn material_ranges() {
+        for (json, key) in [
+            (r#"{"thickness": 0}"#, "thickness"),
+            (r#"{"thickness": -1e-4}"#, "thickness"),
+            (r#"{"youngs_modulus": 0}"#, "youngs_modulus"),
+            (r#"{"density": -800}"#, "density"),
+            (r#"{"poisson_ratio": 0.5}"#, "poisson_ratio"),
+            (r#"{"poisson_ratio": -1}"#, "poisson_ratio"),
+            (r#"{"density": "heavy"}"#, "density"),
+        ] {
+            let e = err(&format!(r#"{{"ancf:material": {json}}}"#));
+            assert!(e.starts_with(&format!("ancf:material.{key}:")), "{e}");
+        }
+        assert!(keys(r#"{"ancf:material": {"poisson_ratio": -0.99}}"#).is_ok());
+    }
+
+    #[test]
+    fn names_are_identifiers_unique_and_not_reserved() {
+        let e = err(r#"{"ancf:actuators": [{"name": "2fold"}]}"#);
+        assert!(
+            e.starts_with("ancf:actuators[0].name:") && e.contains("not a valid"),
+            "{e}"
+        );
+        let e = err(r#"{"ancf:actuators": [{"name": "a.b"}]}"#);
+        assert!(e.contains("not a valid"), "{e}");
+        let e = err(r#"{"ancf:actuators": [{"name": "vertex"}]}"#);
+        assert!(e.contains("clashes with generated"), "{e}");
+        let e = err(r#"{"ancf:actuators": [{"name": "f"}, {"name": "f"}]}"#);
+        assert!(
+            e.starts_with("ancf:actuators[1].name:") && e.contains("already used"),
+            "{e}"
+        );
+        let e = err(
+            r#"{"ancf:actuators": [{"name": "tip"}], "ancf:loads": {"vertex_forces": [{"name": "tip", "vertex": 0}]}}"#,
+        );
+        assert!(e.starts_with("ancf:loads.vertex_forces[0].name:"), "{e}");
+        let e = err(r#"{"ancf:motions": [{"name": "energy", "vertex": 0}]}"#);
+        assert!(e.contains("clashes"), "{e}");
+        let e = err(r#"{"ancf:actuators": [{"edges": "all"}]}"#);
+        assert!(e.starts_with("ancf:actuators[0].name: missing"), "{e}");
+    }
+
+    #[test]
+    fn other_value_errors() {
+        let e = err(r#"{"ancf:contact": {"enabled": true}}"#);
+        assert!(e.contains("contact is not supported yet"), "{e}");
+        let e = err(r#"{"ancf:crease": {"length_scale": 0.01, "stiffness_per_length": 1}}"#);
+        assert!(e.contains("not both"), "{e}");
+        let e = err(r#"{"ancf:actuators": [{"name": "a", "edges": []}]}"#);
+        assert!(e.contains("empty"), "{e}");
+        let e = err(r#"{"ancf:actuators": [{"name": "a", "edges": "X"}]}"#);
+        assert!(e.starts_with("ancf:actuators[0].edges:"), "{e}");
+        let e = err(r#"{"ancf:actuators": [{"name": "a", "mode": "angle"}]}"#);
+        assert!(e.starts_with("ancf:actuators[0].mode:"), "{e}");
+        let e = err(r#"{"ancf:loads": {"gravity": [0, -9.81]}}"#);
+        assert!(e.starts_with("ancf:loads.gravity:"), "{e}");
+        let e = err(r#"{"ancf:solver": {"min_step": 1, "max_step": 0.1}}"#);
+        assert!(e.contains("larger than max_step"), "{e}");
+        let e = err(r#"{"ancf:solver": {"max_newton": 0}}"#);
+        assert!(e.starts_with("ancf:solver.max_newton:"), "{e}");
+        let e = err(r#"{"ancf:refine": 9}"#);
+        assert!(e.contains("too many"), "{e}");
+        let e = err(r#"{"ancf:refine": -1}"#);
+        assert!(e.starts_with("ancf:refine:"), "{e}");
+        let e = err(r#"{"ancf:damping": "none"}"#);
+        assert!(e.starts_with("ancf:damping:"), "{e}");
+        assert_eq!(keys(r#"{"ancf:damping": "auto"}"#).unwrap().damping, None);
+        assert_eq!(
+            keys(r#"{"ancf:damping": {}}"#).unwrap().damping,
+            Some((0.0, 0.0))
+        );
+    }
+}
