@@ -29,8 +29,18 @@ const PLATFORM: &str = "linux64";
 
 /// Load a scene file given on the command line. The one place that knows
 /// which scene formats the CLI reads.
+/// FOLD files (any extension but `.json`) go through the FOLD reader, whose
+/// warnings are printed; `.json` files hold a serialized [`crate::scene::Scene`].
 pub fn load_scene(path: &Path) -> Result<crate::scene::Scene, String> {
-    fmi::resources::load_scene_file(path)
+    if path.extension().is_some_and(|e| e == "json") {
+        return fmi::resources::load_scene_file(path);
+    }
+    let (scene, warnings) =
+        crate::scene::load(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
 }
 
 /// The cdylib next to the running executable.

@@ -2,6 +2,7 @@
 //! returns `Result<(), String>`; errors print to stderr with a non-zero exit.
 
 pub mod build;
+pub mod simulate;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -18,6 +19,8 @@ pub struct Cli {
 enum Command {
     /// Build an FMI 2.0 co-simulation FMU of a scene.
     Build(build::BuildArgs),
+    /// Simulate a scene with the built-in model and write outputs to CSV.
+    Simulate(simulate::SimulateArgs),
 }
 
 /// Run the CLI with the process arguments.
@@ -25,6 +28,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), String> = match cli.command {
         Command::Build(args) => build::run(&args),
+        Command::Simulate(args) => simulate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
