@@ -4,6 +4,9 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+pub mod check;
+pub mod pattern;
+
 /// origami-fmu: origami folding dynamics (iso-ANCF shells) as FMI 2.0 co-simulation FMUs.
 #[derive(Parser, Debug)]
 #[command(name = "origami-fmu", version, about)]
@@ -13,12 +16,20 @@ pub struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Write a generated crease pattern (Miura-ori, Kresling, ...) as a FOLD file.
+    Pattern(pattern::PatternArgs),
+    /// Validate a FOLD scene and print its mesh, variables and warnings.
+    Check(check::CheckArgs),
+}
 
 /// Run the CLI with the process arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), String> = match cli.command {};
+    let result: Result<(), String> = match cli.command {
+        Command::Pattern(args) => pattern::run(args),
+        Command::Check(args) => check::run(args),
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
