@@ -2,6 +2,8 @@
 //! returns `Result<(), String>`; errors print to stderr with a non-zero exit.
 
 pub mod build;
+pub mod check;
+pub mod pattern;
 pub mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -17,6 +19,10 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Write a generated crease pattern (Miura-ori, Kresling, ...) as a FOLD file.
+    Pattern(pattern::PatternArgs),
+    /// Validate a FOLD scene and print its mesh, variables and warnings.
+    Check(check::CheckArgs),
     /// Build an FMI 2.0 co-simulation FMU of a scene.
     Build(build::BuildArgs),
     /// Simulate a scene with the built-in model and write outputs to CSV.
@@ -27,6 +33,8 @@ enum Command {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), String> = match cli.command {
+        Command::Pattern(args) => pattern::run(args),
+        Command::Check(args) => check::run(args),
         Command::Build(args) => build::run(&args),
         Command::Simulate(args) => simulate::run(&args),
     };

@@ -215,6 +215,16 @@ impl Draft {
         description: String,
         interior: impl Fn(usize, usize) -> (Assignment, f64),
     ) -> FoldFile {
+        // Coordinates to 14 decimals of the sheet size: drops the rounding
+        // noise of the trigonometry (0.010000000000000002 becomes 0.01).
+        let (mut lo, mut hi) = (self.coords[0], self.coords[0]);
+        for c in &self.coords {
+            lo = lo.inf(c);
+            hi = hi.sup(c);
+        }
+        let digits = (14.0 - (hi - lo).norm().log10().ceil()).clamp(0.0, 22.0) as i32;
+        let scale = 10f64.powi(digits);
+        let round = |x: f64| (x * scale).round() / scale + 0.0;
         let mut ev = Vec::new();
         let mut asg = Vec::new();
         let mut ang = Vec::new();
@@ -238,7 +248,11 @@ impl Draft {
             frame_classes: vec!["creasePattern".into()],
             frame_attributes: vec!["2D".into()],
             frame_unit: Some("m".into()),
-            vertices_coords: self.coords.iter().map(|c| vec![c.x, c.y]).collect(),
+            vertices_coords: self
+                .coords
+                .iter()
+                .map(|c| vec![round(c.x), round(c.y)])
+                .collect(),
             edges_vertices: Some(ev),
             edges_assignment: Some(asg),
             edges_fold_angle: Some(ang),

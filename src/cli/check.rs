@@ -1,0 +1,180 @@
+//! `origami-fmu check SCENE.fold`: load and validate a scene and print a
+//! summary (mesh, DOFs, inputs, outputs, warnings).
+
+use crate::mesh::EdgeKind;
+use crate::model::Model;
+use crate::scene::{self, CreaseStiffness, Integrator, LoadOptions};
+use clap::Args;
+use std::path::PathBuf;
+
+/// Validate a FOLD scene and print a summary of its mesh, variables and warnings.
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// The FOLD scene file.
+    scene: PathBuf,
+    /// Frame to read from a multi-frame file: an index (0 = top level) or a frame_title.
+    #[arg(long)]
+    frame: Option<String>,
+}
+
+/// Run the check; an invalid scene is an error naming the key and reason.
+pub fn run(args: CheckArgs) -> Result<(), String> {
+    let options = LoadOptions {
+        frame: args
+            .frame
+            .as_deref()
+            .map(|f| f.parse().expect("infallible")),
+        name: None,
+    };
+    let path = args.scene.display().to_string();
+    let (scene, warnings) = scene::load_with(&args.scene, &options).map_err(|e| match e {
+        scene::SceneError::Io { .. } => e.to_string(),
+        _ => format!("{path}: {e}"),
+    })?;
+    print!("{}", summary(&path, &scene, &warnings)?);
+    Ok(())
+}
+
+/// A number for people: plain when moderate, scientific otherwise.
+fn num(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e4).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+fn list(names: &[String]) -> String {
+    const SHOWN: usize = 8;
+    let mut s = names
+        .iter()
+        .take(SHOWN)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(", ");
+    if names.len() > SHOWN {
+        s.push_str(&format!(", ... ({} more)", names.len() - SHOWN));
+    }
+    s
+}
+
+/// The text `check` prints for a valid scene.
+pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<String, String> {
+    use std::fmt::Write as _;
+    let m = &scene.mesh;
+    let count = |k: EdgeKind| m.edges.iter().filter(|e| e.kind == k).count();
+    let creases: Vec<f64> = m
+        .edges
+        .iter()
+        .filter(|e| e.kind == EdgeKind::Crease)
+        .map(|e| e.fold_target)
+        .collect();
+    let mountains = creases.iter().filter(|&&t| t < 0.0).count();
+    let valleys = creases.iter().filter(|&&t| t > 0.0).count();
+    let mut o = String::new();
+    let _ = writeln!(o, "scene '{}' ({path}): valid", scene.name);
+    let _ = writeln!(
+        o,
+        "  FOLD:      {} vertices, {} edges",
+        scene.fold_vertex_count, scene.fold_edge_count
+    );
+    let _ = writeln!(
+        o,
+        "  mesh:      {} vertices, {} facets (triangles); {} creases ({mountains} mountain, \
+         {valleys} valley, {} zero targets), {} smooth and {} boundary edges",
+        m.n_vertices(),
+        m.triangles.len(),
+        creases.len(),
+        creases.len() - mountains - valleys,
+        count(EdgeKind::Smooth),
+        count(EdgeKind::Boundary)
+    );
+    // DOF COUNT: print the number of generalized coordinates here once the
+    // DOF layout module lands (it is being written separately); nothing in
+    // this build computes it yet.
+    let _ = writeln!(
+        o,
+        "  DOFs:      (not computed yet: the DOF layout is not in this build)"
+    );
+    let mat = &scene.material;
+    let _ = writeln!(
+        o,
+        "  material:  E = {} Pa, nu = {}, thickness = {} m, density = {} kg/m^3",
+        num(mat.youngs_modulus),
+        num(mat.poisson_ratio),
+        num(mat.thickness),
+        num(mat.density)
+    );
+    let _ = match scene.crease {
+        CreaseStiffness::LengthScale(l) => {
+            writeln!(
+                o,
+                "  creases:   stiffness = (length / {} m) x bending stiffness",
+                num(l)
+            )
+        }
+        CreaseStiffness::PerLength(k) => {
+            writeln!(
+                o,
+                "  creases:   stiffness = {} N m/(rad m) x length",
+                num(k)
+            )
+        }
+    };
+    let d = &scene.damping;
+    if scene.auto_damping {
+        let _ = writeln!(
+            o,
+            "  damping:   automatic (from the scene's frequencies); crease {} N m s/(rad m)",
+            num(d.crease)
+        );
+    } else {
+        let _ = writeln!(
+            o,
+            "  damping:   alpha = {} 1/s, beta = {} s, crease {} N m s/(rad m)",
+            num(d.alpha),
+            num(d.beta),
+            num(d.crease)
+        );
+    }
+    let fixed: usize = scene.supports.iter().map(|s| s.vertices.len()).sum();
+    let _ = writeln!(
+        o,
+        "  supports:  {} ({fixed} vertices); gravity: {}",
+        scene.supports.len(),
+        scene
+            .gravity
+            .map_or("none".to_string(), |g| format!("{g:?} m/s^2"))
+    );
+    let s = &scene.solver;
+    let _ = writeln!(
+        o,
+        "  solver:    {}, max step {} s, tolerance {}, stop time {} s",
+        match s.integrator {
+            Integrator::GeneralizedAlpha => format!("generalized-alpha (rho_inf {})", s.rho_inf),
+            Integrator::CentralDifference => "central-difference".to_string(),
+        },
+        num(s.max_step),
+        num(s.tolerance),
+        num(s.stop_time)
+    );
+    let model = Model::new(scene.clone()).map_err(|e| format!("{path}: {e}"))?;
+    let inputs: Vec<String> = model.inputs().iter().map(|v| v.name.clone()).collect();
+    let _ = writeln!(o, "  inputs ({}): {}", inputs.len(), list(&inputs));
+    let outs = model.outputs();
+    let group = |p: &str| outs.iter().filter(|v| v.name.starts_with(p)).count();
+    let _ = writeln!(
+        o,
+        "  outputs ({}): {} positions, {} fold angles, {} energies",
+        outs.len(),
+        group("vertex["),
+        group("crease["),
+        group("energy.")
+    );
+    let _ = writeln!(o, "  parameters ({})", model.parameters().len());
+    let _ = writeln!(o, "  warnings ({})", warnings.len());
+    for w in warnings {
+        let _ = writeln!(o, "    - {w}");
+    }
+    Ok(o)
+}
