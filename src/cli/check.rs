@@ -89,12 +89,12 @@ pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<
         count(EdgeKind::Smooth),
         count(EdgeKind::Boundary)
     );
-    // DOF COUNT: print the number of generalized coordinates here once the
-    // DOF layout module lands (it is being written separately); nothing in
-    // this build computes it yet.
+    let layout = crate::dofs::DofLayout::new(m);
     let _ = writeln!(
         o,
-        "  DOFs:      (not computed yet: the DOF layout is not in this build)"
+        "  DOFs:      {} ({} vector slots: positions and sector gradients)",
+        layout.n_dofs(),
+        layout.n_slots()
     );
     let mat = &scene.material;
     let _ = writeln!(

@@ -54,10 +54,19 @@ impl Signals {
 }
 
 fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let header: Vec<&str> = lines.next().ok_or("input CSV is empty")?.split(',').map(str::trim).collect();
-    let tcol = header.iter().position(|h| *h == "time").ok_or("input CSV has no `time` column")?;
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or("input CSV is empty")?
+        .split(',')
+        .map(str::trim)
+        .collect();
+    let tcol = header
+        .iter()
+        .position(|h| *h == "time")
+        .ok_or("input CSV has no `time` column")?;
     let mut cols = Vec::new();
     for (c, h) in header.iter().enumerate() {
         if c == tcol {
@@ -79,8 +88,14 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
                 .get(c)
                 .ok_or_else(|| format!("input CSV line {}: missing column {}", n + 2, c + 1))?
                 .parse()
-                .map_err(|_| format!("input CSV line {}: column {} is not a number", n + 2, c + 1))?;
-            if x.is_finite() { Ok(x) } else { Err(format!("input CSV line {}: non-finite value", n + 2)) }
+                .map_err(|_| {
+                    format!("input CSV line {}: column {} is not a number", n + 2, c + 1)
+                })?;
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                Err(format!("input CSV line {}: non-finite value", n + 2))
+            }
         };
         let t = num(tcol)?;
         if time.last().is_some_and(|&p| t <= p) {
@@ -94,7 +109,10 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
     if time.is_empty() {
         return Err("input CSV has no rows".into());
     }
-    Ok(Signals { time, columns: cols.iter().map(|&(_, i)| i).zip(values).collect() })
+    Ok(Signals {
+        time,
+        columns: cols.iter().map(|&(_, i)| i).zip(values).collect(),
+    })
 }
 
 /// Run `simulate`.
@@ -116,7 +134,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
                 .filter(|(_, a)| a.mode == crate::scene::ActuatorMode::RestAngle)
                 .map(|(i, _)| (i, vec![0.0, 1.0]))
                 .collect();
-            Signals { time: vec![0.0, 0.5 * stop], columns: ramp }
+            Signals {
+                time: vec![0.0, 0.5 * stop],
+                columns: ramp,
+            }
         }
     };
     for (i, v) in signals.at(0.0) {
@@ -151,7 +172,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         steps += r.steps;
         write_row(&mut out, t, &model.output_values()).map_err(io)?;
         if last_report.elapsed().as_secs_f64() > 2.0 {
-            eprintln!("t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps", 100.0 * t / stop);
+            eprintln!(
+                "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps",
+                100.0 * t / stop
+            );
             last_report = std::time::Instant::now();
         }
     }
