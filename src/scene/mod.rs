@@ -8,7 +8,9 @@
 //! let text = r#"{
 //!   "frame_unit": "mm",
 //!   "vertices_coords": [[0,0],[10,0],[20,0],[20,10],[10,10],[0,10]],
-//!   "edges_vertices": [[1,4]], "edges_assignment": ["V"], "edges_foldAngle": [90],
+//!   "edges_vertices": [[1,4],[0,1],[1,2],[2,3],[3,4],[4,5],[5,0]],
+//!   "edges_assignment": ["V","B","B","B","B","B","B"],
+//!   "edges_foldAngle": [90,0,0,0,0,0,0],
 //!   "faces_vertices": [[0,1,4,5],[1,2,3,4]],
 //!   "ancf:supports": [{"vertices": [0, 5], "fix": "position"}]
 //! }"#;
