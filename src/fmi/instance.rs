@@ -284,7 +284,8 @@ impl Instance {
                 resources::VERSION
             ));
         }
-        let model = Model::new(scene.clone()).map_err(|e| e.to_string())?;
+        let model = Model::new(scene.clone()).map_err(|e| format!("invalid scene: {e}"))?;
+        resources::check_variable_names(&model).map_err(|e| format!("invalid scene: {e}"))?;
         Ok((expected, scene, model))
     }
 
