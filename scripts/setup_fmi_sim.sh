@@ -8,8 +8,10 @@
 set -euo pipefail
 VERSION=0.7.0
 export PATH="$HOME/.cargo/bin:$PATH"
-if command -v fmi-sim >/dev/null 2>&1 && fmi-sim --version 2>&1 | grep -q "fmi-sim $VERSION"; then
-  exit 0
+# (fmi-sim 0.7.0 prints its version to stderr and exits non-zero.)
+if command -v fmi-sim >/dev/null 2>&1; then
+  have=$(fmi-sim --version 2>&1 || true)
+  case "$have" in *"fmi-sim $VERSION"*) exit 0 ;; esac
 fi
 if ! ldconfig -p 2>/dev/null | grep -q 'libclang[-.0-9]*\.so'; then
   echo "installing libclang-dev (needed to build fmi-sim)" >&2
@@ -19,4 +21,4 @@ if ! ldconfig -p 2>/dev/null | grep -q 'libclang[-.0-9]*\.so'; then
 fi
 echo "cargo install fmi-sim $VERSION (several minutes, once per machine)" >&2
 # Its own temporary target dir, not the project's.
-env -u CARGO_TARGET_DIR cargo install fmi-sim --version "$VERSION" --locked --quiet >&2
+env -u CARGO_TARGET_DIR cargo install fmi-sim --version "$VERSION" --locked --force --quiet >&2
