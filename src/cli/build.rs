@@ -33,24 +33,26 @@ pub fn load_scene(path: &Path) -> Result<crate::scene::Scene, String> {
     fmi::resources::load_scene_file(path)
 }
 
-/// The cdylib next to the running executable.
+/// The cdylib next to the running executable: `target/<profile>/` after
+/// `cargo build`, or `target/<profile>/deps/` where `cargo test` leaves it;
+/// the newer of the two when both exist.
 fn default_library() -> Result<PathBuf, String> {
     let exe = std::env::current_exe().map_err(|e| format!("cannot locate this executable: {e}"))?;
     let dir = exe.parent().ok_or("the executable has no parent folder")?;
     let name = format!("lib{MODEL_IDENTIFIER}.so");
-    let lib = dir.join(&name);
-    if lib.is_file() {
-        Ok(lib)
-    } else if dir.join("deps").join(&name).is_file() {
-        // `cargo test` leaves the cdylib in deps/ without copying it up.
-        Ok(dir.join("deps").join(&name))
-    } else {
-        Err(format!(
-            "the FMU library {} is missing; build it with `cargo build --release` (it is built with \
-             the executable), or name it with --library",
-            lib.display()
-        ))
-    }
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    [dir.join(&name), dir.join("deps").join(&name)]
+        .into_iter()
+        .filter_map(|p| modified(&p).map(|t| (t, p)))
+        .max_by_key(|(t, _)| *t)
+        .map(|(_, p)| p)
+        .ok_or_else(|| {
+            format!(
+                "the FMU library {} is missing; build it with `cargo build --release` (it is built \
+                 with the executable), or name it with --library",
+                dir.join(&name).display()
+            )
+        })
 }
 
 /// Run `origami-fmu build`.
