@@ -41,7 +41,8 @@ fn default_library() -> Result<PathBuf, String> {
     let dir = exe.parent().ok_or("the executable has no parent folder")?;
     let name = format!("lib{MODEL_IDENTIFIER}.so");
     let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    [dir.join(&name), dir.join("deps").join(&name)]
+    // max_by_key keeps the last of equals: prefer target/<profile>/ on a tie.
+    [dir.join("deps").join(&name), dir.join(&name)]
         .into_iter()
         .filter_map(|p| modified(&p).map(|t| (t, p)))
         .max_by_key(|(t, _)| *t)
