@@ -592,9 +592,12 @@ fn instances_are_independent_across_threads() {
     }
 }
 
-/// The cdylib that cargo built next to the CLI binary.
+/// The cdylib that cargo built along with this test: integration tests run
+/// from `target/<profile>/deps/`, where the library's cdylib is written
+/// (it is copied up to `target/<profile>/` only by `cargo build`).
 fn cdylib() -> PathBuf {
-    Path::new(env!("CARGO_BIN_EXE_origami-fmu"))
+    std::env::current_exe()
+        .unwrap()
         .parent()
         .unwrap()
         .join("liborigami_fmu.so")

@@ -88,6 +88,16 @@ fn case_c() -> Scene {
     s
 }
 
+/// Case C with internal step cutting disabled (min_step = max_step = 1 ms):
+/// a violent torque input makes a step fail (fmi2Discard) where a shorter
+/// communication step succeeds. For the forced-failure test.
+fn case_c_nocut() -> Scene {
+    let mut s = case_c();
+    s.name = "case_c_nocut".into();
+    s.solver.min_step = s.solver.max_step;
+    s
+}
+
 /// One degree-4 Miura-ori vertex (sector angle 60 degrees, creases 50 mm)
 /// with rigid-foldable targets: the straight crease line at +60 / -60
 /// degrees, the zig-zag pair at -2 atan(tan(30 deg) / cos(60 deg)).
@@ -133,7 +143,7 @@ fn miura() -> Scene {
 }
 
 fn examples() -> Vec<Scene> {
-    vec![square(), strip(), case_c(), miura()]
+    vec![square(), strip(), case_c(), case_c_nocut(), miura()]
 }
 
 fn check(path: &Path, want: &[u8], update: bool, drift: &mut Vec<String>) {

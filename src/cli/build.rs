@@ -43,20 +43,27 @@ pub fn load_scene(path: &Path) -> Result<crate::scene::Scene, String> {
     Ok(scene)
 }
 
-/// The cdylib next to the running executable.
+/// The cdylib next to the running executable: `target/<profile>/` after
+/// `cargo build`, or `target/<profile>/deps/` where `cargo test` leaves it;
+/// the newer of the two when both exist.
 fn default_library() -> Result<PathBuf, String> {
     let exe = std::env::current_exe().map_err(|e| format!("cannot locate this executable: {e}"))?;
     let dir = exe.parent().ok_or("the executable has no parent folder")?;
-    let lib = dir.join(format!("lib{MODEL_IDENTIFIER}.so"));
-    if lib.is_file() {
-        Ok(lib)
-    } else {
-        Err(format!(
-            "the FMU library {} is missing; build it with `cargo build --release` (it is built with \
-             the executable), or name it with --library",
-            lib.display()
-        ))
-    }
+    let name = format!("lib{MODEL_IDENTIFIER}.so");
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    // max_by_key keeps the last of equals: prefer target/<profile>/ on a tie.
+    [dir.join("deps").join(&name), dir.join(&name)]
+        .into_iter()
+        .filter_map(|p| modified(&p).map(|t| (t, p)))
+        .max_by_key(|(t, _)| *t)
+        .map(|(_, p)| p)
+        .ok_or_else(|| {
+            format!(
+                "the FMU library {} is missing; build it with `cargo build --release` (it is built \
+                 with the executable), or name it with --library",
+                dir.join(&name).display()
+            )
+        })
 }
 
 /// Run `origami-fmu build`.
@@ -69,7 +76,6 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
     };
     let so = std::fs::read(&library)
         .map_err(|e| format!("cannot read the FMU library {}: {e}", library.display()))?;
-    let model = crate::model::Model::new(contents.scene.clone()).map_err(|e| e.to_string())?;
     let binary = format!("binaries/{PLATFORM}/{MODEL_IDENTIFIER}.so");
     let resource = format!("resources/{SCENE_FILE}");
     write_zip(
@@ -90,12 +96,8 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
         contents.scene.name,
         contents.guid
     );
-    println!(
-        "  variables: {} parameters, {} inputs, {} outputs",
-        model.parameters().len(),
-        model.inputs().len(),
-        model.outputs().len()
-    );
+    let [np, ni, no] = contents.counts;
+    println!("  variables: {np} parameters, {ni} inputs, {no} outputs");
     println!(
         "  modelDescription.xml ({} bytes)",
         contents.model_description.len()

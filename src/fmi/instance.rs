@@ -126,6 +126,11 @@ impl Logger {
         }
     }
 
+    /// True when `fmi2OK` (debug) messages go out: build them only then.
+    pub fn debug_enabled(&self) -> bool {
+        self.logging_on && self.enabled[0] && self.callbacks.logger.is_some()
+    }
+
     /// `fmi2SetDebugLogging`: switch debug logging and select categories
     /// (none listed = all). Unknown names are an error and change nothing.
     pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> fmi2Status {
@@ -186,6 +191,15 @@ pub struct SavedState {
 /// Relative tolerance with which `currentCommunicationPoint` must match
 /// the FMU's time in `fmi2DoStep`.
 pub const TIME_TOLERANCE: f64 = 1e-9;
+
+// Hosts may create an instance on one thread and use it on another (never
+// two at once): what the instance owns besides the host's pointers must be
+// Send. This fails to compile if the Model ever stops being Send.
+const _: () = {
+    const fn assert_send<T: Send>() {}
+    assert_send::<Model>();
+    assert_send::<Scene>();
+};
 
 /// One FMU instance.
 pub struct Instance {
@@ -284,7 +298,8 @@ impl Instance {
                 resources::VERSION
             ));
         }
-        let model = Model::new(scene.clone()).map_err(|e| e.to_string())?;
+        let model = Model::new(scene.clone()).map_err(|e| format!("invalid scene: {e}"))?;
+        resources::check_variable_names(&model).map_err(|e| format!("invalid scene: {e}"))?;
         Ok((expected, scene, model))
     }
 
@@ -622,13 +637,15 @@ impl Instance {
                         self.model.outputs()[k].name
                     ));
                 }
-                self.log.log(
+                if self.log.debug_enabled() {
+                    self.log.log(
                     fmi2OK,
                     &format!(
                         "fmi2DoStep: t = {t} + {h}: {} internal steps ({} rejected), {} Newton iterations, smallest step {:e}",
                         report.steps, report.rejected, report.newton_iterations, report.min_step
                     ),
                 );
+                }
                 fmi2OK
             }
             Err(ModelError::StepFailed { time, reason }) => {

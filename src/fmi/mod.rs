@@ -37,6 +37,8 @@ pub struct FmuContents {
     pub guid: String,
     /// modelDescription.xml.
     pub model_description: String,
+    /// Number of parameters, inputs and outputs.
+    pub counts: [usize; 3],
 }
 
 /// The modelDescription.xml, scene file and GUID of the FMU of `scene`.
@@ -46,11 +48,18 @@ pub fn fmu_contents(scene: &Scene) -> Result<FmuContents, String> {
     let scene = resources::parse_scene(&scene_file)?;
     let guid = resources::guid(&scene_file);
     let model = Model::new(scene.clone()).map_err(|e| e.to_string())?;
+    resources::check_variable_names(&model)?;
+    let counts = [
+        model.parameters().len(),
+        model.inputs().len(),
+        model.outputs().len(),
+    ];
     let model_description = xml::model_description(&model, &guid);
     Ok(FmuContents {
         scene,
         scene_file,
         guid,
         model_description,
+        counts,
     })
 }

@@ -86,7 +86,7 @@ fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), String> {
 }
 
 /// Checks of the scene data beyond the mesh (indices in range, physical
-/// values, legal variable names). Stands in for the scene module's own
+/// values). Stands in for the scene module's own
 /// validation until the FOLD reader lands.
 fn validate_scene(s: &Scene) -> Result<(), String> {
     let nv = s.mesh.n_vertices();
@@ -198,8 +198,12 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             })?;
         }
     }
-    // Variable names: legal FMI structured names, unique.
-    let model = Model::new(s.clone()).map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// Check that every variable name of `model` is a legal FMI structured
+/// name and unique (actuator and vertex-input names come from the scene).
+pub fn check_variable_names(model: &Model) -> Result<(), String> {
     let mut seen = std::collections::HashSet::new();
     for v in model
         .parameters()
