@@ -126,6 +126,30 @@ fn origami_simulator_export_loads() {
     assert!(m.outputs().iter().any(|v| v.name == "crease[9].angle"));
 }
 
+#[test]
+fn documented_example_loads() {
+    let doc = std::fs::read_to_string(repo().join("docs/scenes.md")).unwrap();
+    let section = doc.split("## A complete example").nth(1).unwrap();
+    let json = section
+        .split("```json")
+        .nth(1)
+        .unwrap()
+        .split("```")
+        .next()
+        .unwrap();
+    let (s, warnings) = scene::from_str(json).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(s.name, "hinge");
+    assert!(!s.auto_damping);
+    assert_eq!(s.mesh.triangles.len(), 16); // refined once
+    let m = Model::new(s).unwrap();
+    let inputs: Vec<&str> = m.inputs().iter().map(|v| v.name.as_str()).collect();
+    assert_eq!(inputs, ["fold", "tip.x", "tip.y", "tip.z"]);
+    let outputs: Vec<&str> = m.outputs().iter().map(|v| v.name.as_str()).collect();
+    assert_eq!(outputs.len(), 6 * 3 + 1 + 3);
+    assert!(outputs.contains(&"crease[6].angle"));
+}
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_origami-fmu"))
 }
