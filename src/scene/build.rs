@@ -27,6 +27,11 @@ use std::collections::HashMap;
 /// for 3D reference coordinates.
 pub const COPLANAR_TOLERANCE: f64 = 1e-9;
 
+/// Smallest sheet size (m) the model is asked to handle.
+pub const MIN_EXTENT: f64 = 1e-9;
+/// Largest sheet size, and largest distance from the origin (m).
+pub const MAX_EXTENT: f64 = 1e6;
+
 /// Relative area (against the mean squared side length) below which a face
 /// is degenerate; the same threshold as [`Mesh::new`].
 const DEGENERATE_AREA: f64 = 1e-12;
@@ -71,6 +76,15 @@ pub fn from_fold(fold: &FoldFile, name: Option<&str>) -> Result<(Scene, Vec<Stri
     let coords = reference_coords(&fold.vertices_coords, faces, scale)?;
     let (lo, hi) = bbox(&coords);
     let extent = (hi - lo).norm();
+    let far = coords.iter().map(|c| c.amax()).fold(0.0, f64::max);
+    if !((MIN_EXTENT..=MAX_EXTENT).contains(&extent) && far <= MAX_EXTENT) {
+        return Err(invalid(
+            "vertices_coords",
+            format!(
+                "the sheet is {extent:.3e} m across and reaches {far:.3e} m from the origin;                  the model handles {MIN_EXTENT:e} m to {MAX_EXTENT:e} m (check frame_unit)"
+            ),
+        ));
+    }
     let unit_given = matches!(fold.frame_unit.as_deref(), Some(u) if u != "unit");
     if !unit_given && extent > 10.0 {
         warnings.push(format!(
@@ -1234,6 +1248,28 @@ mod tests {
             "vertices_coords[2]",
         );
         assert!(e.contains("flat crease pattern"), "{e}");
+        // absurd sizes
+        let v = with(
+            base(),
+            "vertices_coords",
+            json!([[0, 0], [1, 0], [2e300, 0], [2, 1], [1, 1], [0, 1]]),
+        );
+        err(&v, "vertices_coords");
+        let v = with(base(), "frame_unit", json!("nm"));
+        let v = with(
+            v,
+            "vertices_coords",
+            json!([
+                [0, 0],
+                [1e-3, 0],
+                [2e-3, 0],
+                [2e-3, 1e-3],
+                [1e-3, 1e-3],
+                [0, 1e-3]
+            ]),
+        );
+        let e = err(&v, "vertices_coords");
+        assert!(e.contains("check frame_unit"), "{e}");
         // mixed dimensions
         let v = with(
             base(),

@@ -158,9 +158,7 @@ impl<'a> Obj<'a> {
         self.map.get(f)
     }
     fn num(&self, f: &str) -> Result<Option<f64>, SceneError> {
-        self.get(f)
-            .map(|v| expect_number(v, &self.path(f)))
-            .transpose()
+        self.get(f).map(|v| number(v, &self.path(f))).transpose()
     }
     /// A number satisfying `ok`, described by `what` in the error.
     fn num_where(
@@ -186,6 +184,22 @@ impl<'a> Obj<'a> {
         self.get(f)
             .ok_or_else(|| SceneError::invalid(self.path(f), "missing (required)"))
     }
+}
+
+/// Largest magnitude of a physical number in the keys: beyond it products
+/// of a few parameters would overflow.
+pub const MAX_MAGNITUDE: f64 = 1e30;
+
+/// A finite number of sensible magnitude.
+fn number(v: &Value, key: &str) -> Result<f64, SceneError> {
+    let x = expect_number(v, key)?;
+    if x.abs() > MAX_MAGNITUDE {
+        return Err(SceneError::invalid(
+            key,
+            format!("{x} is too large (at most {MAX_MAGNITUDE:e} in magnitude)"),
+        ));
+    }
+    Ok(x)
 }
 
 /// Check an input name: a C-like identifier that does not start a
@@ -483,7 +497,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
             }
             let mut gv = [0.0; 3];
             for (c, x) in arr.iter().enumerate() {
-                gv[c] = expect_number(x, &format!("{key}[{c}]"))?;
+                gv[c] = number(x, &format!("{key}[{c}]"))?;
             }
             p.gravity = Some(gv);
         }
@@ -806,6 +820,10 @@ mod tests {
         assert!(e.contains("too many"), "{e}");
         let e = err(r#"{"ancf:refine": -1}"#);
         assert!(e.starts_with("ancf:refine:"), "{e}");
+        let e = err(r#"{"ancf:material": {"youngs_modulus": 1e300}}"#);
+        assert!(e.contains("too large"), "{e}");
+        let e = err(r#"{"ancf:loads": {"gravity": [0, 0, -1e31]}}"#);
+        assert!(e.starts_with("ancf:loads.gravity[2]:"), "{e}");
         let e = err(r#"{"ancf:damping": "none"}"#);
         assert!(e.starts_with("ancf:damping:"), "{e}");
         assert_eq!(keys(r#"{"ancf:damping": "auto"}"#).unwrap().damping, None);
