@@ -30,11 +30,15 @@ fn tag_fold_edges(mut s: Scene) -> Scene {
 }
 
 /// One crease along the diagonal of a 0.1 m paper square, all defaults.
+/// A free-floating square with a diagonal crease and no damping at all (the
+/// energy-conservation test of the fmpy suite runs on it).
 fn square() -> Scene {
-    tag_fold_edges(Scene::with_defaults(
+    let mut s = tag_fold_edges(Scene::with_defaults(
         "square",
         builders::square_with_diagonal(0.1, true, PI / 2.0),
-    ))
+    ));
+    s.auto_damping = false;
+    s
 }
 
 /// A 0.2 m x 0.05 m strip clamped at its left end with a crease across the

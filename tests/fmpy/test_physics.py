@@ -11,7 +11,6 @@ from fmpy.fmi1 import FMICallException
 
 from fmu_helpers import SCENES, Instance
 
-needs_stepper = pytest.mark.xfail(reason="needs stepper", strict=False)
 
 FMI2_DISCARD = 2
 
@@ -21,7 +20,6 @@ def energies(inst):
     return inst.get(vr)
 
 
-@needs_stepper
 def test_case_c_static_fold_angle(unzipped):
     """BENCHMARKS C. Scene case_c: crease stiffness k' = 1e-3 N/rad per metre,
     panel 0 held, torque input tau per metre of crease on panel 1. Statically
@@ -42,7 +40,6 @@ def test_case_c_static_fold_angle(unzipped):
         inst.close()
 
 
-@needs_stepper
 def test_undamped_run_conserves_energy(unzipped):
     """BENCHMARKS E. Scene square (no damping) with solver.rho_inf = 1 (no
     numerical dissipation): fold input ramps 0 -> 0.3 over 50 ms, then holds,
@@ -64,7 +61,6 @@ def test_undamped_run_conserves_energy(unzipped):
         inst.close()
 
 
-@needs_stepper
 def test_miura_vertex_reaches_its_target_angles(unzipped):
     """BENCHMARKS D. Scene miura: one degree-4 Miura vertex whose targets are
     rigid-foldable (straight pair +-60 deg, zig-zag pair -98.2 deg), damped
@@ -85,7 +81,6 @@ def test_miura_vertex_reaches_its_target_angles(unzipped):
         inst.close()
 
 
-@needs_stepper
 def test_forced_solver_failure_is_discarded_and_a_smaller_step_succeeds(unzipped):
     """PRODUCT "Bad input". Scene case_c_nocut cannot cut its internal step
     below 1 ms. A torque of 1e3 N per metre (a million times the one that
