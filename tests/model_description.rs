@@ -140,6 +140,7 @@ fn miura() -> Scene {
     ];
     let mesh = Mesh::new(coords, tris, edges).expect("valid Miura vertex");
     let mut s = tag_fold_edges(Scene::with_defaults("miura", mesh));
+    s.auto_damping = false;
     s.damping.alpha = 20.0;
     s.damping.crease = 1e-4;
     s.solver.stop_time = 2.0;
@@ -178,6 +179,25 @@ fn checked_in_model_descriptions_match_the_generator() {
         );
         check(
             &root.join(format!("modelDescription/{name}.xml")),
+            c.model_description.as_bytes(),
+            update,
+            &mut drift,
+        );
+    }
+    // The shipped example scenes (scenes/*.fold) too.
+    let mut shipped: Vec<_> = std::fs::read_dir(root.join("scenes"))
+        .expect("scenes/ exists")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "fold"))
+        .collect();
+    shipped.sort();
+    assert!(shipped.len() >= 5, "expected the shipped example scenes");
+    for path in shipped {
+        let (scene, _) = origami_fmu::scene::load(&path).expect("shipped scenes load");
+        let c = fmi::fmu_contents(&scene).expect("shipped scenes are valid");
+        let stem = path.file_stem().unwrap().to_string_lossy().to_string();
+        check(
+            &root.join(format!("modelDescription/{stem}.xml")),
             c.model_description.as_bytes(),
             update,
             &mut drift,

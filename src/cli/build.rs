@@ -78,18 +78,29 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot read the FMU library {}: {e}", library.display()))?;
     let binary = format!("binaries/{PLATFORM}/{MODEL_IDENTIFIER}.so");
     let resource = format!("resources/{SCENE_FILE}");
-    write_zip(
-        &args.output,
-        &[
-            (
-                "modelDescription.xml",
-                contents.model_description.as_bytes(),
-                0o644,
-            ),
-            (&binary, &so, 0o755),
-            (&resource, &contents.scene_file, 0o644),
-        ],
-    )?;
+    // A FOLD source travels along as resources/scene.fold, for the user and
+    // other FOLD tools; the FMU itself loads the validated scene JSON.
+    let fold_source = if args.scene.extension().is_some_and(|e| e == "json") {
+        None
+    } else {
+        Some(
+            std::fs::read(&args.scene)
+                .map_err(|e| format!("cannot read {}: {e}", args.scene.display()))?,
+        )
+    };
+    let mut files: Vec<(&str, &[u8], u32)> = vec![
+        (
+            "modelDescription.xml",
+            contents.model_description.as_bytes(),
+            0o644,
+        ),
+        (&binary, &so, 0o755),
+        (&resource, &contents.scene_file, 0o644),
+    ];
+    if let Some(f) = &fold_source {
+        files.push(("resources/scene.fold", f, 0o644));
+    }
+    write_zip(&args.output, &files)?;
     println!(
         "built {}: scene {:?}, FMI 2.0 co-simulation, modelIdentifier {MODEL_IDENTIFIER}, guid {}",
         args.output.display(),

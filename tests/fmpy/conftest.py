@@ -9,7 +9,7 @@ import pytest
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 
-from fmu_helpers import EXAMPLES, SCENES, build, unzip  # noqa: E402
+from fmu_helpers import EXAMPLES, build, scene_path, unzip  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -25,7 +25,7 @@ def fmu(fmu_dir):
     def get(name):
         if name not in built:
             out = fmu_dir / f"{name}.fmu"
-            r = build(SCENES / f"{name}.json", out)
+            r = build(scene_path(name), out)
             assert r.returncode == 0, r.stderr
             built[name] = out
         return built[name]

@@ -20,7 +20,16 @@ from fmpy.fmi2 import (
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SCENES = ROOT / "tests" / "fmpy" / "scenes"
-EXAMPLES = sorted(p.stem for p in SCENES.glob("*.json"))
+SHIPPED = ROOT / "scenes"
+# Test scenes (scene JSON) and the shipped example scenes (FOLD).
+EXAMPLES = sorted(p.stem for p in SCENES.glob("*.json")) + sorted(
+    p.stem for p in SHIPPED.glob("*.fold"))
+
+
+def scene_path(name: str) -> pathlib.Path:
+    """The scene file of an example: tests/fmpy/scenes/NAME.json or scenes/NAME.fold."""
+    p = SCENES / f"{name}.json"
+    return p if p.exists() else SHIPPED / f"{name}.fold"
 
 
 def cli() -> pathlib.Path:
