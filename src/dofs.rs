@@ -116,9 +116,10 @@ impl DofLayout {
         };
         let mut position_slot = vec![0; nv];
         let mut sectors = vec![Vec::new(); nv];
+        let fans = mesh.fans().expect("mesh validated its fans");
         for v in 0..nv {
             position_slot[v] = new_slot(v, SlotKind::Position);
-            let fan = mesh.fan(v).expect("mesh validated its fans");
+            let fan = &fans[v];
             if fan.faces.is_empty() {
                 continue;
             }

@@ -368,11 +368,30 @@ impl Mesh {
     /// (`edges.len() == faces.len() + 1`). A vertex used by no face has an
     /// empty fan.
     pub fn fan(&self, v: usize) -> Result<Fan, MeshError> {
+        let faces: Vec<usize> =
+            (0..self.triangles.len()).filter(|&t| self.triangles[t].contains(&v)).collect();
+        self.fan_of(v, &faces)
+    }
+
+    /// The fans of all vertices, in vertex order (linear in the mesh size,
+    /// where calling [`Mesh::fan`] for every vertex is quadratic).
+    pub fn fans(&self) -> Result<Vec<Fan>, MeshError> {
+        let mut around = vec![Vec::new(); self.n_vertices()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for &v in tri {
+                around[v].push(t);
+            }
+        }
+        around.iter().enumerate().map(|(v, faces)| self.fan_of(v, faces)).collect()
+    }
+
+    fn fan_of(&self, v: usize, faces_at_v: &[usize]) -> Result<Fan, MeshError> {
         // For each incident face: the edge entering (v -> prev-ccw) and leaving.
         // In a CCW triangle (v, p, q): going CCW around v we pass edge v-p,
         // then the face, then edge v-q.
         let mut incident: Vec<(usize, usize, usize)> = Vec::new(); // (face, in_edge, out_edge)
-        for (t, tri) in self.triangles.iter().enumerate() {
+        for &t in faces_at_v {
+            let tri = self.triangles[t];
             if let Some(k) = tri.iter().position(|&x| x == v) {
                 let fe = self.face_edges[t];
                 // side k is (tri[k], tri[k+1]); side k+2 is (tri[k+2], tri[k]).
