@@ -368,8 +368,9 @@ impl Mesh {
     /// (`edges.len() == faces.len() + 1`). A vertex used by no face has an
     /// empty fan.
     pub fn fan(&self, v: usize) -> Result<Fan, MeshError> {
-        let faces: Vec<usize> =
-            (0..self.triangles.len()).filter(|&t| self.triangles[t].contains(&v)).collect();
+        let faces: Vec<usize> = (0..self.triangles.len())
+            .filter(|&t| self.triangles[t].contains(&v))
+            .collect();
         self.fan_of(v, &faces)
     }
 
@@ -382,7 +383,11 @@ impl Mesh {
                 around[v].push(t);
             }
         }
-        around.iter().enumerate().map(|(v, faces)| self.fan_of(v, faces)).collect()
+        around
+            .iter()
+            .enumerate()
+            .map(|(v, faces)| self.fan_of(v, faces))
+            .collect()
     }
 
     fn fan_of(&self, v: usize, faces_at_v: &[usize]) -> Result<Fan, MeshError> {

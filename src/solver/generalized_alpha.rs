@@ -156,13 +156,7 @@ pub fn step(
     let mut out = Outcome::default();
     let mut last_norm = f64::INFINITY;
     for it in 0..settings.max_newton {
-        for i in 0..n {
-            next.abar[i] =
-                (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
-            next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
-            next.qdd[i] =
-                ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
-        }
+        update_rates(&mut next, cur, co, h);
         let st = State {
             q: &next.q,
             v: &next.v,
@@ -195,14 +189,7 @@ pub fn step(
         }
         if norm <= settings.newton_tolerance {
             // Final consistent update and evaluation at the converged state.
-            for i in 0..n {
-                next.abar[i] =
-                    (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i])
-                        / bh2;
-                next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
-                next.qdd[i] =
-                    ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
-            }
+            update_rates(&mut next, cur, co, h);
             let st = State {
                 q: &next.q,
                 v: &next.v,
@@ -241,4 +228,22 @@ pub fn step(
         "Newton did not converge in {} iterations",
         settings.max_newton
     ))
+}
+
+/// Algorithmic acceleration, velocity and acceleration of `next` from its
+/// positions (the scheme's update formulas, solved for q_{n+1}).
+fn update_rates(next: &mut Dynamics, cur: &Dynamics, co: Coefficients, h: f64) {
+    let Coefficients {
+        am,
+        af,
+        beta,
+        gamma,
+    } = co;
+    let bh2 = beta * h * h;
+    for i in 0..next.q.len() {
+        next.abar[i] =
+            (next.q[i] - cur.q[i] - h * cur.v[i] - h * h * (0.5 - beta) * cur.abar[i]) / bh2;
+        next.v[i] = cur.v[i] + h * (1.0 - gamma) * cur.abar[i] + h * gamma * next.abar[i];
+        next.qdd[i] = ((1.0 - am) * next.abar[i] + am * cur.abar[i] - af * cur.qdd[i]) / (1.0 - af);
+    }
 }
