@@ -496,11 +496,6 @@ impl Assembler {
         self.layout.position_slot[v]
     }
 
-    /// Slots of vertex `v` that a clamp fixes (position and gradients).
-    pub fn clamp_slots(layout: &DofLayout, v: usize) -> Vec<usize> {
-        layout.vertex_slots(v)
-    }
-
     /// Characteristic size of each scalar DOF for error norms: `length`
     /// for positions, 1 for gradients.
     pub fn scales(&self, length: f64) -> Vec<f64> {

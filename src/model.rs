@@ -474,14 +474,12 @@ impl Model {
                             2.0
                         };
                         let hn = (h * grow.clamp(0.2, 2.0)).min(sys.max_step);
-                        if h < remaining || s >= big_h {
-                            // do not let a short final step shrink the next advance's step
-                            self.state.h_next = if h < remaining {
-                                hn
-                            } else {
-                                hn.max(self.state.h_next)
-                            };
-                        }
+                        // A short final step must not shrink the next advance's step.
+                        self.state.h_next = if h < remaining {
+                            hn
+                        } else {
+                            hn.max(self.state.h_next)
+                        };
                         h = hn;
                     } else {
                         report.rejected += 1;
