@@ -87,6 +87,30 @@ pub struct StepReport {
     pub factorizations: usize,
     /// Smallest internal step used, s.
     pub min_step: f64,
+    /// CPU time assembling forces and matrices, s.
+    pub assembly_time: f64,
+    /// CPU time in sparse numeric factorizations, s.
+    pub factor_time: f64,
+    /// CPU time in sparse triangular solves, s.
+    pub solve_time: f64,
+}
+
+impl StepReport {
+    /// Add another report's counts and times (the smallest step of both).
+    pub fn accumulate(&mut self, r: &StepReport) {
+        self.min_step = if self.steps == 0 {
+            r.min_step
+        } else {
+            self.min_step.min(r.min_step)
+        };
+        self.steps += r.steps;
+        self.rejected += r.rejected;
+        self.newton_iterations += r.newton_iterations;
+        self.factorizations += r.factorizations;
+        self.assembly_time += r.assembly_time;
+        self.factor_time += r.factor_time;
+        self.solve_time += r.solve_time;
+    }
 }
 
 use crate::assembly::{Assembler, Evaluation, Physics, State};
@@ -426,6 +450,10 @@ impl Model {
         let mut h = self.state.h_next.min(sys.max_step);
         let u0 = self.state.inputs_now.clone();
         let u1 = self.state.inputs_next.clone();
+        // Every advance starts with a fresh iteration matrix: its result is a
+        // function of the state alone (restored states repeat bit for bit).
+        sys.ws.invalidate_jacobian();
+        let stats0 = sys.solver.stats();
         let mut u = u0.clone();
         while s < big_h {
             let remaining = big_h - s;
@@ -459,6 +487,7 @@ impl Model {
                 Ok((next, out)) => {
                     report.newton_iterations += out.iterations;
                     report.factorizations += out.factorizations;
+                    report.assembly_time += out.assembly_time.as_secs_f64();
                     let at_min = h <= sys.min_step * 1.000001;
                     if out.error <= 1.0 || at_min {
                         self.state.dynamics = next;
@@ -499,6 +528,9 @@ impl Model {
                 }
             }
         }
+        let stats = sys.solver.stats();
+        report.factor_time = (stats.factor_time - stats0.factor_time).as_secs_f64();
+        report.solve_time = (stats.solve_time - stats0.solve_time).as_secs_f64();
         let ev = sys.ws.evaluation().clone();
         self.state.time = t0 + big_h;
         self.state.inputs_now = u1;
@@ -749,6 +781,7 @@ impl Model {
                 tolerance: tol,
                 newton_tolerance: (1e-3 * tol).max(1e-13),
                 max_newton: sc.solver.max_newton,
+                newton: sc.solver.newton,
             },
             rest,
             torque,

@@ -161,7 +161,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     let n = (stop / args.step).round().max(1.0) as usize;
     let started = std::time::Instant::now();
     let mut last_report = started;
-    let mut steps = 0usize;
+    let mut total = crate::model::StepReport::default();
     for k in 1..=n {
         let t = (k as f64 * args.step).min(stop);
         for (i, v) in signals.at(t) {
@@ -169,7 +169,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         }
         let h = t - model.time();
         let r = model.advance(h).map_err(|e| e.to_string())?;
-        steps += r.steps;
+        total.accumulate(&r);
+        let steps = total.steps;
         write_row(&mut out, t, &model.output_values()).map_err(io)?;
         if last_report.elapsed().as_secs_f64() > 2.0 {
             eprintln!(
@@ -181,9 +182,21 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     }
     out.flush().map_err(io)?;
     eprintln!(
-        "simulated {stop} s in {:.2} s of CPU wall time ({steps} internal steps) -> {}",
+        "simulated {stop} s in {:.2} s of CPU wall time -> {}",
         started.elapsed().as_secs_f64(),
         args.output.display()
+    );
+    eprintln!(
+        "{} internal steps ({} rejected, smallest {:.3e} s), {} Newton iterations, \
+         {} factorizations; assembly {:.2} s, factorization {:.2} s, solves {:.2} s",
+        total.steps,
+        total.rejected,
+        total.min_step,
+        total.newton_iterations,
+        total.factorizations,
+        total.assembly_time,
+        total.factor_time,
+        total.solve_time
     );
     Ok(())
 }

@@ -11,7 +11,7 @@
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
 //! | `ancf:contact` | `{enabled: false, friction, stiffness, thickness}` |
-//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, stop_time}` |
+//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
 //!
@@ -24,7 +24,8 @@ use super::fold::{
     Assignment, expect_array, expect_index, expect_number, expect_string, type_name,
 };
 use super::{
-    ActuatorMode, CreaseStiffness, Fix, Integrator, Material, Outputs, SolverSettings, VertexInput,
+    ActuatorMode, CreaseStiffness, Fix, Integrator, Material, NewtonMode, Outputs, SolverSettings,
+    VertexInput,
 };
 use serde_json::{Map, Value};
 
@@ -548,6 +549,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                 "min_step",
                 "tolerance",
                 "max_newton",
+                "newton",
                 "stop_time",
             ],
         )?;
@@ -592,6 +594,16 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                 ));
             }
             s.max_newton = n;
+        }
+        if let Some(name) = o.string("newton")? {
+            s.newton = enum_value(
+                &o.path("newton"),
+                name,
+                &[
+                    ("full", NewtonMode::Full),
+                    ("modified", NewtonMode::Modified),
+                ],
+            )?;
         }
         if let Some(x) = o.num_where("stop_time", positive, "positive (s)")? {
             s.stop_time = x;
@@ -708,7 +720,7 @@ mod tests {
             "ancf:motions": [{"name": "grip", "vertex": 2}],
             "ancf:contact": {"enabled": false, "friction": 0.3},
             "ancf:solver": {"integrator": "central-difference", "rho_inf": 0.5, "max_step": 1e-4,
-                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "stop_time": 2},
+                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "newton": "full", "stop_time": 2},
             "ancf:outputs": ["positions", "energies"],
             "ancf:refine": 2
         }"#,
@@ -730,6 +742,7 @@ mod tests {
         assert_eq!(p.vertex_motions[0].0.name, "grip");
         assert_eq!(p.solver.integrator, Integrator::CentralDifference);
         assert_eq!(p.solver.max_newton, 30);
+        assert_eq!(p.solver.newton, NewtonMode::Full);
         assert!(p.outputs.positions && !p.outputs.fold_angles && p.outputs.energies);
         assert_eq!(p.refine, 2);
     }

@@ -222,6 +222,17 @@ pub enum Integrator {
     CentralDifference,
 }
 
+/// How the implicit stepper keeps Newton's iteration matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum NewtonMode {
+    /// Assemble and factor the tangent at every iteration.
+    Full,
+    /// Keep the factorization across iterations and steps while the
+    /// iteration contracts fast; refresh it when it does not.
+    #[default]
+    Modified,
+}
+
 /// Solver settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverSettings {
@@ -237,6 +248,9 @@ pub struct SolverSettings {
     pub tolerance: f64,
     /// Maximum Newton iterations per step.
     pub max_newton: usize,
+    /// Full or modified Newton (generalized-alpha).
+    #[serde(default)]
+    pub newton: NewtonMode,
     /// Default experiment stop time in s.
     pub stop_time: f64,
 }
@@ -250,6 +264,7 @@ impl Default for SolverSettings {
             min_step: 1e-9,
             tolerance: 1e-6,
             max_newton: 20,
+            newton: NewtonMode::Modified,
             stop_time: 1.0,
         }
     }

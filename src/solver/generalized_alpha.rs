@@ -15,7 +15,9 @@
 //! follow the same update with q_{n+1} given, so their inertia couples in.
 
 use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
+pub use crate::scene::NewtonMode;
 use crate::solver::SparseSolver;
+use std::time::{Duration, Instant};
 
 /// The four coefficients of the scheme.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,15 +86,20 @@ pub struct Outcome {
     pub factorizations: usize,
     /// Scaled local error estimate (accept when <= 1).
     pub error: f64,
+    /// Time spent assembling forces and matrices.
+    pub assembly_time: Duration,
 }
 
-/// Reusable work vectors.
+/// Reusable work vectors, and which iteration matrix the solver holds.
 #[derive(Default)]
 pub struct Workspace {
     eval: Evaluation,
     matrix: Vec<f64>,
     rhs: Vec<f64>,
     mqdd: Vec<f64>,
+    /// Step size the factorization in the solver was formed for (None:
+    /// no usable factorization).
+    jacobian_h: Option<f64>,
 }
 
 impl Workspace {
@@ -100,7 +107,17 @@ impl Workspace {
     pub fn evaluation(&self) -> &Evaluation {
         &self.eval
     }
+
+    /// Forget the iteration matrix: the next step forms a fresh one (so that
+    /// a run from a restored state repeats bit for bit).
+    pub fn invalidate_jacobian(&mut self) {
+        self.jacobian_h = None;
+    }
 }
+
+/// Modified Newton forms a new iteration matrix when the contraction rate
+/// of the iteration exceeds this.
+const MAX_RATE: f64 = 0.25;
 
 /// Settings of the Newton iteration and error estimate.
 #[derive(Clone, Copy, Debug)]
@@ -111,6 +128,8 @@ pub struct Settings {
     pub newton_tolerance: f64,
     /// Maximum Newton iterations.
     pub max_newton: usize,
+    /// Full or modified Newton.
+    pub newton: NewtonMode,
 }
 
 /// Take one step of size `h` from `cur`. Fails with a reason when Newton
@@ -153,9 +172,19 @@ pub fn step(
     ws.matrix.resize(asm.nnz(), 0.0);
     ws.rhs.resize(asm.n_free, 0.0);
     ws.mqdd.resize(n, 0.0);
+    let modified = settings.newton == NewtonMode::Modified;
+    let mut refresh = !modified
+        || match ws.jacobian_h {
+            Some(hj) => !(0.8..=1.25).contains(&(h / hj)),
+            None => true,
+        };
+    // Newton iterations since the matrix in the solver was formed (None:
+    // formed in an earlier step).
+    let mut age: Option<usize> = None;
     let mut out = Outcome::default();
     let mut last_norm = f64::INFINITY;
     for it in 0..settings.max_newton {
+        refresh |= !modified;
         update_rates(&mut next, cur, co, h);
         let st = State {
             q: &next.q,
@@ -164,30 +193,68 @@ pub fn step(
             moment: drive.moment,
             theta_prev: drive.theta_prev,
         };
-        asm.evaluate(&st, &mut ws.eval, Some((&mut ws.matrix, coeffs)))?;
+        let t0 = Instant::now();
+        let matrix = if refresh {
+            Some((&mut ws.matrix[..], coeffs))
+        } else {
+            None
+        };
+        asm.evaluate(&st, &mut ws.eval, matrix)?;
         asm.mass_mul(&next.qdd, &mut ws.mqdd);
+        out.assembly_time += t0.elapsed();
         for i in 0..n {
             let fi = asm.free[i];
             if fi != FIXED {
                 ws.rhs[fi] = -(ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]);
             }
         }
-        solver.factor(&ws.matrix)?;
-        out.factorizations += 1;
+        if refresh {
+            ws.jacobian_h = None;
+            solver.factor(&ws.matrix)?;
+            ws.jacobian_h = Some(h);
+            out.factorizations += 1;
+            refresh = false;
+            age = Some(0);
+            last_norm = f64::INFINITY;
+        }
         solver.solve_in_place(&mut ws.rhs)?;
         out.iterations = it + 1;
         let mut norm: f64 = 0.0;
         for i in 0..n {
             let fi = asm.free[i];
             if fi != FIXED {
-                next.q[i] += ws.rhs[fi];
                 norm = norm.max(ws.rhs[fi].abs() / scales[i]);
             }
         }
         if !norm.is_finite() {
             return Err("Newton produced non-finite values".into());
         }
-        if norm <= settings.newton_tolerance {
+        // Contraction rate of the iteration (modified Newton converges linearly:
+        // the remaining error is about rate / (1 - rate) times the last correction).
+        let rate = norm / last_norm;
+        let stale = age != Some(0);
+        if modified && stale && rate > 1.0 && it + 1 < settings.max_newton {
+            // A matrix formed elsewhere sends the iterate away: drop this
+            // correction and form the matrix here.
+            refresh = true;
+            continue;
+        }
+        for i in 0..n {
+            let fi = asm.free[i];
+            if fi != FIXED {
+                next.q[i] += ws.rhs[fi];
+            }
+        }
+        let remaining = if modified && rate > 0.0 {
+            if rate < 1.0 {
+                norm * (rate / (1.0 - rate)).max(1.0)
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            norm
+        };
+        if remaining <= settings.newton_tolerance {
             // Final consistent update and evaluation at the converged state.
             update_rates(&mut next, cur, co, h);
             let st = State {
@@ -197,37 +264,58 @@ pub fn step(
                 moment: drive.moment,
                 theta_prev: drive.theta_prev,
             };
+            let t0 = Instant::now();
             asm.evaluate(&st, &mut ws.eval, None)?;
-            // Local error estimate h^2 (beta - 1/6) (qdd_{n+1} - qdd_n), RMS over free DOFs.
-            let c = h * h * (beta - 1.0 / 6.0).abs().max(1.0 / 24.0);
-            let mut sum = 0.0;
-            let mut cnt = 0usize;
-            for i in 0..n {
-                if asm.free[i] != FIXED {
-                    let e = c * (next.qdd[i] - cur.qdd[i]) / (settings.tolerance * scales[i]);
-                    sum += e * e;
-                    cnt += 1;
-                }
-            }
-            out.error = if cnt > 0 {
-                (sum / cnt as f64).sqrt()
-            } else {
-                0.0
-            };
+            out.assembly_time += t0.elapsed();
+            out.error = local_error(&next, cur, asm, h, beta, scales, settings.tolerance);
             return Ok((next, out));
         }
-        if it >= 3 && norm > 2.0 * last_norm {
+        if it >= 3 && rate > 2.0 {
             return Err(format!(
                 "Newton diverged (correction {norm:.3e} after {} iterations)",
                 it + 1
             ));
         }
+        if modified && rate > MAX_RATE && it + 1 < settings.max_newton {
+            // Slow contraction: the iterate has moved far from where the
+            // matrix was formed; form it anew at the next iterate.
+            refresh = true;
+        }
+        age = age.map(|a| a + 1);
         last_norm = norm;
     }
     Err(format!(
         "Newton did not converge in {} iterations",
         settings.max_newton
     ))
+}
+
+/// Local error estimate h^2 |beta - 1/6| (qdd_{n+1} - qdd_n) (at least
+/// h^2/24 of it), RMS over the free DOFs, scaled by tolerance and DOF size.
+fn local_error(
+    next: &Dynamics,
+    cur: &Dynamics,
+    asm: &Assembler,
+    h: f64,
+    beta: f64,
+    scales: &[f64],
+    tolerance: f64,
+) -> f64 {
+    let c = h * h * (beta - 1.0 / 6.0).abs().max(1.0 / 24.0);
+    let mut sum = 0.0;
+    let mut cnt = 0usize;
+    for i in 0..next.q.len() {
+        if asm.free[i] != FIXED {
+            let e = c * (next.qdd[i] - cur.qdd[i]) / (tolerance * scales[i]);
+            sum += e * e;
+            cnt += 1;
+        }
+    }
+    if cnt > 0 {
+        (sum / cnt as f64).sqrt()
+    } else {
+        0.0
+    }
 }
 
 /// Algorithmic acceleration, velocity and acceleration of `next` from its

@@ -1,25 +1,68 @@
-//! Sparse symmetric linear solves with faer: the pattern is analysed once,
-//! each Newton matrix is only refactored numerically. Cholesky first (the
-//! dynamic iteration matrix is positive definite for small steps); LU when
-//! Cholesky finds the matrix indefinite (statics past a limit point).
+//! Sparse symmetric linear solves with faer: the pattern is analysed once
+//! (fill-reducing ordering, elimination tree), each Newton matrix is only
+//! refactored numerically into buffers allocated once. Cholesky first (the
+//! dynamic iteration matrix is positive definite unless compressed
+//! membranes buckle); LDLT on the same structure when Cholesky meets a
+//! negative pivot; pivoting LU as the last resort (statics past a limit
+//! point, or an LDLT whose solution fails its residual check).
 
-use faer::Side;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::prelude::*;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Par, Side};
+use std::time::{Duration, Instant};
+
+/// Which factorization the last [`SparseSolver::factor`] produced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FactorKind {
+    /// Cholesky `L L^T`.
+    Llt,
+    /// `L D L^T` without pivoting (indefinite but strongly factorable).
+    Ldlt,
+    /// Pivoting LU.
+    Lu,
+}
+
+/// Counts and time spent, for benchmarks.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SolverStats {
+    /// Numeric factorizations by kind: Cholesky, LDLT, LU.
+    pub llt: usize,
+    /// LDLT factorizations.
+    pub ldlt: usize,
+    /// LU factorizations.
+    pub lu: usize,
+    /// Triangular solves.
+    pub solves: usize,
+    /// Time in numeric factorization.
+    pub factor_time: Duration,
+    /// Time in solves.
+    pub solve_time: Duration,
+}
 
 /// A fixed sparsity pattern (full symmetric storage, sorted rows) with its
 /// symbolic factorizations and the latest numeric factorization.
 pub struct SparseSolver {
     pattern: SymbolicSparseColMat<usize>,
-    sym_llt: SymbolicLlt<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    /// Values of the Cholesky or LDLT factor.
+    l_values: Vec<f64>,
+    /// Copy of the factored matrix (to check LDLT solutions).
+    a_values: Vec<f64>,
+    mem: MemBuffer,
     sym_lu: Option<SymbolicLu<usize>>,
-    factor: Option<Factor>,
-}
-
-enum Factor {
-    Llt(Llt<usize, f64>),
-    Lu(Lu<usize, f64>),
+    lu: Option<Lu<usize, f64>>,
+    kind: Option<FactorKind>,
+    work: Vec<f64>,
+    residual: Vec<f64>,
+    stats: SolverStats,
 }
 
 impl SparseSolver {
@@ -27,13 +70,30 @@ impl SparseSolver {
     /// indices (both triangles present).
     pub fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Result<Self, String> {
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let sym_llt = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower)
-            .map_err(|e| format!("symbolic Cholesky failed: {e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| format!("symbolic Cholesky failed: {e:?}"))?;
+        let mem = MemBuffer::new(StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]));
         Ok(SparseSolver {
+            l_values: vec![0.0; symbolic.len_val()],
+            a_values: Vec::new(),
             pattern,
-            sym_llt,
+            symbolic,
+            mem,
             sym_lu: None,
-            factor: None,
+            lu: None,
+            kind: None,
+            work: vec![0.0; n],
+            residual: vec![0.0; n],
+            stats: SolverStats::default(),
         })
     }
 
@@ -47,20 +107,68 @@ impl SparseSolver {
         self.pattern.row_idx().len()
     }
 
+    /// Kind of the factorization in force, if any.
+    pub fn kind(&self) -> Option<FactorKind> {
+        self.kind
+    }
+
+    /// Counts and times so far.
+    pub fn stats(&self) -> SolverStats {
+        self.stats
+    }
+
     /// Factor the matrix with these values (in pattern order).
     pub fn factor(&mut self, values: &[f64]) -> Result<(), String> {
+        let start = Instant::now();
+        let r = self.factor_inner(values);
+        self.stats.factor_time += start.elapsed();
+        r
+    }
+
+    fn factor_inner(&mut self, values: &[f64]) -> Result<(), String> {
+        self.kind = None;
         if values.iter().any(|v| !v.is_finite()) {
-            self.factor = None;
             return Err("matrix has non-finite entries".into());
         }
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        match Llt::try_new_with_symbolic(self.sym_llt.clone(), a, Side::Lower) {
-            Ok(f) => {
-                self.factor = Some(Factor::Llt(f));
-                return Ok(());
-            }
-            Err(_) => {}
+        let stack = MemStack::new(&mut self.mem);
+        let llt = self.symbolic.factorize_numeric_llt(
+            &mut self.l_values,
+            a,
+            Side::Lower,
+            LltRegularization::default(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        if llt.is_ok() {
+            self.stats.llt += 1;
+            self.kind = Some(FactorKind::Llt);
+            return Ok(());
         }
+        let stack = MemStack::new(&mut self.mem);
+        let ldlt = self.symbolic.factorize_numeric_ldlt(
+            &mut self.l_values,
+            a,
+            Side::Lower,
+            LdltRegularization::default(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        if ldlt.is_ok() && self.l_values.iter().all(|x| x.is_finite()) {
+            self.stats.ldlt += 1;
+            self.a_values.clear();
+            self.a_values.extend_from_slice(values);
+            self.kind = Some(FactorKind::Ldlt);
+            return Ok(());
+        }
+        self.factor_lu(values)
+    }
+
+    fn factor_lu(&mut self, values: &[f64]) -> Result<(), String> {
+        self.kind = None;
+        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
         if self.sym_lu.is_none() {
             self.sym_lu = Some(
                 SymbolicLu::try_new(self.pattern.as_ref())
@@ -70,32 +178,77 @@ impl SparseSolver {
         let sym = self.sym_lu.clone().expect("just set");
         match Lu::try_new_with_symbolic(sym, a) {
             Ok(f) => {
-                self.factor = Some(Factor::Lu(f));
+                self.stats.lu += 1;
+                self.lu = Some(f);
+                self.kind = Some(FactorKind::Lu);
                 Ok(())
             }
-            Err(e) => {
-                self.factor = None;
-                Err(format!("matrix is singular: {e:?}"))
-            }
+            Err(e) => Err(format!("matrix is singular: {e:?}")),
         }
     }
 
     /// Solve with the latest factorization, overwriting `rhs` with the
     /// solution. Errors if nothing is factored or the result is not finite.
-    pub fn solve_in_place(&self, rhs: &mut [f64]) -> Result<(), String> {
-        let mut x = Col::<f64>::from_fn(rhs.len(), |i| rhs[i]);
-        match &self.factor {
-            Some(Factor::Llt(f)) => f.solve_in_place(x.as_mut()),
-            Some(Factor::Lu(f)) => f.solve_in_place(x.as_mut()),
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), String> {
+        let start = Instant::now();
+        let r = self.solve_inner(rhs);
+        self.stats.solves += 1;
+        self.stats.solve_time += start.elapsed();
+        r
+    }
+
+    fn solve_inner(&mut self, rhs: &mut [f64]) -> Result<(), String> {
+        let n = rhs.len();
+        match self.kind {
             None => return Err("no factorization".into()),
-        }
-        for (r, xi) in rhs.iter_mut().zip(x.iter()) {
-            *r = *xi;
+            Some(FactorKind::Llt) => {
+                let f = LltRef::new(&self.symbolic, &self.l_values);
+                let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
+                f.solve_in_place_with_conj(Conj::No, x, Par::Seq, MemStack::new(&mut self.mem));
+            }
+            Some(FactorKind::Ldlt) => {
+                self.work.clear();
+                self.work.extend_from_slice(rhs);
+                let f = LdltRef::new(&self.symbolic, &self.l_values);
+                let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
+                f.solve_in_place_with_conj(Conj::No, x, Par::Seq, MemStack::new(&mut self.mem));
+                // No pivoting: accept the solution only if its residual is small.
+                if self.relative_residual(rhs) > 1e-8 {
+                    let a = std::mem::take(&mut self.a_values);
+                    let r = self.factor_lu(&a);
+                    self.a_values = a;
+                    r?;
+                    rhs.copy_from_slice(&self.work);
+                    return self.solve_inner(rhs);
+                }
+            }
+            Some(FactorKind::Lu) => {
+                let f = self.lu.as_ref().expect("LU in force");
+                let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
+                f.solve_in_place(x);
+            }
         }
         if rhs.iter().any(|v| !v.is_finite()) {
             return Err("linear solve produced non-finite values".into());
         }
         Ok(())
+    }
+
+    /// `|A x - b| / |b|` with `b` in `work` and `A` in `a_values`.
+    fn relative_residual(&mut self, x: &[f64]) -> f64 {
+        let cp = self.pattern.col_ptr();
+        let ri = self.pattern.row_idx();
+        let r = &mut self.residual;
+        r.clear();
+        r.extend(self.work.iter().map(|b| -b));
+        for j in 0..x.len() {
+            for k in cp[j]..cp[j + 1] {
+                r[ri[k]] += self.a_values[k] * x[j];
+            }
+        }
+        let nb = self.work.iter().map(|b| b * b).sum::<f64>().sqrt();
+        let nr = r.iter().map(|b| b * b).sum::<f64>().sqrt();
+        if nb > 0.0 { nr / nb } else { nr }
     }
 }
 
@@ -103,10 +256,7 @@ impl SparseSolver {
 mod tests {
     use super::*;
 
-    /// 1D Laplacian (SPD) and the same shifted to be indefinite (LU path).
-    #[test]
-    fn solves_spd_and_indefinite() {
-        let n: usize = 5;
+    fn tridiagonal(n: usize) -> (Vec<usize>, Vec<usize>) {
         let mut col_ptr = vec![0];
         let mut rows = Vec::new();
         for j in 0..n {
@@ -115,26 +265,58 @@ mod tests {
             }
             col_ptr.push(rows.len());
         }
+        (col_ptr, rows)
+    }
+
+    fn check(s: &mut SparseSolver, col_ptr: &[usize], rows: &[usize], vals: &[f64]) {
+        let n = col_ptr.len() - 1;
+        s.factor(vals).unwrap();
+        let x_true: Vec<f64> = (0..n).map(|i| i as f64 + 1.0).collect();
+        let mut b = vec![0.0; n];
+        for j in 0..n {
+            for k in col_ptr[j]..col_ptr[j + 1] {
+                b[rows[k]] += vals[k] * x_true[j];
+            }
+        }
+        s.solve_in_place(&mut b).unwrap();
+        for i in 0..n {
+            assert!((b[i] - x_true[i]).abs() < 1e-10, "{:?}", s.kind());
+        }
+    }
+
+    /// 1D Laplacian (SPD: Cholesky) and shifted to be indefinite (LDLT).
+    #[test]
+    fn solves_spd_and_indefinite() {
+        let n: usize = 5;
+        let (col_ptr, rows) = tridiagonal(n);
         let mut s = SparseSolver::new(n, col_ptr.clone(), rows.clone()).unwrap();
-        for shift in [0.0, -2.5] {
+        for (shift, kind) in [(0.0, FactorKind::Llt), (-2.5, FactorKind::Ldlt)] {
             let mut vals = Vec::new();
             for j in 0..n {
                 for i in j.saturating_sub(1)..(j + 2).min(n) {
                     vals.push(if i == j { 2.0 + shift } else { -1.0 });
                 }
             }
-            s.factor(&vals).unwrap();
-            let x_true: Vec<f64> = (0..n).map(|i| i as f64 + 1.0).collect();
-            let mut b = vec![0.0; n];
-            for j in 0..n {
-                for k in col_ptr[j]..col_ptr[j + 1] {
-                    b[rows[k]] += vals[k] * x_true[j];
-                }
-            }
-            s.solve_in_place(&mut b).unwrap();
-            for i in 0..n {
-                assert!((b[i] - x_true[i]).abs() < 1e-12);
+            check(&mut s, &col_ptr, &rows, &vals);
+            assert_eq!(s.kind(), Some(kind));
+        }
+    }
+
+    /// A zero diagonal defeats factorization without pivoting: LU takes over.
+    #[test]
+    fn zero_pivot_falls_back_to_lu() {
+        let n: usize = 4;
+        let (col_ptr, rows) = tridiagonal(n);
+        let mut s = SparseSolver::new(n, col_ptr.clone(), rows.clone()).unwrap();
+        let mut vals = Vec::new();
+        for j in 0..n {
+            for i in j.saturating_sub(1)..(j + 2).min(n) {
+                vals.push(if i == j { 0.0 } else { 1.0 });
             }
         }
+        check(&mut s, &col_ptr, &rows, &vals);
+        assert_eq!(s.kind(), Some(FactorKind::Lu));
+        let stats = s.stats();
+        assert_eq!((stats.llt, stats.lu), (0, 1));
     }
 }

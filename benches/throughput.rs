@@ -1,0 +1,129 @@
+//! Throughput of the implicit stepper on Miura-ori sheets of growing size:
+//! DOFs, internal steps per second of CPU time, Newton iterations and
+//! factorizations per step, and where the time goes (assembly,
+//! factorization, solves). Each sheet folds from flat under the default
+//! rest-angle ramp (0 -> 1 over the first half) with 10 ms communication
+//! steps.
+//!
+//! `cargo bench --bench throughput -- [--sizes 2,4,8,16] [--time 1.0]
+//! [--tolerance 1e-3] [--newton modified|full] [--max-step 1e-3]`
+//!
+//! The last column compares simulated time with CPU time (> 1: faster than
+//! real time). The cost-growth exponent fits cost per step ~ n^p between
+//! successive sizes.
+
+use origami_fmu::model::{Model, StepReport};
+use origami_fmu::scene::patterns::Miura;
+use origami_fmu::scene::{self, NewtonMode, Scene};
+use std::time::Instant;
+
+struct Options {
+    sizes: Vec<usize>,
+    time: f64,
+    tolerance: f64,
+    newton: NewtonMode,
+    max_step: f64,
+}
+
+fn options() -> Options {
+    let mut o = Options {
+        sizes: vec![2, 4, 8, 16],
+        time: 1.0,
+        tolerance: 1e-3,
+        newton: NewtonMode::Modified,
+        max_step: 1e-3,
+    };
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut i = 0;
+    while i < args.len() {
+        let val = args.get(i + 1).cloned().unwrap_or_default();
+        match args[i].as_str() {
+            "--sizes" => o.sizes = val.split(',').map(|s| s.parse().expect("size")).collect(),
+            "--time" => o.time = val.parse().expect("time"),
+            "--tolerance" => o.tolerance = val.parse().expect("tolerance"),
+            "--max-step" => o.max_step = val.parse().expect("max step"),
+            "--newton" => {
+                o.newton = match val.as_str() {
+                    "full" => NewtonMode::Full,
+                    "modified" => NewtonMode::Modified,
+                    _ => panic!("--newton full|modified"),
+                }
+            }
+            // cargo bench passes --bench; ignore what is not ours.
+            _ => {
+                i += 1;
+                continue;
+            }
+        }
+        i += 2;
+    }
+    o
+}
+
+/// The Miura-ori scene with `n x n` unit cells and the default settings.
+pub fn miura(n: usize) -> Scene {
+    let fold = Miura {
+        nx: n,
+        ny: n,
+        ..Miura::default()
+    }
+    .generate()
+    .expect("valid Miura");
+    scene::from_fold(&fold, None).expect("scene").0
+}
+
+fn main() {
+    let o = options();
+    println!(
+        "Miura-ori folding, {} s simulated, tolerance {:.0e}, max step {:.0e} s, {:?} Newton",
+        o.time, o.tolerance, o.max_step, o.newton
+    );
+    println!(
+        "| cells | DOFs | steps | steps/s | Newton its/step | factorizations/step | assembly % | factorization % | solves % | CPU s | sim/CPU | cost/step exponent |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut last: Option<(usize, f64)> = None;
+    for &n in &o.sizes {
+        let mut sc = miura(n);
+        sc.solver.tolerance = o.tolerance;
+        sc.solver.newton = o.newton;
+        sc.solver.max_step = o.max_step;
+        let mut m = Model::new(sc).expect("model");
+        m.initialize().expect("initialize");
+        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        let dt = 0.01;
+        let steps = (o.time / dt).round() as usize;
+        let mut total = StepReport::default();
+        let start = Instant::now();
+        for k in 1..=steps {
+            let t = k as f64 * dt;
+            m.set_input(fold, (t / (0.5 * o.time)).min(1.0)).unwrap();
+            total.accumulate(&m.advance(dt).expect("advance"));
+        }
+        let cpu = start.elapsed().as_secs_f64();
+        let dofs = m.n_dofs();
+        let per_step = cpu / total.steps as f64;
+        let exponent = last
+            .map(|(d0, c0)| {
+                format!(
+                    "{:.2}",
+                    (per_step / c0).ln() / (dofs as f64 / d0 as f64).ln()
+                )
+            })
+            .unwrap_or_else(|| "-".into());
+        last = Some((dofs, per_step));
+        let pct = |x: f64| 100.0 * x / cpu;
+        println!(
+            "| {n}x{n} | {dofs} | {} | {:.0} | {:.2} | {:.2} | {:.0} | {:.0} | {:.0} | {:.2} | {:.2} | {exponent} |",
+            total.steps,
+            total.steps as f64 / cpu,
+            total.newton_iterations as f64 / total.steps as f64,
+            total.factorizations as f64 / total.steps as f64,
+            pct(total.assembly_time),
+            pct(total.factor_time),
+            pct(total.solve_time),
+            cpu,
+            o.time / cpu,
+        );
+    }
+}
