@@ -115,8 +115,9 @@ impl StepReport {
 
 use crate::assembly::{Assembler, Evaluation, Physics, State};
 use crate::element::Rule;
-use crate::scene::{ActuatorMode, CreaseStiffness, Fix, Scene};
+use crate::scene::{ActuatorMode, CreaseStiffness, Fix, Integrator, Scene};
 use crate::solver::SparseSolver;
+use crate::solver::central_difference::CentralDifference;
 use crate::solver::generalized_alpha::{self as ga, Dynamics};
 
 /// Life-cycle phase of a [`Model`].
@@ -158,10 +159,26 @@ struct System {
     coeffs: ga::Coefficients,
     settings: ga::Settings,
     scales: Vec<f64>,
+    inputs: InputMap,
+    /// For each `crease[e]` output: the crease ends averaged.
+    angle_ends: Vec<Vec<usize>>,
+    ws: ga::Workspace,
+    /// The explicit stepper when the scene asks for central differences
+    /// (made at initialization).
+    cd: Option<CentralDifference>,
+    max_step: f64,
+    min_step: f64,
+}
+
+/// How input values become rest angles, moments, forces and prescribed
+/// DOFs of the assembly.
+struct InputMap {
     /// For each crease end: (actuator index, fold target) of rest-angle actuators.
     rest: Vec<Vec<(usize, f64)>>,
     /// For each crease end: torque actuators acting on it.
     torque: Vec<Vec<usize>>,
+    /// Length share of each crease end (moments are per unit length).
+    end_length: Vec<f64>,
     /// Constant external force (gravity), all DOFs; None without gravity.
     gravity: Option<Vec<f64>>,
     /// Slots fixed by supports (value = reference value), scalar indices.
@@ -170,11 +187,7 @@ struct System {
     motion: Vec<(usize, usize)>,
     /// Scalar index of each force input component (input index, scalar).
     force: Vec<(usize, usize)>,
-    /// For each `crease[e]` output: the crease ends averaged.
-    angle_ends: Vec<Vec<usize>>,
-    ws: ga::Workspace,
-    max_step: f64,
-    min_step: f64,
+    n_dofs: usize,
 }
 
 /// One origami scene with its state and stepper.
@@ -360,7 +373,7 @@ impl Model {
         let n = sys.asm.n_dofs();
         let mut q = sys.asm.layout.reference_state(&self.scene.mesh);
         let u = self.state.inputs_now.clone();
-        let d = drive(sys, &u);
+        let d = sys.inputs.drive(&u);
         for &(i, x) in &d.prescribed {
             q[i] = x;
         }
@@ -455,6 +468,39 @@ impl Model {
         sys.ws.invalidate_jacobian();
         let stats0 = sys.solver.stats();
         let mut u = u0.clone();
+        let mut d = DriveValues::default();
+        if let Some(cd) = sys.cd.as_mut() {
+            // Explicit: equal substeps below the stability limit.
+            let n_sub = (big_h / cd.stable_step().min(sys.max_step)).ceil().max(1.0);
+            let h = big_h / n_sub;
+            let t_asm = cd.assembly_time;
+            let t_solve = cd.solve_time();
+            for k in 1..=n_sub as usize {
+                let frac = k as f64 / n_sub;
+                for k in 0..u.len() {
+                    u[k] = u0[k] + (u1[k] - u0[k]) * frac;
+                }
+                sys.inputs.drive_into(&u, &mut d);
+                let gd = ga::Drive {
+                    theta0: &d.theta0,
+                    moment: &d.moment,
+                    f_ext: &d.f_ext,
+                    prescribed: &d.prescribed,
+                    theta_prev: &self.state.crease_theta,
+                };
+                cd.step(&sys.asm, &mut self.state.dynamics, h, &gd)
+                    .map_err(|reason| Error::StepFailed {
+                        time: t0 + (k - 1) as f64 * h,
+                        reason,
+                    })?;
+                self.state.crease_theta.clone_from(&cd.evaluation().theta);
+            }
+            report.steps = n_sub as usize;
+            report.min_step = h;
+            report.assembly_time = (cd.assembly_time - t_asm).as_secs_f64();
+            report.solve_time = (cd.solve_time() - t_solve).as_secs_f64();
+            s = big_h;
+        }
         while s < big_h {
             let remaining = big_h - s;
             if h >= remaining || remaining - h < 1e-3 * h {
@@ -464,7 +510,7 @@ impl Model {
             for k in 0..u.len() {
                 u[k] = u0[k] + (u1[k] - u0[k]) * frac;
             }
-            let d = drive(sys, &u);
+            sys.inputs.drive_into(&u, &mut d);
             let gd = ga::Drive {
                 theta0: &d.theta0,
                 moment: &d.moment,
@@ -529,9 +575,14 @@ impl Model {
             }
         }
         let stats = sys.solver.stats();
-        report.factor_time = (stats.factor_time - stats0.factor_time).as_secs_f64();
-        report.solve_time = (stats.solve_time - stats0.solve_time).as_secs_f64();
-        let ev = sys.ws.evaluation().clone();
+        if sys.cd.is_none() {
+            report.factor_time = (stats.factor_time - stats0.factor_time).as_secs_f64();
+            report.solve_time = (stats.solve_time - stats0.solve_time).as_secs_f64();
+        }
+        let ev = match &sys.cd {
+            Some(cd) => cd.evaluation().clone(),
+            None => sys.ws.evaluation().clone(),
+        };
         self.state.time = t0 + big_h;
         self.state.inputs_now = u1;
         self.state.outputs = self.compute_outputs(&ev);
@@ -772,6 +823,14 @@ impl Model {
             .collect();
         let length = sheet_size(mesh);
         let scales = asm.scales(length);
+        // The explicit stepper's stable step, estimated on the unstressed sheet.
+        let cd = match sc.solver.integrator {
+            Integrator::CentralDifference => Some(
+                CentralDifference::new(&asm, &q_ref, &vec![std::f64::consts::PI; nends])
+                    .map_err(Error::Scene)?,
+            ),
+            Integrator::GeneralizedAlpha => None,
+        };
         let tol = sc.solver.tolerance;
         let sys = System {
             scales,
@@ -783,12 +842,17 @@ impl Model {
                 max_newton: sc.solver.max_newton,
                 newton: sc.solver.newton,
             },
-            rest,
-            torque,
-            gravity,
-            supported,
-            motion,
-            force,
+            inputs: InputMap {
+                rest,
+                torque,
+                end_length: asm.creases.iter().map(|c| c.length).collect(),
+                gravity,
+                supported,
+                motion,
+                force,
+                n_dofs: asm.n_dofs(),
+            },
+            cd,
             angle_ends,
             ws: ga::Workspace::default(),
             max_step: sc.solver.max_step,
@@ -801,7 +865,9 @@ impl Model {
     }
 }
 
-/// Inputs of one step turned into what the assembly needs.
+/// Inputs of one step turned into what the assembly needs (buffers
+/// reused from step to step).
+#[derive(Default)]
 struct DriveValues {
     theta0: Vec<f64>,
     moment: Vec<f64>,
@@ -809,34 +875,43 @@ struct DriveValues {
     prescribed: Vec<(usize, f64)>,
 }
 
-fn drive(sys: &System, u: &[f64]) -> DriveValues {
-    let pi = std::f64::consts::PI;
-    let theta0 = sys
-        .rest
-        .iter()
-        .map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>())
-        .collect();
-    let moment = sys
-        .torque
-        .iter()
-        .zip(&sys.asm.creases)
-        .map(|(t, ce)| t.iter().map(|&a| u[a]).sum::<f64>() * ce.length)
-        .collect();
-    let n = sys.asm.n_dofs();
-    let mut f_ext = match &sys.gravity {
-        Some(g) => g.clone(),
-        None => vec![0.0; n],
-    };
-    for &(k, i) in &sys.force {
-        f_ext[i] += u[k];
+impl InputMap {
+    /// Fill `d` from the input values `u`.
+    fn drive_into(&self, u: &[f64], d: &mut DriveValues) {
+        let pi = std::f64::consts::PI;
+        d.theta0.clear();
+        d.theta0.extend(
+            self.rest
+                .iter()
+                .map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>()),
+        );
+        d.moment.clear();
+        d.moment.extend(
+            self.torque
+                .iter()
+                .zip(&self.end_length)
+                .map(|(t, l)| t.iter().map(|&a| u[a]).sum::<f64>() * l),
+        );
+        match &self.gravity {
+            Some(g) => d.f_ext.clone_from(g),
+            None => {
+                d.f_ext.clear();
+                d.f_ext.resize(self.n_dofs, 0.0);
+            }
+        }
+        for &(k, i) in &self.force {
+            d.f_ext[i] += u[k];
+        }
+        d.prescribed.clone_from(&self.supported);
+        d.prescribed
+            .extend(self.motion.iter().map(|&(k, i)| (i, u[k])));
     }
-    let mut prescribed = sys.supported.clone();
-    prescribed.extend(sys.motion.iter().map(|&(k, i)| (i, u[k])));
-    DriveValues {
-        theta0,
-        moment,
-        f_ext,
-        prescribed,
+
+    /// The drive values for `u`, freshly allocated.
+    fn drive(&self, u: &[f64]) -> DriveValues {
+        let mut d = DriveValues::default();
+        self.drive_into(u, &mut d);
+        d
     }
 }
 
