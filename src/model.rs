@@ -548,7 +548,7 @@ impl Model {
                         } else {
                             2.0
                         };
-                        let hn = (h * grow.clamp(0.2, 2.0)).min(sys.max_step);
+                        let hn = (h * grow.clamp(0.2, 2.0)).clamp(sys.min_step, sys.max_step);
                         // A short final step must not shrink the next advance's step.
                         self.state.h_next = if h < remaining {
                             hn

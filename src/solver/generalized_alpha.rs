@@ -215,7 +215,6 @@ pub fn step(
             out.factorizations += 1;
             refresh = false;
             age = Some(0);
-            last_norm = f64::INFINITY;
         }
         solver.solve_in_place(&mut ws.rhs)?;
         out.iterations = it + 1;
@@ -245,7 +244,7 @@ pub fn step(
                 next.q[i] += ws.rhs[fi];
             }
         }
-        let remaining = if modified && rate > 0.0 {
+        let remaining = if modified && stale {
             if rate < 1.0 {
                 norm * (rate / (1.0 - rate)).max(1.0)
             } else {
@@ -254,7 +253,11 @@ pub fn step(
         } else {
             norm
         };
-        if remaining <= settings.newton_tolerance {
+        // A fresh matrix that stops contracting this close to the tolerance
+        // has reached the round-off floor of an ill-conditioned (thin,
+        // membrane-stiff) system: as converged as it gets.
+        let floor = !stale && it >= 2 && rate > 0.5 && norm <= 100.0 * settings.newton_tolerance;
+        if remaining <= settings.newton_tolerance || floor {
             // Final consistent update and evaluation at the converged state.
             update_rates(&mut next, cur, co, h);
             let st = State {
@@ -276,7 +279,7 @@ pub fn step(
                 it + 1
             ));
         }
-        if modified && rate > MAX_RATE && it + 1 < settings.max_newton {
+        if modified && stale && rate > MAX_RATE && it + 1 < settings.max_newton {
             // Slow contraction: the iterate has moved far from where the
             // matrix was formed; form it anew at the next iterate.
             refresh = true;
