@@ -32,6 +32,23 @@ pub fn roll_up_exact(ratio: f64) -> (f64, f64) {
     )
 }
 
+/// Case A material (E = 1.2e6, nu = 0, h = 0.1, unit density), no creases,
+/// no damping.
+pub fn roll_up_physics() -> Physics {
+    Physics {
+        material: Material {
+            youngs_modulus: 1.2e6,
+            poisson_ratio: 0.0,
+            thickness: 0.1,
+            density: 1.0,
+        },
+        crease_k_per_length: 0.0,
+        crease_c_per_length: 0.0,
+        alpha: 0.0,
+        beta: 0.0,
+    }
+}
+
 /// An end moment about -y, rolling a strip along x towards +z: potential
 /// `-M_i psi_i` with `psi_i = atan2(t_z, t_x)` of the x-gradient `t` at each
 /// loaded vertex (the projection of the end rotation on the xz-plane).
@@ -144,18 +161,7 @@ impl RollUp {
             return Err("roll-up: ratios must be positive and increasing".into());
         }
         let mesh = grid_with(ROLL_UP_L, 1.0, self.nx, self.ny, &[], self.alternate);
-        let physics = Physics {
-            material: Material {
-                youngs_modulus: 1.2e6,
-                poisson_ratio: 0.0,
-                thickness: 0.1,
-                density: 1.0,
-            },
-            crease_k_per_length: 0.0,
-            crease_c_per_length: 0.0,
-            alpha: 0.0,
-            beta: 0.0,
-        };
+        let physics = roll_up_physics();
         let layout = DofLayout::new(&mesh);
         let nv = mesh.n_vertices();
         let tip: Vec<usize> = (0..nv).filter(|&v| mesh.coords[v].x == ROLL_UP_L).collect();
