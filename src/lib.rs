@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod assembly;
+pub mod benchmarks;
 pub mod cli;
 pub mod crease;
 pub mod dofs;

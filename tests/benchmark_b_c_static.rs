@@ -70,6 +70,7 @@ fn deflection(
         load_steps: 1,
         max_iterations: 20,
         tolerance: 1e-8,
+        ..StaticSettings::default()
     };
     statics::solve(&asm, &mut q, &[], &Constant(f), settings).unwrap();
     q[3 * asm.layout.position_slot[probe] + 2]

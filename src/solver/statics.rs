@@ -1,6 +1,12 @@
-//! Static equilibrium by Newton's method with load stepping and a
-//! backtracking line search: `f_int(q) = lambda f_ext + extra(q)` for
-//! `lambda` from 0 to 1. Used for the benchmarks with known static answers.
+//! Static equilibrium `f_int(q) = lambda f_ext + extra(q)` followed from
+//! `lambda = 0` to 1 by Newton's method with adaptive load stepping and a
+//! line search. Used for the benchmarks with known static answers.
+//!
+//! Each increment starts from the last converged state moved along the
+//! secant of the previous increment, then iterates Newton steps with the
+//! analytic tangent, each scaled by a line search on the energy slope
+//! (Crisfield). An increment that does not converge is retried with half the
+//! size; easy increments let the size grow back to `1 / load_steps`.
 
 use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
 use crate::solver::SparseSolver;
@@ -23,14 +29,16 @@ pub trait Load {
 /// Settings of the static solve.
 #[derive(Clone, Copy, Debug)]
 pub struct StaticSettings {
-    /// Number of equal load increments.
+    /// The largest load increment is `1 / load_steps` (the first one too).
     pub load_steps: usize,
-    /// Maximum Newton iterations per increment.
+    /// Maximum Newton iterations per increment before it is cut.
     pub max_iterations: usize,
     /// Converged when the residual norm is below `tolerance` times the
     /// external force norm, or when the work of a Newton correction is
     /// below 1e-16 of the increment's first (the round-off floor).
     pub tolerance: f64,
+    /// Give up when an increment would have to be smaller than this.
+    pub min_increment: f64,
 }
 
 impl Default for StaticSettings {
@@ -39,6 +47,7 @@ impl Default for StaticSettings {
             load_steps: 10,
             max_iterations: 50,
             tolerance: 1e-9,
+            min_increment: 1e-6,
         }
     }
 }
@@ -46,15 +55,28 @@ impl Default for StaticSettings {
 /// What a static solve did.
 #[derive(Clone, Debug, Default)]
 pub struct StaticReport {
-    /// Newton iterations per load increment.
+    /// Load factor reached by each accepted increment.
+    pub lambdas: Vec<f64>,
+    /// Newton iterations of each accepted increment.
     pub iterations: Vec<usize>,
-    /// Final relative residual norm per increment.
+    /// Final relative residual norm of each accepted increment.
     pub residuals: Vec<f64>,
+    /// Increments that failed and were retried at half the size.
+    pub cuts: usize,
+    /// Newton iterations spent in those failed increments.
+    pub wasted_iterations: usize,
+}
+
+impl StaticReport {
+    /// All Newton iterations, failed increments included.
+    pub fn total_iterations(&self) -> usize {
+        self.iterations.iter().sum::<usize>() + self.wasted_iterations
+    }
 }
 
 /// Solve for equilibrium starting from `q` (updated in place). Fixed DOFs
-/// keep their values in `q`. `theta0` are the crease rest angles; the
-/// theta history starts flat (pi).
+/// keep their values in `q`. `theta0` are the crease rest angles; crease
+/// angles are unwrapped from the flat state (pi) at the start.
 pub fn solve(
     asm: &Assembler,
     q: &mut [f64],
@@ -62,127 +84,288 @@ pub fn solve(
     load: &dyn Load,
     settings: StaticSettings,
 ) -> Result<StaticReport, String> {
-    let n = asm.n_dofs();
-    let mut solver = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())?;
-    let zeros = vec![0.0; n];
-    let moment = vec![0.0; asm.creases.len()];
-    let mut theta_prev = vec![std::f64::consts::PI; asm.creases.len()];
-    let mut ev = Evaluation::default();
-    let mut mat = vec![0.0; asm.nnz()];
-    let mut fext = vec![0.0; n];
-    let mut rhs = vec![0.0; asm.n_free];
+    solve_path(asm, q, theta0, load, settings, &[], |_, _, _| {})
+}
+
+/// Like [`solve`], with increments that land exactly on each load factor in
+/// `stops` (increasing, within (0, 1]), where `at_stop(lambda, q, report)`
+/// sees the converged state. So one load path yields several load levels.
+pub fn solve_path(
+    asm: &Assembler,
+    q: &mut [f64],
+    theta0: &[f64],
+    load: &dyn Load,
+    settings: StaticSettings,
+    stops: &[f64],
+    mut at_stop: impl FnMut(f64, &[f64], &StaticReport),
+) -> Result<StaticReport, String> {
+    check_inputs(asm, q, theta0, &settings, stops)?;
+    let mut newton = Newton::new(asm, theta0, load)?;
     let mut report = StaticReport::default();
-    let co = MatrixCoeffs {
-        k: 1.0,
-        m: 0.0,
-        c: 0.0,
-    };
-    let residual = |q: &[f64],
-                    lambda: f64,
-                    theta_prev: &[f64],
-                    ev: &mut Evaluation,
-                    fext: &mut Vec<f64>,
-                    mat: Option<&mut [f64]>|
-     -> Result<f64, String> {
-        let st = State {
-            q,
-            v: &zeros,
-            theta0,
-            moment: &moment,
-            theta_prev,
+    let max_step = 1.0 / settings.load_steps as f64;
+    // Unwrapped crease angles of the start, measured from the flat state.
+    let flat = vec![std::f64::consts::PI; asm.creases.len()];
+    newton.residual(q, 0.0, &flat, false)?;
+    let mut theta_prev = newton.ev.theta.clone();
+
+    let mut lambda = 0.0;
+    let mut step = max_step;
+    // Secant of the last accepted increment (free DOFs), per unit load.
+    let mut rate: Option<Vec<f64>> = None;
+    let mut q_start = q.to_vec();
+    let mut next_stop = 0;
+    while lambda < 1.0 {
+        let target = stops.get(next_stop).copied().unwrap_or(1.0);
+        // Land on the target rather than leave a sliver of rounding.
+        let lambda_new = if target - lambda <= step * (1.0 + 1e-9) {
+            target
+        } else {
+            lambda + step
         };
-        match mat {
-            Some(m) => {
-                asm.evaluate(&st, ev, Some((&mut *m, co)))?;
-                fext.iter_mut().for_each(|x| *x = 0.0);
-                load.apply(asm, q, lambda, fext, Some(m));
-            }
-            None => {
-                asm.evaluate(&st, ev, None)?;
-                fext.iter_mut().for_each(|x| *x = 0.0);
-                load.apply(asm, q, lambda, fext, None);
-            }
-        }
-        let mut r2 = 0.0;
-        for i in 0..n {
-            if asm.free[i] != FIXED {
-                let r = ev.force[i] - fext[i];
-                r2 += r * r;
-            }
-        }
-        Ok(r2.sqrt())
-    };
-    for step in 1..=settings.load_steps {
-        let lambda = step as f64 / settings.load_steps as f64;
-        // Reference force norm: the external load at this lambda.
-        let mut converged = false;
-        let mut it = 0;
-        let mut rnorm = 0.0;
-        let mut first_work = 0.0;
-        while it < settings.max_iterations {
-            it += 1;
-            rnorm = residual(q, lambda, &theta_prev, &mut ev, &mut fext, Some(&mut mat))?;
-            let fref = fext.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
-            if rnorm <= settings.tolerance * fref {
-                converged = true;
-                break;
-            }
-            for i in 0..n {
-                let fi = asm.free[i];
-                if fi != FIXED {
-                    rhs[fi] = fext[i] - ev.force[i];
+        let dl = lambda_new - lambda;
+        if let Some(r) = &rate {
+            for i in 0..q.len() {
+                if asm.free[i] != FIXED {
+                    q[i] = q_start[i] + dl * r[i];
                 }
             }
-            solver.factor(&mat)?;
-            let b = rhs.clone();
-            solver.solve_in_place(&mut rhs)?;
+        }
+        match newton.iterate(q, lambda_new, &theta_prev, &settings) {
+            Ok((its, res)) => {
+                rate = Some(q.iter().zip(&q_start).map(|(a, b)| (a - b) / dl).collect());
+                q_start.copy_from_slice(q);
+                theta_prev.clone_from(&newton.ev.theta);
+                lambda = lambda_new;
+                report.lambdas.push(lambda);
+                report.iterations.push(its);
+                report.residuals.push(res);
+                if its <= settings.max_iterations / 2 {
+                    step = (2.0 * step).min(max_step);
+                }
+                if lambda == target && next_stop < stops.len() {
+                    next_stop += 1;
+                    at_stop(lambda, q, &report);
+                }
+            }
+            Err(fail) => {
+                q.copy_from_slice(&q_start);
+                report.cuts += 1;
+                report.wasted_iterations += fail.iterations;
+                step = 0.5 * dl;
+                if step < settings.min_increment {
+                    return Err(format!(
+                        "static solve failed at load factor {lambda:.6}: an increment of {dl:.3e} {} \
+                         (relative residual {:.3e} after {} iterations) and increments below {:.1e} are not tried",
+                        fail.reason, fail.residual, fail.iterations, settings.min_increment
+                    ));
+                }
+            }
+        }
+    }
+    Ok(report)
+}
+
+/// Reject inputs that would make the solve index out of range or loop.
+fn check_inputs(
+    asm: &Assembler,
+    q: &[f64],
+    theta0: &[f64],
+    settings: &StaticSettings,
+    stops: &[f64],
+) -> Result<(), String> {
+    if q.len() != asm.n_dofs() {
+        return Err(format!(
+            "static solve: q has {} values, the model {}",
+            q.len(),
+            asm.n_dofs()
+        ));
+    }
+    if theta0.len() != asm.creases.len() {
+        return Err(format!(
+            "static solve: {} rest angles for {} crease ends",
+            theta0.len(),
+            asm.creases.len()
+        ));
+    }
+    if settings.load_steps == 0 || settings.max_iterations == 0 {
+        return Err("static solve: load_steps and max_iterations must be positive".into());
+    }
+    if !(settings.tolerance > 0.0 && settings.tolerance.is_finite())
+        || !(settings.min_increment > 0.0 && settings.min_increment <= 1.0)
+    {
+        return Err("static solve: tolerance and min_increment must be positive and finite".into());
+    }
+    if stops.iter().any(|s| !(*s > 0.0 && *s <= 1.0)) || stops.windows(2).any(|w| w[1] <= w[0]) {
+        return Err("static solve: stops must increase within (0, 1]".into());
+    }
+    if q.iter().any(|x| !x.is_finite()) {
+        return Err("static solve: q has non-finite values".into());
+    }
+    Ok(())
+}
+
+/// Why one increment failed.
+struct Failure {
+    reason: &'static str,
+    iterations: usize,
+    residual: f64,
+}
+
+/// Buffers of the Newton iteration at one load factor.
+struct Newton<'a> {
+    asm: &'a Assembler,
+    theta0: &'a [f64],
+    load: &'a dyn Load,
+    solver: SparseSolver,
+    zeros: Vec<f64>,
+    moment: Vec<f64>,
+    ev: Evaluation,
+    mat: Vec<f64>,
+    fext: Vec<f64>,
+    rhs: Vec<f64>,
+    q0: Vec<f64>,
+}
+
+impl<'a> Newton<'a> {
+    fn new(asm: &'a Assembler, theta0: &'a [f64], load: &'a dyn Load) -> Result<Self, String> {
+        let n = asm.n_dofs();
+        Ok(Newton {
+            asm,
+            theta0,
+            load,
+            solver: SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())?,
+            zeros: vec![0.0; n],
+            moment: vec![0.0; asm.creases.len()],
+            ev: Evaluation::default(),
+            mat: vec![0.0; asm.nnz()],
+            fext: vec![0.0; n],
+            rhs: vec![0.0; asm.n_free],
+            q0: vec![0.0; n],
+        })
+    }
+
+    /// Evaluate forces (and the tangent if asked) at `q`; return the free
+    /// residual norm and leave `f_int` in `ev.force`, `f_ext` in `fext`.
+    fn residual(
+        &mut self,
+        q: &[f64],
+        lambda: f64,
+        theta_prev: &[f64],
+        tangent: bool,
+    ) -> Result<f64, String> {
+        let st = State {
+            q,
+            v: &self.zeros,
+            theta0: self.theta0,
+            moment: &self.moment,
+            theta_prev,
+        };
+        self.fext.iter_mut().for_each(|x| *x = 0.0);
+        if tangent {
+            let co = MatrixCoeffs {
+                k: 1.0,
+                m: 0.0,
+                c: 0.0,
+            };
+            self.asm
+                .evaluate(&st, &mut self.ev, Some((&mut self.mat, co)))?;
+            self.load
+                .apply(self.asm, q, lambda, &mut self.fext, Some(&mut self.mat));
+        } else {
+            self.asm.evaluate(&st, &mut self.ev, None)?;
+            self.load.apply(self.asm, q, lambda, &mut self.fext, None);
+        }
+        let r2: f64 = (0..q.len())
+            .filter(|&i| self.asm.free[i] != FIXED)
+            .map(|i| (self.ev.force[i] - self.fext[i]).powi(2))
+            .sum();
+        if !r2.is_finite() || self.fext.iter().any(|x| !x.is_finite()) {
+            return Err("the load is not finite".into());
+        }
+        Ok(r2.sqrt())
+    }
+
+    /// Energy slope `dq . (f_ext - f_int)` at `q0 + alpha dq` (`dq` in
+    /// `rhs`); `None` where the configuration cannot be evaluated.
+    fn slope(&mut self, q: &mut [f64], alpha: f64, lambda: f64, theta_prev: &[f64]) -> Option<f64> {
+        let free = &self.asm.free;
+        for i in 0..q.len() {
+            if free[i] != FIXED {
+                q[i] = self.q0[i] + alpha * self.rhs[free[i]];
+            }
+        }
+        self.residual(q, lambda, theta_prev, false).ok()?;
+        let s: f64 = (0..q.len())
+            .filter(|&i| free[i] != FIXED)
+            .map(|i| self.rhs[free[i]] * (self.fext[i] - self.ev.force[i]))
+            .sum();
+        s.is_finite().then_some(s)
+    }
+
+    /// Newton iterations at load factor `lambda` from `q`; on success the
+    /// iterations and the final relative residual, with `ev.theta` the
+    /// unwrapped crease angles of the converged `q`.
+    fn iterate(
+        &mut self,
+        q: &mut [f64],
+        lambda: f64,
+        theta_prev: &[f64],
+        settings: &StaticSettings,
+    ) -> Result<(usize, f64), Failure> {
+        let n = q.len();
+        let mut first_work = 0.0;
+        let mut rel = f64::NAN;
+        let fail = |reason, iterations, residual| Failure {
+            reason,
+            iterations,
+            residual,
+        };
+        for it in 1..=settings.max_iterations {
+            let rnorm = self
+                .residual(q, lambda, theta_prev, true)
+                .map_err(|_| fail("reached a configuration that cannot be evaluated", it, rel))?;
+            let fref = self.fext.iter().map(|x| x * x).sum::<f64>().sqrt();
+            rel = rnorm / fref.max(1e-300);
+            if rnorm <= settings.tolerance * fref {
+                return Ok((it, rel));
+            }
+            for i in 0..n {
+                let fi = self.asm.free[i];
+                if fi != FIXED {
+                    self.rhs[fi] = self.fext[i] - self.ev.force[i];
+                }
+            }
+            let b = self.rhs.clone();
+            self.solver
+                .factor(&self.mat)
+                .and_then(|_| self.solver.solve_in_place(&mut self.rhs))
+                .map_err(|_| fail("met a singular tangent", it, rel))?;
             // Energy criterion (Bathe): the work of the correction against the
             // residual, relative to the first one of this increment. It stays
             // meaningful where the force residual hits its round-off floor
             // (thin sheets: membrane stiffness >> load).
-            let work = rhs.iter().zip(&b).map(|(x, y)| x * y).sum::<f64>().abs();
+            let work = self
+                .rhs
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| x * y)
+                .sum::<f64>()
+                .abs();
             if it == 1 {
                 first_work = work;
             } else if work <= 1e-16 * first_work {
-                converged = true;
-                break;
+                return Ok((it, rel));
             }
             // Line search on the energy slope along the step (Crisfield):
             // s(alpha) = dq . R(q + alpha dq) should vanish; accept the full
             // step when |s(1)| <= 0.8 |s(0)|, else take secant steps.
-            let q0: Vec<f64> = q.to_vec();
-            let slope = |q: &mut [f64],
-                         alpha: f64,
-                         ev: &mut Evaluation,
-                         fext: &mut Vec<f64>|
-             -> Option<f64> {
-                for i in 0..n {
-                    let fi = asm.free[i];
-                    if fi != FIXED {
-                        q[i] = q0[i] + alpha * rhs[fi];
-                    }
-                }
-                residual(q, lambda, &theta_prev, ev, fext, None).ok()?;
-                let mut s = 0.0;
-                for i in 0..n {
-                    let fi = asm.free[i];
-                    if fi != FIXED {
-                        s -= rhs[fi] * (ev.force[i] - fext[i]);
-                    }
-                }
-                s.is_finite().then_some(s)
-            };
-            // s(0) = dq . (f_ext - f_int) at q0, with the sign convention of `slope`.
-            let s0: f64 = (0..n)
-                .filter(|&i| asm.free[i] != FIXED)
-                .map(|i| rhs[asm.free[i]] * (fext[i] - ev.force[i]))
-                .sum();
+            self.q0.copy_from_slice(q);
+            let s0: f64 = self.rhs.iter().zip(&b).map(|(x, y)| x * y).sum();
             let (mut a_lo, mut s_lo, mut alpha) = (0.0, s0, 1.0);
             for _ in 0..8 {
-                match slope(q, alpha, &mut ev, &mut fext) {
+                match self.slope(q, alpha, lambda, theta_prev) {
                     Some(s) if s.abs() <= 0.8 * s0.abs() => break,
                     Some(s) => {
-                        // secant between (a_lo, s_lo) and (alpha, s)
                         let next = if (s_lo - s).abs() > 0.0 {
                             alpha - s * (alpha - a_lo) / (s - s_lo)
                         } else {
@@ -195,22 +378,10 @@ pub fn solve(
                     None => alpha *= 0.25,
                 }
             }
-            if slope(q, alpha, &mut ev, &mut fext).is_none() {
-                return Err(format!(
-                    "static solve reached an invalid configuration at load factor {lambda:.3}"
-                ));
+            if self.slope(q, alpha, lambda, theta_prev).is_none() {
+                return Err(fail("left the valid configurations", it, rel));
             }
         }
-        if !converged {
-            return Err(format!(
-                "static Newton did not converge at load factor {lambda:.3} (relative residual {:.3e} after {it} iterations)",
-                rnorm / fext.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300)
-            ));
-        }
-        theta_prev.clone_from(&ev.theta);
-        let fref = fext.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
-        report.iterations.push(it);
-        report.residuals.push(rnorm / fref);
+        Err(fail("did not converge", settings.max_iterations, rel))
     }
-    Ok(report)
 }
