@@ -183,6 +183,7 @@ pub fn step(
     let mut age: Option<usize> = None;
     let mut out = Outcome::default();
     let mut last_norm = f64::INFINITY;
+    let mut last_rate = 0.0;
     for it in 0..settings.max_newton {
         refresh |= !modified;
         update_rates(&mut next, cur, co, h);
@@ -273,7 +274,9 @@ pub fn step(
             out.error = local_error(&next, cur, asm, h, beta, scales, settings.tolerance);
             return Ok((next, out));
         }
-        if it >= 3 && rate > 2.0 {
+        // Diverging: the correction grew twice in a row (one growth alone
+        // happens in a converging zig-zag between slots).
+        if it >= 3 && rate > 2.0 && last_rate > 2.0 {
             return Err(format!(
                 "Newton diverged (correction {norm:.3e} after {} iterations)",
                 it + 1
@@ -285,6 +288,7 @@ pub fn step(
             refresh = true;
         }
         age = age.map(|a| a + 1);
+        last_rate = rate;
         last_norm = norm;
     }
     Err(format!(
