@@ -19,6 +19,11 @@ def input_signal(md, stop_time):
 
 
 def test_simulate_with_a_fold_ramp_gives_finite_outputs(fmu, example):
+    if example == "case_c_nocut":
+        # Its internal step cannot be cut (min_step = max_step), so a torque of
+        # 1 N m/m discards (test_physics covers that); fmpy's simulate_fmu
+        # retries a discarded step forever at the same size.
+        pytest.skip("scene made to discard; see test_physics")
     path = str(fmu(example))
     md = read_model_description(path)
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
