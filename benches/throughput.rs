@@ -12,9 +12,9 @@
 //! real time). The cost-growth exponent fits cost per step ~ n^p between
 //! successive sizes.
 
+use origami_fmu::benchmarks::miura_scene;
 use origami_fmu::model::{Model, StepReport};
-use origami_fmu::scene::patterns::Miura;
-use origami_fmu::scene::{self, NewtonMode, Scene};
+use origami_fmu::scene::NewtonMode;
 use std::time::Instant;
 
 struct Options {
@@ -60,18 +60,6 @@ fn options() -> Options {
     o
 }
 
-/// The Miura-ori scene with `n x n` unit cells and the default settings.
-pub fn miura(n: usize) -> Scene {
-    let fold = Miura {
-        nx: n,
-        ny: n,
-        ..Miura::default()
-    }
-    .generate()
-    .expect("valid Miura");
-    scene::from_fold(&fold, None).expect("scene").0
-}
-
 fn main() {
     let o = options();
     println!(
@@ -84,7 +72,7 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut last: Option<(usize, f64)> = None;
     for &n in &o.sizes {
-        let mut sc = miura(n);
+        let mut sc = miura_scene(n);
         sc.solver.tolerance = o.tolerance;
         sc.solver.newton = o.newton;
         sc.solver.max_step = o.max_step;

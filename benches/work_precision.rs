@@ -21,12 +21,10 @@
 //! scripts/work_precision.sh also plots it. The observed order is the
 //! slope of log error against log step between successive fixed-step runs.
 
+use origami_fmu::benchmarks;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::{Model, StepReport};
-use origami_fmu::scene::patterns::Miura;
-use origami_fmu::scene::{
-    self, ActuatorMode, Fix, Integrator, NewtonMode, Scene, Support, VertexInput,
-};
+use origami_fmu::scene::{Fix, Integrator, NewtonMode, Scene, Support, VertexInput};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -191,17 +189,7 @@ fn cantilever_inputs(m: &Model, _t: f64) -> Vec<(usize, f64)> {
 }
 
 fn miura_scene() -> Scene {
-    let fold = Miura {
-        nx: 2,
-        ny: 2,
-        ..Miura::default()
-    }
-    .generate()
-    .expect("Miura");
-    let mut sc = scene::from_fold(&fold, None).expect("scene").0;
-    for a in &mut sc.actuators {
-        assert_eq!(a.mode, ActuatorMode::RestAngle);
-    }
+    let mut sc = benchmarks::miura_scene(2);
     sc.solver.newton = NewtonMode::Full;
     sc
 }
@@ -308,14 +296,7 @@ fn main() {
         };
         let sc = (case.scene)();
         let n_pos = 3 * sc.mesh.n_vertices();
-        let size = {
-            let (mut lo, mut hi) = (sc.mesh.coords[0], sc.mesh.coords[0]);
-            for c in &sc.mesh.coords {
-                lo = lo.inf(c);
-                hi = hi.sup(c);
-            }
-            (hi - lo).norm()
-        };
+        let size = sc.mesh.size();
         let mut last_fixed: Option<(f64, f64)> = None;
         for method in methods {
             let (step, tol) = match method {

@@ -236,3 +236,19 @@ impl RollUp {
         })
     }
 }
+
+/// The Miura-ori scene of `n x n` unit cells with the generator's defaults
+/// (20 mm facets, 60 degree sectors): the sheet the throughput and
+/// work-precision benches fold.
+pub fn miura_scene(n: usize) -> crate::scene::Scene {
+    let fold = crate::scene::patterns::Miura {
+        nx: n,
+        ny: n,
+        ..Default::default()
+    }
+    .generate()
+    .expect("valid Miura parameters");
+    crate::scene::from_fold(&fold, None)
+        .expect("generated Miura scene")
+        .0
+}

@@ -339,6 +339,20 @@ impl Mesh {
         self.coords.len()
     }
 
+    /// Diagonal of the reference bounding box (m): the sheet's size, the
+    /// length scale of position errors.
+    pub fn size(&self) -> f64 {
+        let Some(&first) = self.coords.first() else {
+            return 0.0;
+        };
+        let (mut lo, mut hi) = (first, first);
+        for c in &self.coords {
+            lo = lo.inf(c);
+            hi = hi.sup(c);
+        }
+        (hi - lo).norm()
+    }
+
     /// Reference area of triangle `t`.
     pub fn area(&self, t: usize) -> f64 {
         let [a, b, c] = self.triangles[t];

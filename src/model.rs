@@ -821,7 +821,7 @@ impl Model {
                     .collect()
             })
             .collect();
-        let length = sheet_size(mesh);
+        let length = mesh.size().max(f64::MIN_POSITIVE);
         let scales = asm.scales(length);
         // The explicit stepper's stable step, estimated on the unstressed sheet.
         let cd = match sc.solver.integrator {
@@ -913,16 +913,6 @@ impl InputMap {
         self.drive_into(u, &mut d);
         d
     }
-}
-
-/// Diagonal of the sheet's bounding box (m): the length scale of position errors.
-fn sheet_size(mesh: &crate::mesh::Mesh) -> f64 {
-    let (mut lo, mut hi) = (mesh.coords[0], mesh.coords[0]);
-    for c in &mesh.coords {
-        lo = lo.inf(c);
-        hi = hi.sup(c);
-    }
-    (hi - lo).norm().max(f64::MIN_POSITIVE)
 }
 
 /// Default mass-proportional damping: damping ratio 0.2 on the folding mode

@@ -122,6 +122,9 @@ impl CentralDifference {
         // Prescribed DOFs: the half-step velocity that reaches the value, and
         // the acceleration consistent with it (zero for fixed supports).
         self.accel_p.fill(0.0);
+        // Fixed supports have zero acceleration: only moving prescribed DOFs
+        // couple into the free ones through the mass matrix.
+        let mut coupled = false;
         for &(i, x) in drive.prescribed {
             let v_start = s.v[i] - 0.5 * h * s.qdd[i];
             let q_start = s.q[i] - h * s.v[i];
@@ -130,21 +133,11 @@ impl CentralDifference {
             s.q[i] = x;
             s.v[i] = v_half;
             self.accel_p[i] = a;
+            coupled |= a != 0.0;
         }
         let t0 = Instant::now();
-        asm.evaluate(
-            &State {
-                q: &s.q,
-                v: &s.v,
-                theta0: drive.theta0,
-                moment: drive.moment,
-                theta_prev: drive.theta_prev,
-            },
-            &mut self.eval,
-            None,
-        )?;
+        asm.evaluate(&drive.at(s), &mut self.eval, None)?;
         self.assembly_time += t0.elapsed();
-        let coupled = !drive.prescribed.is_empty();
         if coupled {
             asm.mass_mul(&self.accel_p, &mut self.m_accel_p);
         }

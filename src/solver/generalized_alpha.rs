@@ -77,6 +77,19 @@ pub struct Drive<'a> {
     pub theta_prev: &'a [f64],
 }
 
+impl<'a> Drive<'a> {
+    /// The assembly's view of positions and velocities `d` under this drive.
+    pub fn at<'s>(&'s self, d: &'s Dynamics) -> State<'s> {
+        State {
+            q: &d.q,
+            v: &d.v,
+            theta0: self.theta0,
+            moment: self.moment,
+            theta_prev: self.theta_prev,
+        }
+    }
+}
+
 /// Result of one successful step.
 #[derive(Clone, Debug, Default)]
 pub struct Outcome {
@@ -187,13 +200,7 @@ pub fn step(
     for it in 0..settings.max_newton {
         refresh |= !modified;
         update_rates(&mut next, cur, co, h);
-        let st = State {
-            q: &next.q,
-            v: &next.v,
-            theta0: drive.theta0,
-            moment: drive.moment,
-            theta_prev: drive.theta_prev,
-        };
+        let st = drive.at(&next);
         let t0 = Instant::now();
         let matrix = if refresh {
             Some((&mut ws.matrix[..], coeffs))
@@ -261,13 +268,7 @@ pub fn step(
         if remaining <= settings.newton_tolerance || floor {
             // Final consistent update and evaluation at the converged state.
             update_rates(&mut next, cur, co, h);
-            let st = State {
-                q: &next.q,
-                v: &next.v,
-                theta0: drive.theta0,
-                moment: drive.moment,
-                theta_prev: drive.theta_prev,
-            };
+            let st = drive.at(&next);
             let t0 = Instant::now();
             asm.evaluate(&st, &mut ws.eval, None)?;
             out.assembly_time += t0.elapsed();

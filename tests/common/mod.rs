@@ -67,7 +67,7 @@ pub fn input(model: &Model, name: &str) -> usize {
 }
 
 /// The step controller's work summed over many advances.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Work {
     /// Sum of the reports so far (min_step: the smallest).
     pub total: StepReport,
@@ -75,27 +75,10 @@ pub struct Work {
     pub advances: usize,
 }
 
-impl Default for Work {
-    fn default() -> Self {
-        Work {
-            total: StepReport {
-                min_step: f64::INFINITY,
-                ..Default::default()
-            },
-            advances: 0,
-        }
-    }
-}
-
 impl Work {
     /// Add one advance's report.
     pub fn add(&mut self, r: &StepReport) {
-        let t = &mut self.total;
-        t.steps += r.steps;
-        t.rejected += r.rejected;
-        t.newton_iterations += r.newton_iterations;
-        t.factorizations += r.factorizations;
-        t.min_step = t.min_step.min(r.min_step);
+        self.total.accumulate(r);
         self.advances += 1;
     }
 
