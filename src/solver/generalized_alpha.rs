@@ -186,14 +186,12 @@ pub fn step(
     ws.rhs.resize(asm.n_free, 0.0);
     ws.mqdd.resize(n, 0.0);
     let modified = settings.newton == NewtonMode::Modified;
-    let mut refresh = !modified
-        || match ws.jacobian_h {
-            Some(hj) => !(0.8..=1.25).contains(&(h / hj)),
-            None => true,
-        };
-    // Newton iterations since the matrix in the solver was formed (None:
-    // formed in an earlier step).
-    let mut age: Option<usize> = None;
+    // Full Newton forms the matrix at every iterate (set in the loop);
+    // modified Newton keeps one formed for a step size close to h.
+    let mut refresh = match ws.jacobian_h {
+        Some(hj) => !(0.8..=1.25).contains(&(h / hj)),
+        None => true,
+    };
     let mut out = Outcome::default();
     let mut last_norm = f64::INFINITY;
     let mut last_rate = 0.0;
@@ -216,13 +214,15 @@ pub fn step(
                 ws.rhs[fi] = -(ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]);
             }
         }
+        // Whether the matrix was formed at this iterate (else it is stale:
+        // formed at an earlier iterate or step).
+        let stale = !refresh;
         if refresh {
             ws.jacobian_h = None;
             solver.factor(&ws.matrix)?;
             ws.jacobian_h = Some(h);
             out.factorizations += 1;
             refresh = false;
-            age = Some(0);
         }
         solver.solve_in_place(&mut ws.rhs)?;
         out.iterations = it + 1;
@@ -239,7 +239,6 @@ pub fn step(
         // Contraction rate of the iteration (modified Newton converges linearly:
         // the remaining error is about rate / (1 - rate) times the last correction).
         let rate = norm / last_norm;
-        let stale = age != Some(0);
         if modified && stale && rate > 1.0 && it + 1 < settings.max_newton {
             // A matrix formed elsewhere sends the iterate away: drop this
             // correction and form the matrix here.
@@ -288,7 +287,6 @@ pub fn step(
             // matrix was formed; form it anew at the next iterate.
             refresh = true;
         }
-        age = age.map(|a| a + 1);
         last_rate = rate;
         last_norm = norm;
     }
