@@ -67,9 +67,9 @@ fn main() {
         o.time, o.tolerance, o.max_step, o.newton
     );
     println!(
-        "| cells | DOFs | steps | steps/s | Newton its/step | factorizations/step | assembly % | factorization % | solves % | CPU s | sim/CPU | cost/step exponent |"
+        "| cells | DOFs | steps | steps/s | Newton its/step | factorizations/step | assembly % | factorization % | solves % | LLT/LDLT/LU | CPU s | sim/CPU | cost/step exponent |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut last: Option<(usize, f64)> = None;
     for &n in &o.sizes {
         let mut sc = miura_scene(n);
@@ -101,8 +101,12 @@ fn main() {
             .unwrap_or_else(|| "-".into());
         last = Some((dofs, per_step));
         let pct = |x: f64| 100.0 * x / cpu;
+        let kinds = m
+            .solver_stats()
+            .map(|s| format!("{}/{}/{}", s.llt, s.ldlt, s.lu))
+            .unwrap_or_default();
         println!(
-            "| {n}x{n} | {dofs} | {} | {:.0} | {:.2} | {:.2} | {:.0} | {:.0} | {:.0} | {:.2} | {:.2} | {exponent} |",
+            "| {n}x{n} | {dofs} | {} | {:.0} | {:.2} | {:.2} | {:.0} | {:.0} | {:.0} | {kinds} | {:.2} | {:.2} | {exponent} |",
             total.steps,
             total.steps as f64 / cpu,
             total.newton_iterations as f64 / total.steps as f64,

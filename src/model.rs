@@ -595,6 +595,17 @@ impl Model {
         Ok(report)
     }
 
+    /// Counts and times of the implicit stepper's sparse solver so far
+    /// (None before initialize or with an explicit integrator): which
+    /// factorizations (Cholesky, LDLT, LU) the iteration matrices needed.
+    pub fn solver_stats(&self) -> Option<crate::solver::SolverStats> {
+        let sys = self.sys.as_ref()?;
+        if sys.cd.is_some() {
+            return None;
+        }
+        Some(sys.solver.stats())
+    }
+
     /// Current values of all outputs, in the order of [`Model::outputs`].
     pub fn output_values(&self) -> Vec<f64> {
         self.state.outputs.clone()
