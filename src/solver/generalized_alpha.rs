@@ -167,19 +167,45 @@ pub fn step(
         gamma,
     } = co;
     let bh2 = beta * h * h;
-    // Predictor: positions held, q_{n+1} = q_n (the rates follow from the
-    // update formulas). Extrapolating the motion (with v_n, or v_n and
-    // qdd_n) starts Newton from linearly stretched rotating gradients and
-    // from the sheet's unresolved membrane vibration; measured, it then
-    // needs more steps and meets many more indefinite iteration matrices
-    // (LDLT or LU instead of Cholesky). Folding 8x8 Miura-ori for 1 s at tolerance
-    // 1e-3 (`cargo bench --bench throughput`): held positions 10.8 s of CPU
-    // with 4 indefinite matrices; constant velocity 23.9 s with 134;
-    // constant acceleration 19.1 s with 122. The price: a rigid spin at
-    // 100 rad/s needs 3x the Newton iterations (tests/dynamics_extreme.rs).
+    let mut out = Outcome::default();
+    // Predictor: of two guesses, the one with the smaller residual. Held
+    // positions (q_{n+1} = q_n) suit a folding sheet: extrapolating its
+    // motion starts Newton from stretched rotating gradients and from the
+    // unresolved membrane vibration in qdd_n, and meets many more
+    // indefinite iteration matrices (8x8 Miura-ori folding 1 s at
+    // tolerance 1e-3: 9.1 s of CPU with 4 LDLT against 19.1 s with 122 from
+    // constant acceleration). Constant acceleration suits fast rigid
+    // motion (a spin at 100 rad/s: 1212 Newton iterations against 3203
+    // held). Choosing costs one force evaluation per step.
+    ws.mqdd.resize(n, 0.0);
     let mut next = cur.clone();
-    for &(i, x) in drive.prescribed {
-        next.q[i] = x;
+    let mut alt = cur.clone();
+    for i in 0..n {
+        alt.abar[i] = (cur.qdd[i] - am * cur.abar[i]) / (1.0 - am);
+        alt.q[i] = cur.q[i] + h * cur.v[i] + h * h * (0.5 - beta) * cur.abar[i] + bh2 * alt.abar[i];
+    }
+    let mut residual = [0.0; 2];
+    for (k, guess) in [&mut next, &mut alt].into_iter().enumerate() {
+        for &(i, x) in drive.prescribed {
+            guess.q[i] = x;
+        }
+        update_rates(guess, cur, co, h);
+        let t0 = Instant::now();
+        let ok = asm.evaluate(&drive.at(guess), &mut ws.eval, None).is_ok();
+        asm.mass_mul(&guess.qdd, &mut ws.mqdd);
+        out.assembly_time += t0.elapsed();
+        residual[k] = if ok {
+            // Work-like norm: force times the DOF's scale.
+            (0..n)
+                .filter(|&i| asm.free[i] != FIXED)
+                .map(|i| ((ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]) * scales[i]).powi(2))
+                .sum()
+        } else {
+            f64::INFINITY
+        };
+    }
+    if residual[1] < residual[0] {
+        next = alt;
     }
     let coeffs = MatrixCoeffs {
         k: 1.0,
@@ -196,7 +222,6 @@ pub fn step(
         Some(hj) => !(0.8..=1.25).contains(&(h / hj)),
         None => true,
     };
-    let mut out = Outcome::default();
     let mut last_norm = f64::INFINITY;
     let mut last_rate = 0.0;
     for it in 0..settings.max_newton {
