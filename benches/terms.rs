@@ -8,10 +8,10 @@
 //! `cargo bench --bench terms -- [--size 8] [--repeats 50]`
 
 use origami_fmu::assembly::{Assembler, Evaluation, MatrixCoeffs, Physics, State};
-use origami_fmu::benchmarks::miura_scene;
+use origami_fmu::benchmarks::{fold_by_ramp, miura_scene};
 use origami_fmu::element::quadrature::Rule;
 use origami_fmu::model::{Model, StepReport};
-use origami_fmu::scene::{CreaseStiffness, VertexInput};
+use origami_fmu::scene::VertexInput;
 use std::time::Instant;
 
 fn arg(name: &str, default: usize) -> usize {
@@ -47,17 +47,12 @@ fn main() {
     let repeats = arg("--repeats", 50);
     let scene = miura_scene(size);
     let mesh = &scene.mesh;
-    let material = scene.material;
-    let k_pl = match scene.crease {
-        CreaseStiffness::LengthScale(l) => material.bending_stiffness() / l,
-        CreaseStiffness::PerLength(k) => k,
-    };
+    // The scene's own physics, every damping term off.
     let bare = Physics {
-        material,
-        crease_k_per_length: k_pl,
         crease_c_per_length: 0.0,
         alpha: 0.0,
         beta: 0.0,
+        ..origami_fmu::model::physics(&scene)
     };
     println!("Part 1: one evaluation on {size}x{size} Miura-ori, best of {repeats} (microseconds)");
     println!("| terms | DOFs | force | force + matrix | force vs bare | force + matrix vs bare |");
@@ -204,13 +199,8 @@ fn main() {
             }
             let mut m = Model::new(sc).expect("model");
             m.initialize().expect("initialize");
-            let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
-            let mut total = StepReport::default();
             let start = Instant::now();
-            for s in 1..=20 {
-                m.set_input(fold, 0.02 * s as f64).unwrap();
-                total.accumulate(&m.advance(0.01).expect("advance"));
-            }
+            let total = fold_by_ramp(&mut m, 20, 0.01, 0.5);
             let per_it = start.elapsed().as_secs_f64() * 1e3 / total.newton_iterations as f64;
             best[k] = best[k].min(per_it);
             counts[k] = total;

@@ -12,8 +12,8 @@
 //! real time). The cost-growth exponent fits cost per step ~ n^p between
 //! successive sizes.
 
-use origami_fmu::benchmarks::miura_scene;
-use origami_fmu::model::{Model, StepReport};
+use origami_fmu::benchmarks::{fold_by_ramp, miura_scene};
+use origami_fmu::model::Model;
 use origami_fmu::scene::NewtonMode;
 use std::time::Instant;
 
@@ -78,16 +78,10 @@ fn main() {
         sc.solver.max_step = o.max_step;
         let mut m = Model::new(sc).expect("model");
         m.initialize().expect("initialize");
-        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
         let dt = 0.01;
         let steps = (o.time / dt).round() as usize;
-        let mut total = StepReport::default();
         let start = Instant::now();
-        for k in 1..=steps {
-            let t = k as f64 * dt;
-            m.set_input(fold, (t / (0.5 * o.time)).min(1.0)).unwrap();
-            total.accumulate(&m.advance(dt).expect("advance"));
-        }
+        let total = fold_by_ramp(&mut m, steps, dt, 0.5 * o.time);
         let cpu = start.elapsed().as_secs_f64();
         let dofs = m.n_dofs();
         let per_step = cpu / total.steps as f64;

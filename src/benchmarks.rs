@@ -252,3 +252,27 @@ pub fn miura_scene(n: usize) -> crate::scene::Scene {
         .expect("generated Miura scene")
         .0
 }
+
+/// Drive a Miura model's `fold` input by the ramp t / `ramp_time` (held
+/// at 1 after it) through `steps` communication steps of `dt`, summing
+/// the step reports: the fold the throughput and terms benches time.
+pub fn fold_by_ramp(
+    m: &mut crate::model::Model,
+    steps: usize,
+    dt: f64,
+    ramp_time: f64,
+) -> crate::model::StepReport {
+    let fold = m
+        .inputs()
+        .iter()
+        .position(|v| v.name == "fold")
+        .expect("a fold input");
+    let mut total = crate::model::StepReport::default();
+    for k in 1..=steps {
+        let t = k as f64 * dt;
+        m.set_input(fold, (t / ramp_time).min(1.0))
+            .expect("fold input in range");
+        total.accumulate(&m.advance(dt).expect("advance"));
+    }
+    total
+}

@@ -780,22 +780,7 @@ impl Model {
                 force.push((n_act + 3 * k + c, 3 * s + c));
             }
         }
-        let material = sc.material;
-        let d = material.bending_stiffness();
-        let k_pl = match sc.crease {
-            CreaseStiffness::LengthScale(l) => d / l,
-            CreaseStiffness::PerLength(k) => k,
-        };
-        let mut physics = Physics {
-            material,
-            crease_k_per_length: k_pl,
-            crease_c_per_length: sc.damping.crease,
-            alpha: sc.damping.alpha,
-            beta: sc.damping.beta,
-        };
-        if sc.auto_damping {
-            physics.alpha = auto_alpha(sc, k_pl);
-        }
+        let physics = physics(sc);
         let asm = Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
         let solver = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
             .map_err(Error::Scene)?;
@@ -923,6 +908,27 @@ impl InputMap {
         let mut d = DriveValues::default();
         self.drive_into(u, &mut d);
         d
+    }
+}
+
+/// The physics a scene asks for: material, crease stiffness per unit
+/// length, damping (the automatic mass damping when the scene sets none).
+pub fn physics(sc: &Scene) -> Physics {
+    let material = sc.material;
+    let k_pl = match sc.crease {
+        CreaseStiffness::LengthScale(l) => material.bending_stiffness() / l,
+        CreaseStiffness::PerLength(k) => k,
+    };
+    Physics {
+        material,
+        crease_k_per_length: k_pl,
+        crease_c_per_length: sc.damping.crease,
+        alpha: if sc.auto_damping {
+            auto_alpha(sc, k_pl)
+        } else {
+            sc.damping.alpha
+        },
+        beta: sc.damping.beta,
     }
 }
 
