@@ -51,7 +51,7 @@ impl Coefficients {
 
 /// Dynamic state: positions, velocities, accelerations and the algorithmic
 /// acceleration (all DOFs).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Dynamics {
     /// Positions.
     pub q: Vec<f64>,
@@ -110,6 +110,8 @@ pub struct Workspace {
     matrix: Vec<f64>,
     rhs: Vec<f64>,
     mqdd: Vec<f64>,
+    /// The predictor's second guess (buffers reused across steps).
+    guess: Dynamics,
     /// Step size the factorization in the solver was formed for (None:
     /// no usable factorization).
     jacobian_h: Option<f64>,
@@ -177,44 +179,42 @@ pub fn step(
     // constant acceleration). Constant acceleration suits fast rigid
     // motion (a spin at 100 rad/s: 1212 Newton iterations against 3203
     // held). Choosing costs one force evaluation per step.
+    ws.matrix.resize(asm.nnz(), 0.0);
+    ws.rhs.resize(asm.n_free, 0.0);
     ws.mqdd.resize(n, 0.0);
     let mut next = cur.clone();
-    let mut alt = cur.clone();
+    let mut alt = std::mem::take(&mut ws.guess);
+    alt.clone_from(cur);
     for i in 0..n {
         alt.abar[i] = (cur.qdd[i] - am * cur.abar[i]) / (1.0 - am);
         alt.q[i] = cur.q[i] + h * cur.v[i] + h * h * (0.5 - beta) * cur.abar[i] + bh2 * alt.abar[i];
     }
-    let mut residual = [0.0; 2];
+    let mut size = [f64::INFINITY; 2];
     for (k, guess) in [&mut next, &mut alt].into_iter().enumerate() {
         for &(i, x) in drive.prescribed {
             guess.q[i] = x;
         }
         update_rates(guess, cur, co, h);
         let t0 = Instant::now();
-        let ok = asm.evaluate(&drive.at(guess), &mut ws.eval, None).is_ok();
-        asm.mass_mul(&guess.qdd, &mut ws.mqdd);
+        let ok = residual(asm, drive, guess, ws, None).is_ok();
         out.assembly_time += t0.elapsed();
-        residual[k] = if ok {
+        if ok {
             // Work-like norm: force times the DOF's scale.
-            (0..n)
+            size[k] = (0..n)
                 .filter(|&i| asm.free[i] != FIXED)
-                .map(|i| ((ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]) * scales[i]).powi(2))
-                .sum()
-        } else {
-            f64::INFINITY
-        };
+                .map(|i| (ws.rhs[asm.free[i]] * scales[i]).powi(2))
+                .sum();
+        }
     }
-    if residual[1] < residual[0] {
-        next = alt;
+    if size[1] < size[0] {
+        std::mem::swap(&mut next, &mut alt);
     }
+    ws.guess = alt;
     let coeffs = MatrixCoeffs {
         k: 1.0,
         c: gamma / (beta * h),
         m: (1.0 - am) / ((1.0 - af) * bh2),
     };
-    ws.matrix.resize(asm.nnz(), 0.0);
-    ws.rhs.resize(asm.n_free, 0.0);
-    ws.mqdd.resize(n, 0.0);
     let modified = settings.newton == NewtonMode::Modified;
     // Full Newton forms the matrix at every iterate (set in the loop);
     // modified Newton keeps one formed for a step size close to h.
@@ -227,22 +227,9 @@ pub fn step(
     for it in 0..settings.max_newton {
         refresh |= !modified;
         update_rates(&mut next, cur, co, h);
-        let st = drive.at(&next);
         let t0 = Instant::now();
-        let matrix = if refresh {
-            Some((&mut ws.matrix[..], coeffs))
-        } else {
-            None
-        };
-        asm.evaluate(&st, &mut ws.eval, matrix)?;
-        asm.mass_mul(&next.qdd, &mut ws.mqdd);
+        residual(asm, drive, &next, ws, refresh.then_some(coeffs))?;
         out.assembly_time += t0.elapsed();
-        for i in 0..n {
-            let fi = asm.free[i];
-            if fi != FIXED {
-                ws.rhs[fi] = -(ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]);
-            }
-        }
         // Whether the matrix was formed at this iterate (else it is stale:
         // formed at an earlier iterate or step).
         let stale = !refresh;
@@ -323,6 +310,31 @@ pub fn step(
         "Newton did not converge in {} iterations",
         settings.max_newton
     ))
+}
+
+/// Evaluate at `d` and write the negated residual of the equation of
+/// motion, f_ext - M qdd - f, into `ws.rhs` (free DOFs); with `matrix`,
+/// also the iteration matrix into `ws.matrix`.
+fn residual(
+    asm: &Assembler,
+    drive: &Drive,
+    d: &Dynamics,
+    ws: &mut Workspace,
+    matrix: Option<MatrixCoeffs>,
+) -> Result<(), String> {
+    asm.evaluate(
+        &drive.at(d),
+        &mut ws.eval,
+        matrix.map(|co| (&mut ws.matrix[..], co)),
+    )?;
+    asm.mass_mul(&d.qdd, &mut ws.mqdd);
+    for i in 0..d.q.len() {
+        let fi = asm.free[i];
+        if fi != FIXED {
+            ws.rhs[fi] = -(ws.mqdd[i] + ws.eval.force[i] - drive.f_ext[i]);
+        }
+    }
+    Ok(())
 }
 
 /// Local error estimate h^2 |beta - 1/6| (qdd_{n+1} - qdd_n) (at least
