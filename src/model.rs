@@ -938,7 +938,12 @@ impl Model {
             }
         }
         let physics = physics(sc);
-        let asm = Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
+        let mut asm =
+            Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
+        // Damping leaves alone the rigid motion the supports allow.
+        let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
+        asm.rigid
+            .set_supports(&supported_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
         let solver = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
             .map_err(Error::Scene)?;
         let nends = asm.creases.len();
