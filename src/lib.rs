@@ -21,5 +21,6 @@ pub mod element;
 pub mod fmi;
 pub mod mesh;
 pub mod model;
+pub mod paraview;
 pub mod scene;
 pub mod solver;
