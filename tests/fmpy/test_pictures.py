@@ -124,3 +124,27 @@ def test_cli_paraview_series_reads_back(miura):
         energy = np.concatenate(m.cell_data["strain_energy"])[kinds == 0]
         assert energy.sum() == pytest.approx(rows[k, strain], rel=1e-9, abs=1e-30)
     assert rows[-1, strain] > 0
+
+
+def _has_ffmpeg():
+    from matplotlib import animation
+
+    return animation.FFMpegWriter.isAvailable()
+
+
+@pytest.mark.skipif(not _has_ffmpeg(), reason="no MP4 encoder (ffmpeg) on this machine")
+def test_mp4_animation_where_an_encoder_exists(miura, main_job, tmp_path):
+    _, _, fmu = miura
+    names, rows = _rows(main_job["csv"])
+    res = {n: rows[:, k] for k, n in enumerate(names)}
+    sheet = fold_pictures.load_sheet(fmu, names)
+    X = fold_pictures.positions(res, sheet.n_vertices)
+    ang = fold_pictures.crease_angles(res, sheet)
+    out = tmp_path / "m.mp4"
+    n = fold_pictures.write_animation(out, sheet, res["time"], X, ang, max_frames=20)
+    assert n == 20
+    r = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0",
+                        "-show_entries", "stream=nb_read_frames", "-of", "csv=p=0", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert int(r.stdout.strip()) == 20
