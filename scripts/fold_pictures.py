@@ -103,6 +103,10 @@ def load_sheet(fmu, output_names):
 
 def positions(res, n):
     """(rows, n, 3) vertex positions from an fmpy result."""
+    names = res.dtype.names if hasattr(res, "dtype") else res.keys()
+    if n and "vertex[0].x" not in names:
+        raise ValueError("the FMU outputs no vertex positions (the scene turns them off): "
+                         "no pictures or ParaView files")
     return np.stack([np.column_stack([res[f"vertex[{i}].{c}"] for c in "xyz"])
                      for i in range(n)], axis=1)
 

@@ -65,7 +65,11 @@ def main(argv=None):
     fig.savefig(a.png, dpi=110)
     plt.close(fig)
     if a.gif or a.mp4 or a.snapshots or a.pvd:
-        pictures(a, md, outputs, res)
+        try:
+            pictures(a, md, outputs, res)
+        except ValueError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
     crease_cols = [n for n in names if n.startswith("crease[")]
     final = {n: float(np.degrees(res[n][-1])) for n in crease_cols}
     print(f"simulated {a.stop_time} s: {len(res)} rows, {len(outputs)} outputs -> {a.csv}, {a.png}")

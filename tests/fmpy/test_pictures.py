@@ -148,3 +148,21 @@ def test_mp4_animation_where_an_encoder_exists(miura, main_job, tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert int(r.stdout.strip()) == 20
+
+
+def test_an_fmu_without_position_outputs_gets_a_clear_error(tmp_path, capsys):
+    import json
+
+    scene = json.loads((ROOT / "tests" / "fmpy" / "scenes" / "square.json").read_text())
+    scene["outputs"]["positions"] = False
+    src = tmp_path / "nopos.json"
+    src.write_text(json.dumps(scene))
+    fmu = tmp_path / "nopos.fmu"
+    r = build(src, fmu)
+    assert r.returncode == 0, r.stderr
+    rc = simulate_fmu.main([str(fmu), "--stop-time", "0.05", "--step", "0.01",
+                            "--csv", str(tmp_path / "x.csv"), "--png", str(tmp_path / "x.png"),
+                            "--gif", str(tmp_path / "x.gif")])
+    assert rc == 1
+    assert "no vertex positions" in capsys.readouterr().err
+    assert not (tmp_path / "x.gif").exists()
