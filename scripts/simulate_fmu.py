@@ -1,8 +1,12 @@
 """Simulate an origami FMU with fmpy: ramp every actuator input from 0 to 1
 over `--ramp` seconds, then hold; write every output to CSV and plot fold
-angles and energies against time."""
+angles and energies against time. Optionally also an animation of the
+folding sheet (--gif, --mp4), a sheet of 3D snapshots (--snapshots) and a
+ParaView series (--pvd); see fold_pictures.py."""
 import argparse
+import pathlib
 import sys
+import time
 
 import numpy as np
 import fmpy
@@ -17,6 +21,11 @@ def main(argv=None):
     ap.add_argument("--ramp", type=float, default=0.6, help="time to reach full actuation (s)")
     ap.add_argument("--csv", required=True)
     ap.add_argument("--png", required=True)
+    ap.add_argument("--gif", help="animation of the fold (GIF)")
+    ap.add_argument("--mp4", help="animation of the fold (MP4; skipped when no encoder is available)")
+    ap.add_argument("--snapshots", help="PNG sheet of 3D views of the sheet at several times")
+    ap.add_argument("--pvd", metavar="DIR",
+                    help="ParaView series: DIR/<fmu name>.pvd and one .vtu per output time")
     a = ap.parse_args(argv)
 
     md = read_model_description(a.fmu)
@@ -54,6 +63,13 @@ def main(argv=None):
     ax2.legend()
     fig.tight_layout()
     fig.savefig(a.png, dpi=110)
+    plt.close(fig)
+    if a.gif or a.mp4 or a.snapshots or a.pvd:
+        try:
+            pictures(a, md, outputs, res)
+        except ValueError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
     crease_cols = [n for n in names if n.startswith("crease[")]
     final = {n: float(np.degrees(res[n][-1])) for n in crease_cols}
     print(f"simulated {a.stop_time} s: {len(res)} rows, {len(outputs)} outputs -> {a.csv}, {a.png}")
@@ -61,6 +77,33 @@ def main(argv=None):
         vals = np.array(list(final.values()))
         print(f"final fold angles: min {vals.min():.1f} deg, max {vals.max():.1f} deg")
     return 0
+
+
+def pictures(a, md, outputs, res):
+    """The animation, snapshot sheet and ParaView series the flags ask for."""
+    import fold_pictures as fp
+
+    started = time.perf_counter()
+    sheet = fp.load_sheet(a.fmu, outputs)
+    X = fp.positions(res, sheet.n_vertices)
+    ang = fp.crease_angles(res, sheet)
+    t = res["time"]
+    title = md.modelName
+    for path in [a.gif, a.mp4]:
+        if not path:
+            continue
+        try:
+            n = fp.write_animation(path, sheet, t, X, ang, title=title)
+            print(f"animation: {n} frames -> {path}")
+        except RuntimeError as e:
+            print(f"animation {path} skipped: {e}")
+    if a.snapshots:
+        fp.write_snapshots(a.snapshots, sheet, t, X, ang, title=f"{title}: folding")
+        print(f"snapshots -> {a.snapshots}")
+    if a.pvd:
+        pvd = fp.write_pvd(a.pvd, pathlib.Path(a.fmu).stem, sheet, t, X, ang)
+        print(f"ParaView series: {len(t)} times -> {pvd}")
+    print(f"pictures took {time.perf_counter() - started:.1f} s")
 
 
 if __name__ == "__main__":

@@ -770,6 +770,18 @@ impl Model {
         }
     }
 
+    /// Strain energy (membrane + bending, J) of each mesh triangle now, in
+    /// the order of `scene().mesh.triangles`; zeros before initialization
+    /// (the flat reference state is stress-free).
+    pub fn facet_strain_energies(&self) -> Vec<f64> {
+        match &self.sys {
+            Some(sys) if self.state.phase == Phase::Running => {
+                sys.asm.facet_strain_energies(&self.state.dynamics.q)
+            }
+            _ => vec![0.0; self.scene.mesh.triangles.len()],
+        }
+    }
+
     fn compute_outputs(&self, ev: &Evaluation) -> Vec<f64> {
         let sys = self.sys.as_ref().expect("built");
         let mut out = Vec::with_capacity(self.outputs.len());
