@@ -13,6 +13,50 @@ import fmpy
 from fmpy.model_description import read_model_description
 
 
+def run_ramp(fmu, md, actuators, outputs, stop_time, dt, ramp):
+    """Step the FMU as a co-simulation master with input derivatives does
+    (fmpy's FMU2Slave): before each step from t, every actuator gets the
+    ramp's value min(t / ramp, 1) and its slope over the step
+    (fmi2SetRealInputDerivatives), so the FMU sees the continuous ramp.
+    (fmpy 0.3.32's simulate_fmu cannot hand derivatives to this FMU, and
+    without them a sampled ramp is a staircase whose every step rings the
+    sheet: about 45x the CPU on the 4x4 Miura fold, benches/cosim.rs.)
+    Returns the outputs at every communication point as a structured array."""
+    from fmpy import extract
+    from fmpy.fmi2 import FMU2Slave
+    import shutil
+
+    unzipdir = extract(fmu)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="main")
+    n = int(round(stop_time / dt))
+    res = np.zeros(n + 1, dtype=[("time", np.float64)] + [(o, np.float64) for o in outputs])
+    out_vrs = [vr[o] for o in outputs]
+    act_vrs = [vr[x] for x in actuators]
+    try:
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0, stopTime=n * dt)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        row = lambda k, t: res.__setitem__(k, (t, *slave.getReal(out_vrs)))
+        row(0, 0.0)
+        for k in range(n):
+            t, h = k * dt, dt
+            u0, u1 = min(t / ramp, 1.0), min((t + h) / ramp, 1.0)
+            if act_vrs:
+                slave.setReal(act_vrs, [u0] * len(act_vrs))
+                slave.setRealInputDerivatives(act_vrs, [1] * len(act_vrs),
+                                              [(u1 - u0) / h] * len(act_vrs))
+            slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            row(k + 1, (k + 1) * dt)
+        slave.terminate()
+    finally:
+        slave.freeInstance()
+        shutil.rmtree(unzipdir, ignore_errors=True)
+    return res
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("fmu")
@@ -32,13 +76,7 @@ def main(argv=None):
     inputs = [v.name for v in md.modelVariables if v.causality == "input"]
     actuators = [n for n in inputs if "." not in n]
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
-    t = np.array([0.0, a.ramp, max(a.stop_time, a.ramp)])
-    sig = np.zeros(len(t), dtype=[("time", np.float64)] + [(n, np.float64) for n in actuators])
-    sig["time"] = t
-    for n in actuators:
-        sig[n] = [0.0, 1.0, 1.0]
-    res = fmpy.simulate_fmu(a.fmu, stop_time=a.stop_time, output_interval=a.step,
-                            input=sig if actuators else None, output=outputs)
+    res = run_ramp(a.fmu, md, actuators, outputs, a.stop_time, a.step, a.ramp)
     names = res.dtype.names
     np.savetxt(a.csv, np.column_stack([res[n] for n in names]), delimiter=",",
                header=",".join(names), comments="")

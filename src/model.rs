@@ -1095,7 +1095,7 @@ pub fn physics(sc: &Scene) -> Physics {
         CreaseStiffness::PerLength(k) => k,
     };
     let (alpha, beta, crease) = if sc.auto_damping {
-        (auto_alpha(sc, k_pl), 0.0, 0.0)
+        (auto_alpha(sc, k_pl), 0.0, sc.damping.crease)
     } else {
         (sc.damping.alpha, sc.damping.beta, sc.damping.crease)
     };

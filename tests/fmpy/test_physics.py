@@ -101,7 +101,6 @@ def test_forced_solver_failure_is_discarded_and_a_smaller_step_succeeds(unzipped
         with pytest.raises(FMICallException) as e:
             inst.step(0.01, {"torque": 1e3})
         assert e.value.status == FMI2_DISCARD
-        inst.time -= 0.01  # Instance.step advanced its clock before the raise
         assert inst.get().tobytes() == before.tobytes()
         assert inst.slave.getRealStatus(2) == inst.time  # fmi2LastSuccessfulTime
         assert inst.slave.getBooleanStatus(fmi2Terminated)
