@@ -225,18 +225,30 @@ fn cli_pattern_then_check() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("miura --nx"));
     let bad = dir.join("bad.fold");
+    // one clockwise face among counter-clockwise ones: an error
     std::fs::write(
         &bad,
-        r#"{"vertices_coords": [[0,0],[1,0],[0,1]], "faces_vertices": [[0,2,1]]}"#,
+        r#"{"vertices_coords": [[0,0],[1,0],[1,1],[0,1],[2,0],[2,1]],
+            "faces_vertices": [[0,1,2,3],[2,5,4,1]]}"#,
     )
     .unwrap();
     let out = bin().arg("check").arg(&bad).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("faces_vertices[0]") && err.contains("clockwise"),
+        err.contains("faces_vertices[1]") && err.contains("clockwise"),
         "{err}"
     );
+    // every face clockwise: mirrored, with a warning
+    std::fs::write(
+        &bad,
+        r#"{"vertices_coords": [[0,0],[1,0],[0,1]], "faces_vertices": [[0,2,1]]}"#,
+    )
+    .unwrap();
+    let out = bin().arg("check").arg(&bad).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("every face is clockwise"), "{text}");
     std::fs::write(&bad, "{\n  \"vertices_coords\": [[0,0],\n").unwrap();
     let out = bin().arg("check").arg(&bad).output().unwrap();
     assert!(!out.status.success());
@@ -476,7 +488,7 @@ fn exercise(text: &str) {
         text,
         &scene::LoadOptions {
             frame: Some(scene::FrameSelector::Index(1)),
-            name: None,
+            ..Default::default()
         },
     );
 }

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 /// Arguments of `simulate`.
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Scene file (FOLD, or a scene JSON).
+    /// The scene: a FOLD file (or a scene JSON).
     pub scene: PathBuf,
     /// Stop time in s (default: the scene's stop time).
     #[arg(long)]
@@ -25,6 +25,9 @@ pub struct SimulateArgs {
     /// Output CSV.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// How a FOLD scene is read (--frame, --size, --unit, --f-edges).
+    #[command(flatten)]
+    pub read: super::SceneOptions,
 }
 
 /// Input signals: times and, per model input index, values.
@@ -117,7 +120,11 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
 
 /// Run `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<(), String> {
-    let scene = super::build::load_scene(&args.scene)?;
+    let loaded = super::load_scene(&args.scene, &args.read)?;
+    for n in &loaded.notes {
+        super::err(&format!("{n}\n"));
+    }
+    let scene = loaded.scene;
     let stop = args.stop_time.unwrap_or(scene.solver.stop_time);
     if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
         return Err("--step and --stop-time must be positive numbers".into());
@@ -173,22 +180,22 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         let steps = total.steps;
         write_row(&mut out, t, &model.output_values()).map_err(io)?;
         if last_report.elapsed().as_secs_f64() > 2.0 {
-            eprintln!(
-                "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps",
+            super::err(&format!(
+                "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps\n",
                 100.0 * t / stop
-            );
+            ));
             last_report = std::time::Instant::now();
         }
     }
     out.flush().map_err(io)?;
-    eprintln!(
-        "simulated {stop} s in {:.2} s of CPU wall time -> {}",
+    super::err(&format!(
+        "simulated {stop} s in {:.2} s (wall-clock time) -> {}\n",
         started.elapsed().as_secs_f64(),
         args.output.display()
-    );
-    eprintln!(
+    ));
+    super::err(&format!(
         "{} internal steps ({} rejected, smallest {:.3e} s), {} Newton iterations, \
-         {} factorizations; assembly {:.2} s, factorization {:.2} s, solves {:.2} s",
+         {} factorizations; of that time assembly {:.2} s, factorization {:.2} s, solves {:.2} s\n",
         total.steps,
         total.rejected,
         total.min_step,
@@ -197,6 +204,6 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         total.assembly_time,
         total.factor_time,
         total.solve_time
-    );
+    ));
     Ok(())
 }
