@@ -14,7 +14,6 @@ use crate::mesh::{EdgeKind, Mesh};
 use crate::scene::Material;
 use nalgebra::{SMatrix, SVector, Vector2};
 
-
 /// Marker for "not a free scalar".
 pub const FIXED: usize = usize::MAX;
 

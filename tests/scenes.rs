@@ -539,3 +539,57 @@ fn fuzzed_fold_files_never_panic() {
     // The mutations must exercise both outcomes.
     assert!(ok > cases / 20 && err > cases / 20, "ok {ok}, err {err}");
 }
+
+/// A square grid of `n x n` unit quads (2 n^2 facets), without a unit.
+fn grid(n: usize) -> scene::FoldFile {
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    scene::FoldFile {
+        vertices_coords: (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| vec![i as f64, j as f64]))
+            .collect(),
+        faces_vertices: (0..n)
+            .flat_map(|j| {
+                (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn size_budget_refuses_a_million_facets_quickly() {
+    use std::time::{Duration, Instant};
+    let big = grid(708); // 1,002,528 facets
+    let text = big.to_json();
+    let t = Instant::now();
+    let e = scene::from_str(&text).unwrap_err().to_string();
+    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
+    assert!(
+        e.starts_with("faces_vertices: the pattern would triangulate into about 1002528 facets")
+            && e.contains("size budget is 200000"),
+        "{e}"
+    );
+    // Refinement past the budget, and a mesh built in code.
+    let mut small = grid(100); // 20,000 facets; two levels make 320,000
+    small
+        .ancf
+        .insert("ancf:refine".into(), serde_json::json!(2));
+    let e = scene::build::from_fold(&small, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("ancf:refine:") && e.contains("size budget"),
+        "{e}"
+    );
+    small.ancf.clear();
+    let (s, _) = scene::build::from_fold(&small, None).unwrap();
+    let e = refine::refine(&s, 2).unwrap_err().to_string();
+    assert!(e.contains("size budget"), "{e}");
+    // A mid-sized sheet sets up in seconds (the 131k-facet timings are
+    // `cargo bench --bench scene_size`).
+    let t = Instant::now();
+    let (s, _) = scene::build::from_fold(&grid(150), None).unwrap(); // 45,000 facets
+    let m = Model::new(s).unwrap();
+    assert!(m.n_dofs() > 200_000);
+    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
+}

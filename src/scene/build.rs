@@ -49,22 +49,23 @@ pub const MAX_EXTENT: f64 = 1e6;
 pub const DEFAULT_SIZE: f64 = 0.1;
 
 /// The size budget: the most facets (triangles, after triangulation and
-/// refinement) a scene may have. Building the model of a scene takes about
-/// 7 kB of memory per facet and its time-stepping about as much again
-/// (docs/scenes.md, "Size budget"), so the budget keeps a scene within a
-/// few GB. Checked before the large allocations: on the face count right
-/// after reading the file, on the triangle count after triangulation, by
+/// refinement) a scene may have. Setting a scene up takes about 27 kB of
+/// memory per facet and time-stepping it about 75 kB per facet (the sparse
+/// Cholesky factor; it grows faster than linearly), so that a scene at the
+/// budget needs about 16 GB to simulate (docs/scenes.md, "Size budget").
+/// Checked before the large allocations: on the face count right after
+/// reading the file, on the triangle count after triangulation, by
 /// refinement, and by [`crate::model::Model::new`].
-pub const MAX_FACETS: usize = 400_000;
+pub const MAX_FACETS: usize = 200_000;
 
 /// The error above [`MAX_FACETS`]; `what` says where the count comes from.
 pub fn over_budget(key: &str, facets: usize, what: &str) -> SceneError {
     invalid(
         key,
         format!(
-            "{what} {facets} facets (triangles); the size budget is {MAX_FACETS} facets (a \
-             model takes about 15 kB of memory per facet): use a coarser pattern, or simulate \
-             a part of it"
+            "{what} {facets} facets (triangles); the size budget is {MAX_FACETS} facets (about \
+             16 GB of memory to simulate; docs/scenes.md, \"Size budget\"): use a coarser \
+             pattern, or simulate a part of it"
         ),
     )
 }
@@ -135,14 +136,13 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     }
     let listed = read_edges(fold, nv, &mut warnings)?;
 
-    let f_mode = options
-        .f_edges
-        .or(physics.import.f_edges)
-        .unwrap_or(if is_origami_simulator_export(fold) {
+    let f_mode = options.f_edges.or(physics.import.f_edges).unwrap_or(
+        if is_origami_simulator_export(fold) {
             FlatEdges::Smooth
         } else {
             FlatEdges::Crease
-        });
+        },
+    );
 
     // The flat reference in metres, and the faces (given, or traced).
     let traced = fold.faces_vertices.is_empty();
@@ -177,7 +177,12 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     }
     let mut faces: Vec<Vec<usize>> = match &listed {
         Some(l) if traced => {
-            let faces = planar::trace_faces(&coords, &l.v)?;
+            let boundary: Vec<bool> = l
+                .assignment
+                .iter()
+                .map(|&a| a == Assignment::Boundary)
+                .collect();
+            let faces = planar::trace_faces(&coords, &l.v, &boundary)?;
             if faces.is_empty() {
                 return Err(invalid(
                     "edges_vertices",
@@ -197,6 +202,13 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     check_areas(&faces, &coords)?;
     orient(&mut coords, &faces, fold, &mut warnings)?;
     notes.push(size_note);
+    let slits = faces.iter().filter(|f| has_slit(f)).count();
+    if slits > 0 {
+        notes.push(format!(
+            "slits: {slits} face(s) run along an edge and back (a crease or cut ending \
+             inside the face); such a crease folds and stops in the paper, such a cut opens"
+        ));
+    }
 
     let sides = Sides::new(&faces)?;
     let edges = fold_edges(listed, &sides, f_mode, &mut warnings)?;
@@ -274,7 +286,9 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
             "the pattern triangulates into",
         ));
     }
-    let refined = triangles.len().saturating_mul(4usize.saturating_pow(physics.refine as u32));
+    let refined = triangles
+        .len()
+        .saturating_mul(4usize.saturating_pow(physics.refine as u32));
     if refined > MAX_FACETS {
         return Err(over_budget(
             "ancf:refine",
@@ -361,14 +375,14 @@ fn choose_scale(
         ));
     }
     if options.size.is_some() && options.unit.is_some() {
-        return Err(invalid(
-            "--size",
-            "give either a size or a unit, not both",
-        ));
+        return Err(invalid("--size", "give either a size or a unit, not both"));
     }
     if let Some(s) = options.size {
         if !(s > 0.0 && s.is_finite()) {
-            return Err(invalid("--size", format!("{s} is not a positive length (m)")));
+            return Err(invalid(
+                "--size",
+                format!("{s} is not a positive length (m)"),
+            ));
         }
     }
     let dims = |k: f64| {
@@ -392,7 +406,10 @@ fn choose_scale(
     };
     let by_unit = |u: &str, why: String| -> (f64, String) {
         let k = unit_scale(u).expect("checked unit");
-        (k, format!("size: {}: {why} (1 file unit = {} m)", dims(k), short(k)))
+        (
+            k,
+            format!("size: {}: {why} (1 file unit = {} m)", dims(k), short(k)),
+        )
     };
     if let Some(s) = options.size {
         return Ok(by_size(s, format!("--size {}", short(s))));
@@ -420,7 +437,10 @@ fn choose_scale(
                     }
                 ),
             );
-            Ok((k, format!("{note}; --size, --unit or ancf:import change it")))
+            Ok((
+                k,
+                format!("{note}; --size, --unit or ancf:import change it"),
+            ))
         }
         Some(u) => {
             if unit_scale(u).is_none() {
@@ -459,19 +479,31 @@ fn check_faces(faces: &[Vec<usize>], nv: usize) -> Result<(), SceneError> {
         let mut sorted = face.clone();
         sorted.sort_unstable();
         if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-            return Err(invalid(
-                key,
-                format!(
-                    "repeats vertex {}: the face has a slit or touches itself there (a crease \
-                     or cut that ends inside it); the model needs simple polygons: split the \
-                     face into simple polygons (e.g. extend the slit's crease to the face's \
-                     side), or remove the edge that ends inside it",
-                    w[0]
-                ),
-            ));
+            // Allowed where the boundary runs out along an edge and back (a
+            // crease or cut ending inside the face: a slit).
+            if !has_slit(face) {
+                return Err(invalid(
+                    key,
+                    format!(
+                        "repeats vertex {} without a slit (no side of the face is run along \
+                         both ways): the face touches itself there; split it into simple \
+                         polygons at that vertex",
+                        w[0]
+                    ),
+                ));
+            }
         }
     }
     Ok(())
+}
+
+/// True when a face runs along one of its sides in both directions (a
+/// crease or cut that ends inside the face: a slit).
+fn has_slit(face: &[usize]) -> bool {
+    let n = face.len();
+    let sides: std::collections::HashSet<(usize, usize)> =
+        (0..n).map(|k| (face[k], face[(k + 1) % n])).collect();
+    (0..n).any(|k| sides.contains(&(face[(k + 1) % n], face[k])))
 }
 
 /// The flat reference coordinates in file units (see the module docs of
@@ -689,10 +721,14 @@ fn orient(
     ))
 }
 
+/// Where a side occurs: face, position in it, and whether it runs from the
+/// smaller vertex index to the larger.
+type Occurrence = (usize, usize, bool);
+
 /// Face sides, keyed by sorted vertex pair: where they occur (face,
 /// position) and in which direction.
 struct Sides {
-    map: HashMap<(usize, usize), Vec<(usize, usize, bool)>>,
+    map: HashMap<(usize, usize), Vec<Occurrence>>,
     /// Keys in the order of first appearance (face by face).
     order: Vec<(usize, usize)>,
 }
@@ -704,8 +740,7 @@ fn key(a: usize, b: usize) -> (usize, usize) {
 impl Sides {
     fn new(faces: &[Vec<usize>]) -> Result<Sides, SceneError> {
         let n: usize = faces.iter().map(Vec::len).sum();
-        let mut map: HashMap<(usize, usize), Vec<(usize, usize, bool)>> =
-            HashMap::with_capacity(n);
+        let mut map: HashMap<(usize, usize), Vec<Occurrence>> = HashMap::with_capacity(n);
         let mut order = Vec::with_capacity(n / 2 + 1);
         for (f, face) in faces.iter().enumerate() {
             for k in 0..face.len() {
@@ -877,7 +912,13 @@ fn fold_edges(
                 .order
                 .iter()
                 // In the direction of the first appearance.
-                .map(|k| if sides.map[k][0].2 { [k.0, k.1] } else { [k.1, k.0] })
+                .map(|k| {
+                    if sides.map[k][0].2 {
+                        [k.0, k.1]
+                    } else {
+                        [k.1, k.0]
+                    }
+                })
                 .collect();
             let asg = sides
                 .order
@@ -906,9 +947,8 @@ fn fold_edges(
     };
 
     let ne = v.len();
-    let is_crease = |a: Assignment| {
-        a.is_crease() || (a == Assignment::Flat && f_mode == FlatEdges::Crease)
-    };
+    let is_crease =
+        |a: Assignment| a.is_crease() || (a == Assignment::Flat && f_mode == FlatEdges::Crease);
     let mut kind = Vec::with_capacity(ne);
     let mut target = Vec::with_capacity(ne);
     let mut crease_on_boundary: Vec<usize> = Vec::new();
@@ -1113,8 +1153,7 @@ fn split(
         on_cut[k.0] = true;
         on_cut[k.1] = true;
     }
-    let (by_cut, touching): (Vec<usize>, Vec<usize>) =
-        copies.iter().partition(|&&v| on_cut[v]);
+    let (by_cut, touching): (Vec<usize>, Vec<usize>) = copies.iter().partition(|&&v| on_cut[v]);
     if !by_cut.is_empty() {
         notes.push(format!(
             "cuts: {} cut edge(s) (C) open the sheet; {} vertex copies were made along them \
@@ -1526,7 +1565,38 @@ mod tests {
             ),
             "faces_vertices[0]",
         );
-        assert!(e.contains("repeats vertex 1") && e.contains("slit"), "{e}");
+        assert!(e.contains("zero area"), "{e}");
+        // two triangles touching at vertex 2: a face that touches itself
+        let v = json!({
+            "frame_unit": "m",
+            "vertices_coords": [[0,0],[2,0],[1,1],[2,2],[0,2]],
+            "faces_vertices": [[0,1,2,3,4,2]]
+        });
+        let e = err(&v, "faces_vertices[0]");
+        assert!(e.contains("repeats vertex 2 without a slit"), "{e}");
+        // a crease from a corner to the centre of a square: a slit face,
+        // triangulated with the crease between two triangles
+        let v = json!({
+            "frame_unit": "m",
+            "vertices_coords": [[0,0],[1,0],[1,1],[0,1],[0.5,0.5]],
+            "edges_vertices": [[0,1],[1,2],[2,3],[3,0],[0,4]],
+            "edges_assignment": ["B","B","B","B","V"],
+            "edges_foldAngle": [0,0,0,0,90],
+            "faces_vertices": [[0,4,0,1,2,3]]
+        });
+        let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
+        let l = from_fold_with(&parsed, &LoadOptions::default()).unwrap();
+        assert!(
+            l.notes.iter().any(|n| n.starts_with("slits: 1 face")),
+            "{:?}",
+            l.notes
+        );
+        let m = &l.scene.mesh;
+        assert_eq!(m.edges[4].kind, EdgeKind::Crease);
+        assert_eq!(m.edge_faces[4].len(), 2);
+        assert_eq!(m.triangles.len(), 4);
+        let mut model = crate::model::Model::new(l.scene.clone()).unwrap();
+        model.initialize().unwrap();
         let e = err(
             &with(base(), "faces_vertices", json!([[0, 1], [1, 2, 3, 4]])),
             "faces_vertices[0]",
@@ -1627,7 +1697,10 @@ mod tests {
             json!(["B", "B", "B", "B", "B", "B", "B"]),
         );
         let e = err(&v, "edges_assignment[6]");
-        assert!(e.contains("borders two faces") && e.contains("mark it C"), "{e}");
+        assert!(
+            e.contains("borders two faces") && e.contains("mark it C"),
+            "{e}"
+        );
         // a cut across the sheet: two separate panels, vertices 1 and 4 split
         let v = with(
             base(),
@@ -1644,15 +1717,33 @@ mod tests {
         assert_eq!(s.fold_vertex_count, 6);
         assert_eq!(s.mesh.coords[6], s.mesh.coords[1]);
         assert_eq!(s.mesh.coords[7], s.mesh.coords[4]);
-        assert!(l.notes.iter().any(|n| n.starts_with("cuts: 1 cut edge")), "{:?}", l.notes);
-        assert!(l.warnings[0].contains("angle 90 of the C edge 1-4 is ignored"), "{:?}", l.warnings);
+        assert!(
+            l.notes.iter().any(|n| n.starts_with("cuts: 1 cut edge")),
+            "{:?}",
+            l.notes
+        );
+        assert!(
+            l.warnings[0].contains("angle 90 of the C edge 1-4 is ignored"),
+            "{:?}",
+            l.warnings
+        );
         // both sides of the cut are boundary edges on FOLD edge 6
-        let cut: Vec<&Edge> = s.mesh.edges.iter().filter(|e| e.fold_edge == Some(6)).collect();
+        let cut: Vec<&Edge> = s
+            .mesh
+            .edges
+            .iter()
+            .filter(|e| e.fold_edge == Some(6))
+            .collect();
         assert_eq!(cut.len(), 2);
         assert!(cut.iter().all(|e| e.kind == EdgeKind::Boundary));
         assert!(s.actuators[0].edges.is_empty());
         // a support on a split vertex holds both copies
-        let (s, _) = load(&with(v.clone(), "ancf:supports", json!([{"vertices": [1]}]))).unwrap();
+        let (s, _) = load(&with(
+            v.clone(),
+            "ancf:supports",
+            json!([{"vertices": [1]}]),
+        ))
+        .unwrap();
         assert_eq!(s.supports[0].vertices, vec![1, 6]);
         crate::model::Model::new(s).unwrap();
         // a cut of one edge inside the sheet cannot open
@@ -1698,7 +1789,13 @@ mod tests {
         };
         let l = from_fold_with(&parsed, &smooth).unwrap();
         assert_eq!(l.scene.mesh.edges[6].kind, EdgeKind::Smooth);
-        assert!(l.notes.iter().any(|n| n.starts_with("F edges: 1 read as smooth")), "{:?}", l.notes);
+        assert!(
+            l.notes
+                .iter()
+                .any(|n| n.starts_with("F edges: 1 read as smooth")),
+            "{:?}",
+            l.notes
+        );
         let os = with(
             v.clone(),
             "file_creator",
@@ -1829,7 +1926,10 @@ mod tests {
                 ..Default::default()
             };
             let e = from_fold_with(&parsed, &o).unwrap_err().to_string();
-            assert!(e.starts_with("--unit:") && e.contains("did you mean"), "{e}");
+            assert!(
+                e.starts_with("--unit:") && e.contains("did you mean"),
+                "{e}"
+            );
             let (s, _) = load(&with(v.clone(), "ancf:import", json!({"size": 0.5}))).unwrap();
             assert!((s.mesh.coords[2].x - 0.5).abs() < 1e-15);
             let (s, _) = load(&with(v.clone(), "ancf:import", json!({"unit": "cm"}))).unwrap();
@@ -1845,7 +1945,10 @@ mod tests {
             size: Some(1.0),
             ..Default::default()
         };
-        assert_eq!(from_fold_with(&parsed, &o).unwrap().scene.mesh.coords[2].x, 1.0);
+        assert_eq!(
+            from_fold_with(&parsed, &o).unwrap().scene.mesh.coords[2].x,
+            1.0
+        );
         // 3D with one z: as 2D
         let v = with(
             base(),

@@ -42,7 +42,10 @@ fn bbox_of(points: impl Iterator<Item = Vector2<f64>>) -> (Vector2<f64>, Vector2
 /// edges that cross without a common vertex, a vertex in the middle of an
 /// edge, and collinear edges that overlap. Edges are bucketed in a grid of
 /// about one edge per cell, so typical patterns cost linear time.
-pub(crate) fn check_crossings(coords: &[Vector2<f64>], edges: &[[usize; 2]]) -> Result<(), SceneError> {
+pub(crate) fn check_crossings(
+    coords: &[Vector2<f64>],
+    edges: &[[usize; 2]],
+) -> Result<(), SceneError> {
     let n = edges.len();
     if n < 2 {
         return Ok(());
@@ -54,7 +57,9 @@ pub(crate) fn check_crossings(coords: &[Vector2<f64>], edges: &[[usize; 2]]) -> 
         if (coords[b] - coords[a]).norm() <= tol {
             return Err(invalid(
                 format!("edges_vertices[{e}]"),
-                format!("vertices {a} and {b} are at the same point (an edge of zero length); merge them"),
+                format!(
+                    "vertices {a} and {b} are at the same point (an edge of zero length); merge them"
+                ),
             ));
         }
     }
@@ -148,7 +153,9 @@ fn segment_pair(
         let s = if a == p || a == q { a } else { b };
         let u = if s == a { cb - ca } else { ca - cb };
         let w = if s == p { cq - cp } else { cp - cq };
-        if cross(u.normalize(), w.normalize()).abs() * u.norm().min(w.norm()) <= tol && u.dot(&w) > 0.0 {
+        if cross(u.normalize(), w.normalize()).abs() * u.norm().min(w.norm()) <= tol
+            && u.dot(&w) > 0.0
+        {
             return Err(invalid(
                 key,
                 format!(
@@ -168,7 +175,15 @@ fn segment_pair(
     let (d1, d2) = (cb - ca, cq - cp);
     let (op, oq) = (dist(ca, d1, cp), dist(ca, d1, cq));
     let (oa, ob) = (dist(cp, d2, ca), dist(cp, d2, cb));
-    let sgn = |x: f64| if x > tol { 1 } else if x < -tol { -1 } else { 0 };
+    let sgn = |x: f64| {
+        if x > tol {
+            1
+        } else if x < -tol {
+            -1
+        } else {
+            0
+        }
+    };
     let on_segment = |o: Vector2<f64>, d: Vector2<f64>, x: Vector2<f64>| {
         let t = (x - o).dot(&d) / d.norm_squared();
         t * d.norm() > tol && (1.0 - t) * d.norm() > tol
@@ -221,19 +236,29 @@ fn segment_pair(
 /// The faces of a planar straight-line graph: the counter-clockwise
 /// boundary cycles of its bounded regions, found by walking each half-edge
 /// to the next one clockwise around its end vertex. Outer boundaries
-/// (clockwise cycles) are dropped. Refused: crossing edges (see
-/// [`check_crossings`]), a crease that ends inside a face (a slit), a face
-/// that touches itself at a vertex, and a piece of the pattern lying inside
-/// a face of another piece with no edge between them (an island or a hole).
+/// (clockwise cycles) are dropped, and so are holes: regions bounded only
+/// by edges marked `boundary` that are also sides of other faces. A crease
+/// that ends inside a region makes its face run along it and back (a slit:
+/// the crease stops in the paper), which the triangulation handles.
+/// Refused: crossing edges (see [`check_crossings`]), a face that touches
+/// itself at a vertex without a slit, and a piece of the pattern lying
+/// inside a face of another piece with no edge between them (an island).
 pub(crate) fn trace_faces(
     coords: &[Vector2<f64>],
     edges: &[[usize; 2]],
+    boundary: &[bool],
 ) -> Result<Vec<Vec<usize>>, SceneError> {
     check_crossings(coords, edges)?;
     let nv = coords.len();
     let ne = edges.len();
     // Half-edge h = 2e runs a -> b, 2e + 1 runs b -> a.
-    let origin = |h: usize| if h % 2 == 0 { edges[h / 2][0] } else { edges[h / 2][1] };
+    let origin = |h: usize| {
+        if h % 2 == 0 {
+            edges[h / 2][0]
+        } else {
+            edges[h / 2][1]
+        }
+    };
     let dest = |h: usize| origin(h ^ 1);
     let mut out: Vec<Vec<usize>> = vec![Vec::new(); nv];
     for h in 0..2 * ne {
@@ -275,47 +300,37 @@ pub(crate) fn trace_faces(
         let area = shoelace(&verts, coords);
         cycles.push((hs, area));
     }
+    // Bounded regions; holes (all sides boundary edges shared with another
+    // region) are not paper.
+    let bounded: Vec<usize> = (0..cycles.len()).filter(|&id| cycles[id].1 > eps).collect();
+    let is_hole = |id: usize| {
+        cycles[id].0.iter().all(|&h| {
+            let other = cycle_of[h ^ 1];
+            boundary[h / 2] && other != id && cycles[other].1 > eps
+        })
+    };
     let mut faces = Vec::new();
-    let mut face_cycles = Vec::new();
-    for (id, (hs, area)) in cycles.iter().enumerate() {
-        if *area <= eps {
+    for &id in &bounded {
+        if is_hole(id) {
             continue;
         }
+        let hs = &cycles[id].0;
         let verts: Vec<usize> = hs.iter().map(|&h| origin(h)).collect();
         let mut sorted = verts.clone();
         sorted.sort_unstable();
         if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-            if let Some(&h) = hs.iter().find(|&&h| cycle_of[h ^ 1] == id) {
-                let e = h / 2;
-                let [a, b] = edges[e];
-                let tip = [a, b].into_iter().find(|&x| out[x].len() == 1);
-                let why = match tip {
-                    Some(t) => format!(
-                        "it ends inside the paper at vertex {t} (a slit); the model cannot fold \
-                         along a crease that stops in a face: extend it to another crease or the \
-                         boundary, or remove it"
-                    ),
-                    None => "it is the only edge joining two parts of the pattern (a slit to an \
-                             island or a hole inside a face): join them with a second edge, so \
-                             that the face between them is a simple polygon"
-                        .to_string(),
-                };
+            if !hs.iter().any(|&h| cycle_of[h ^ 1] == id) {
                 return Err(invalid(
-                    format!("edges_vertices[{e}]"),
-                    format!("edge {a}-{b} has the same face on both sides: {why}"),
+                    format!("vertices_coords[{}]", w[0]),
+                    format!(
+                        "a face traced from the edges touches itself at vertex {}: add an edge \
+                         that splits it there",
+                        w[0]
+                    ),
                 ));
             }
-            return Err(invalid(
-                format!("vertices_coords[{}]", w[0]),
-                format!(
-                    "a face traced from the edges touches itself at vertex {}: add an edge that \
-                     splits it there",
-                    w[0]
-                ),
-            ));
         }
         faces.push(verts);
-        face_cycles.push(id);
     }
     // Pieces (connected components) inside a face of another piece.
     let mut parent: Vec<usize> = (0..nv).collect();
@@ -332,7 +347,9 @@ pub(crate) fn trace_faces(
             parent[ra] = rb;
         }
     }
-    let outer: Vec<usize> = (0..cycles.len()).filter(|&id| cycles[id].1 < -eps).collect();
+    let outer: Vec<usize> = (0..cycles.len())
+        .filter(|&id| cycles[id].1 < -eps)
+        .collect();
     if outer.len() > 1 {
         let boxes: Vec<_> = faces
             .iter()
@@ -353,9 +370,9 @@ pub(crate) fn trace_faces(
                         format!("edges_vertices[{}]", cycles[id].0[0] / 2),
                         format!(
                             "the edges around vertex {v} form a piece that lies inside a face of \
-                             the rest of the pattern, with no edge joining them (an island or a \
-                             hole): join it to the surrounding pattern with an edge (a J edge joins \
-                             without folding)"
+                             the rest of the pattern, with no edge joining them (an island): join \
+                             it to the surrounding pattern with an edge (a J edge joins without \
+                             folding), or mark the edges around it B if it is a hole"
                         ),
                     ));
                 }
@@ -461,7 +478,7 @@ mod tests {
     fn square_with_diagonal_traces_two_faces() {
         let c = vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.)];
         let e = vec![[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]];
-        let f = trace_faces(&c, &e).unwrap();
+        let f = trace_faces(&c, &e, &[false; 5]).unwrap();
         assert_eq!(f.len(), 2);
         for face in &f {
             assert_eq!(face.len(), 3);
@@ -470,23 +487,25 @@ mod tests {
     }
 
     #[test]
-    fn crossings_slits_and_islands_are_refused() {
+    fn crossings_slits_holes_and_islands() {
+        let no = [false; 16];
         // both diagonals, no centre vertex
         let c = vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.)];
         let e = vec![[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [1, 3]];
-        let err = trace_faces(&c, &e).unwrap_err().to_string();
+        let err = trace_faces(&c, &e, &no).unwrap_err().to_string();
         assert!(err.contains("cross at (0.500000, 0.500000)"), "{err}");
-        // a dangling crease from a corner to the centre
+        // a crease from a corner to the centre: a slit face
         let c = vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.), v(0.5, 0.5)];
         let e = vec![[0, 1], [1, 2], [2, 3], [3, 0], [0, 4]];
-        let err = trace_faces(&c, &e).unwrap_err().to_string();
-        assert!(err.contains("slit") && err.starts_with("edges_vertices[4]"), "{err}");
+        let f = trace_faces(&c, &e, &no).unwrap();
+        assert_eq!(f.len(), 1);
+        assert_eq!(f[0].len(), 6);
         // a vertex on an edge
         let c = vec![v(0., 0.), v(2., 0.), v(2., 1.), v(0., 1.), v(1., 0.)];
         let e = vec![[0, 1], [1, 2], [2, 3], [3, 0], [4, 2]];
-        let err = trace_faces(&c, &e).unwrap_err().to_string();
+        let err = trace_faces(&c, &e, &no).unwrap_err().to_string();
         assert!(err.contains("in the middle of edge 0"), "{err}");
-        // a square inside a square, not joined
+        // a square inside a square, not joined: an island
         let c = vec![
             v(0., 0.),
             v(3., 0.),
@@ -497,19 +516,31 @@ mod tests {
             v(2., 2.),
             v(1., 2.),
         ];
-        let e = vec![[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]];
-        let err = trace_faces(&c, &e).unwrap_err().to_string();
+        let e = vec![
+            [0, 1],
+            [1, 2],
+            [2, 3],
+            [3, 0],
+            [4, 5],
+            [5, 6],
+            [6, 7],
+            [7, 4],
+        ];
+        let err = trace_faces(&c, &e, &no).unwrap_err().to_string();
         assert!(err.contains("island"), "{err}");
-        // joined by one edge: the ring face runs along it twice (a slit)
+        // joined by one edge: the ring face runs along it both ways
         let mut e2 = e.clone();
         e2.push([0, 4]);
-        let err = trace_faces(&c, &e2).unwrap_err().to_string();
-        assert!(err.contains("slit"), "{err}");
-        // joined by two edges: three faces
+        let f = trace_faces(&c, &e2, &no).unwrap();
+        assert_eq!(f.len(), 2);
+        // the inner square marked B and joined twice: a hole
         let mut e3 = e2.clone();
         e3.push([2, 6]);
-        let f = trace_faces(&c, &e3).unwrap();
-        assert_eq!(f.len(), 3);
+        let mut b = vec![true, true, true, true, true, true, true, true, false, false];
+        let f = trace_faces(&c, &e3, &b).unwrap();
+        assert_eq!(f.len(), 2);
+        b[4] = false; // not all B: a face
+        assert_eq!(trace_faces(&c, &e3, &b).unwrap().len(), 3);
         // two separate squares side by side are fine
         let c = vec![
             v(0., 0.),
@@ -521,8 +552,16 @@ mod tests {
             v(3., 1.),
             v(2., 1.),
         ];
-        let f = trace_faces(&c, &e).unwrap();
+        let f = trace_faces(&c, &e, &no).unwrap();
         assert_eq!(f.len(), 2);
+        // disjoint edges with ends at one point
+        let c = vec![v(0., 0.), v(1., 0.), v(1., 0.), v(0., 1.)];
+        let e = vec![[0, 1], [2, 3], [3, 0]];
+        let err = trace_faces(&c, &e, &no).unwrap_err().to_string();
+        assert!(
+            err.contains("vertices 1 and 2 are at the same point"),
+            "{err}"
+        );
     }
 
     #[test]

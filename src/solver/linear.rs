@@ -80,8 +80,10 @@ fn block_amd(
     let bpat = SymbolicSparseColMat::new_checked(nb, nb, bcol, None, brow);
     let mut fwd = vec![0usize; nb];
     let mut inv = vec![0usize; nb];
-    let mut mem = MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(nb, nnz))
-        .map_err(|_| "out of memory for the ordering".to_string())?;
+    let mut mem = MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<
+        usize,
+    >(nb, nnz))
+    .map_err(|_| "out of memory for the ordering".to_string())?;
     faer::sparse::linalg::amd::order_maybe_unsorted(
         &mut fwd,
         &mut inv,
@@ -146,7 +148,9 @@ impl SparseSolver {
             None
         };
         let ordering = match &perm {
-            Some((fwd, inv)) => SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n)),
+            Some((fwd, inv)) => {
+                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n))
+            }
             None => SymmetricOrdering::Amd,
         };
         let symbolic = factorize_symbolic_cholesky(
