@@ -470,6 +470,16 @@ fn fuzz_bases() -> Vec<String> {
             {"frame_inherit": true, "frame_parent": 1, "frame_unit": "mm"}]}"#
             .to_string(),
     );
+    // edges only (faces traced), unitless
+    out.push(std::fs::read_to_string(repo().join("tests/data/fold-spec/vertex.fold")).unwrap());
+    // a cut across the sheet and a slit face (a crease ending inside it)
+    out.push(
+        r#"{"vertices_coords": [[0,0],[1,0],[2,0],[2,1],[1,1],[0,1],[1.5,0.5]],
+            "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4],[2,6]],
+            "edges_assignment": ["B","B","B","B","B","B","C","V"],
+            "faces_vertices": [[0,1,4,5],[1,2,6,2,3,4]]}"#
+            .to_string(),
+    );
     for b in &out {
         scene::from_str(b).unwrap_or_else(|e| panic!("fuzz base does not load: {e}\n{b}"));
     }

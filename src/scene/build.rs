@@ -309,8 +309,8 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     let mut scene = Scene::with_defaults(&scene_name, mesh);
     scene.fold_vertex_count = nv;
     scene.fold_edge_count = edges.v.len();
-    // with_defaults drove every mesh crease: the FOLD creases.
-    scene.actuators[0].edges.retain(|&e| e < edges.v.len());
+    // with_defaults drives every mesh crease: the FOLD creases (mesh edges
+    // after the FOLD edges are diagonals and cut sides, never creases).
     apply_physics(&mut scene, physics.clone(), &edges, &copies, &mut warnings)?;
 
     // Thin-shell sanity: thickness against the shortest edge.
