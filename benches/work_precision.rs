@@ -97,8 +97,13 @@ fn run(case: &Case, method: Method) -> Result<Run, String> {
     let start = Instant::now();
     for k in 1..=n {
         let t = k as f64 * case.sample;
-        for (i, v) in (case.inputs)(&m, t) {
-            m.set_input(i, v).map_err(|e| e.to_string())?;
+        // Each input's value at the step start and its slope over the step:
+        // the case's piecewise linear signal (never a staircase).
+        let (t0, h) = (t - case.sample, case.sample);
+        for ((i, v0), (_, v1)) in (case.inputs)(&m, t0).into_iter().zip((case.inputs)(&m, t)) {
+            m.set_input(i, v0).map_err(|e| e.to_string())?;
+            m.set_input_derivative(i, 1, (v1 - v0) / h)
+                .map_err(|e| e.to_string())?;
         }
         report.accumulate(&m.advance(case.sample).map_err(|e| e.to_string())?);
         samples.push(m.output_values());

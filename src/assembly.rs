@@ -14,7 +14,6 @@ use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
 use crate::scene::Material;
 use nalgebra::{SMatrix, SVector, Vector2};
-use std::collections::{BTreeSet, HashMap};
 
 /// Marker for "not a free scalar".
 pub const FIXED: usize = usize::MAX;
@@ -117,6 +116,9 @@ pub struct Assembler {
     pub row_idx: Vec<usize>,
     face_maps: Vec<BlockMap>,
     crease_maps: Vec<BlockMap>,
+    /// Slot-level pattern (all slots, CSR, sorted rows): which slots couple.
+    slot_ptr: Vec<usize>,
+    slot_idx: Vec<usize>,
     /// Mass matrix by slots: for each slot, (other slot, coefficient of I3).
     pub mass_rows: Vec<Vec<(usize, f64)>>,
     mass_values: Vec<f64>,
@@ -189,15 +191,44 @@ impl Assembler {
         let mut crease_maps: Vec<BlockMap> =
             creases.iter().map(|c| block_map_of(&c.combos)).collect();
 
-        // Slot-level adjacency -> scalar pattern over free DOFs.
-        let mut adj: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n_slots];
+        // Slot-level adjacency (CSR, sorted, all slots) -> scalar pattern
+        // over free DOFs. Sorting each slot's neighbour list keeps this
+        // O(n log n) in time and O(n) in memory.
+        let mut count = vec![0usize; n_slots + 1];
+        for bm in face_maps.iter().chain(crease_maps.iter()) {
+            for &a in &bm.slots {
+                count[a + 1] += bm.slots.len();
+            }
+        }
+        for s in 0..n_slots {
+            count[s + 1] += count[s];
+        }
+        let mut fill = count.clone();
+        let mut raw = vec![0usize; count[n_slots]];
         for bm in face_maps.iter().chain(crease_maps.iter()) {
             for &a in &bm.slots {
                 for &b in &bm.slots {
-                    adj[a].insert(b);
+                    raw[fill[a]] = b;
+                    fill[a] += 1;
                 }
             }
         }
+        let mut slot_ptr = Vec::with_capacity(n_slots + 1);
+        slot_ptr.push(0);
+        let mut slot_idx = Vec::new();
+        for s in 0..n_slots {
+            let row = &mut raw[count[s]..count[s + 1]];
+            row.sort_unstable();
+            let mut last = usize::MAX;
+            for &b in row.iter() {
+                if b != last {
+                    slot_idx.push(b);
+                    last = b;
+                }
+            }
+            slot_ptr.push(slot_idx.len());
+        }
+        drop(raw);
         let mut col_ptr = vec![0usize];
         let mut row_idx = Vec::new();
         for sb in 0..n_slots {
@@ -205,7 +236,7 @@ impl Assembler {
                 continue;
             }
             for _cb in 0..3 {
-                for &sa in &adj[sb] {
+                for &sa in &slot_idx[slot_ptr[sb]..slot_ptr[sb + 1]] {
                     if !is_fixed[sa] {
                         for ca in 0..3 {
                             row_idx.push(free[3 * sa + ca]);
@@ -248,6 +279,8 @@ impl Assembler {
             row_idx,
             face_maps,
             crease_maps,
+            slot_ptr,
+            slot_idx,
             mass_rows: Vec::new(),
             mass_values: Vec::new(),
             rigid: RigidModes::default(),
@@ -262,10 +295,24 @@ impl Assembler {
         self.physics = physics;
         let n_slots = self.layout.n_slots();
         let rho_h = physics.material.density * physics.material.thickness;
-        let mut mass: HashMap<(usize, usize), f64> = HashMap::new();
+        // Accumulate on the slot pattern, element by element in the order
+        // of the terms (each entry sums its contributions in that order).
+        let mut mass = vec![0.0; self.slot_idx.len()];
+        let mut touched = vec![false; self.slot_idx.len()];
+        let mut vals = vec![0.0; self.row_idx.len()];
+        let mut pos: Vec<usize> = Vec::new();
         for (f, el) in self.elements.iter().enumerate() {
             let scale = rho_h * el.area();
             let bm = &self.face_maps[f];
+            let ns = bm.slots.len();
+            pos.clear();
+            for &sa in &bm.slots {
+                let row = &self.slot_idx[self.slot_ptr[sa]..self.slot_ptr[sa + 1]];
+                for &sb in &bm.slots {
+                    let k = row.binary_search(&sb).expect("slot pattern has the pair");
+                    pos.push(self.slot_ptr[sa] + k);
+                }
+            }
             for i in 0..9 {
                 for j in 0..9 {
                     let mij = scale * MASS_HAT[i][j];
@@ -273,33 +320,27 @@ impl Assembler {
                         for tj in 0..bm.nterms[j] as usize {
                             let (a, ca) = bm.terms[i][ti];
                             let (b, cb) = bm.terms[j][tj];
-                            *mass.entry((bm.slots[a], bm.slots[b])).or_insert(0.0) += ca * cb * mij;
+                            let p = pos[a * ns + b];
+                            let m = ca * cb * mij;
+                            mass[p] += m;
+                            touched[p] = true;
+                            // The free-DOF matrix: the same sums, in the same order.
+                            let off = bm.offsets[a * ns + b];
+                            if off[0] != FIXED {
+                                for c in 0..3 {
+                                    vals[off[c] + c] += m;
+                                }
+                            }
                         }
                     }
                 }
             }
         }
         let mut rows = vec![Vec::new(); n_slots];
-        for (&(a, b), &m) in &mass {
-            rows[a].push((b, m));
-        }
-        for r in &mut rows {
-            r.sort_by_key(|x| x.0);
-        }
-        let mut vals = vec![0.0; self.row_idx.len()];
-        for (a, row) in rows.iter().enumerate() {
-            for &(b, m) in row {
-                if self.free[3 * a] == FIXED || self.free[3 * b] == FIXED {
-                    continue;
-                }
-                for c in 0..3 {
-                    let col = self.free[3 * b + c];
-                    let r = self.free[3 * a + c];
-                    let range = self.col_ptr[col]..self.col_ptr[col + 1];
-                    let k = self.row_idx[range.clone()]
-                        .binary_search(&r)
-                        .expect("mass in pattern");
-                    vals[range.start + k] += m;
+        for (a, row) in rows.iter_mut().enumerate() {
+            for p in self.slot_ptr[a]..self.slot_ptr[a + 1] {
+                if touched[p] {
+                    row.push((self.slot_idx[p], mass[p]));
                 }
             }
         }

@@ -328,9 +328,9 @@ impl Mesh {
             edge_faces,
             face_edges,
         };
-        for v in 0..nv {
-            mesh.fan(v)?;
-        }
+        // One pass over the triangles (calling `fan` per vertex would be
+        // quadratic in the mesh size).
+        mesh.fans()?;
         Ok(mesh)
     }
 
@@ -367,7 +367,8 @@ impl Mesh {
         (self.coords[b] - self.coords[a]).norm()
     }
 
-    /// The edge between vertices `a` and `b`, if any.
+    /// The edge between vertices `a` and `b`, if any (a linear search: for
+    /// tests and small meshes).
     pub fn find_edge(&self, a: usize, b: usize) -> Option<usize> {
         self.edges
             .iter()
@@ -380,7 +381,7 @@ impl Mesh {
     /// (`edges.len() == faces.len()`, the last face followed by `edges[0]`);
     /// for a boundary vertex it is open, starts and ends on a boundary edge
     /// (`edges.len() == faces.len() + 1`). A vertex used by no face has an
-    /// empty fan.
+    /// empty fan. Scans all triangles: use [`Mesh::fans`] for all vertices.
     pub fn fan(&self, v: usize) -> Result<Fan, MeshError> {
         let faces: Vec<usize> = (0..self.triangles.len())
             .filter(|&t| self.triangles[t].contains(&v))

@@ -13,6 +13,7 @@
 //! instead ramps each input over the advance to the value set.
 
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 use std::fmt;
 
 /// One scalar variable of the model, as the FMU and CSV files name it.
@@ -221,6 +222,13 @@ pub struct Model {
 impl Model {
     /// Build a model of a validated scene.
     pub fn new(scene: Scene) -> Result<Model, Error> {
+        let facets = scene.mesh.triangles.len();
+        if facets > crate::scene::build::MAX_FACETS {
+            // Refused before the large allocations of the assembly.
+            return Err(Error::Scene(
+                crate::scene::build::over_budget("mesh", facets, "the mesh has").to_string(),
+            ));
+        }
         let parameters = parameter_table(&scene);
         let inputs = input_table(&scene);
         let outputs = output_table(&scene);
@@ -452,8 +460,8 @@ impl Model {
             return Err(Error::Phase("model is already initialized".into()));
         }
         self.apply_parameters();
-        // Built once per life unless the parameters changed since.
-        if self.built_with.as_deref() != Some(&self.state.parameters[..]) {
+        // Model::new built the system; build again only for changed parameters.
+        if self.sys.is_none() || self.built_with.as_deref() != Some(&self.state.parameters[..]) {
             self.build()?;
         }
         let sys = self.sys.as_mut().expect("built");
@@ -912,6 +920,7 @@ impl Model {
         let layout = crate::dofs::DofLayout::new(mesh);
         let q_ref = layout.reference_state(mesh);
         let mut fixed = Vec::new();
+        let mut is_fixed = vec![false; layout.n_slots()];
         let mut supported = Vec::new();
         for sup in &sc.supports {
             for &v in &sup.vertices {
@@ -920,7 +929,8 @@ impl Model {
                     Fix::Clamped => layout.vertex_slots(v),
                 };
                 for s in slots {
-                    if !fixed.contains(&s) {
+                    if !is_fixed[s] {
+                        is_fixed[s] = true;
                         fixed.push(s);
                         for c in 0..3 {
                             supported.push((3 * s + c, q_ref[3 * s + c]));
@@ -934,7 +944,8 @@ impl Model {
         let mut idx = n_act + 3 * sc.vertex_forces.len();
         for m in &sc.vertex_motions {
             let s = layout.position_slot[m.vertex];
-            if !fixed.contains(&s) {
+            if !is_fixed[s] {
+                is_fixed[s] = true;
                 fixed.push(s);
             }
             for c in 0..3 {
@@ -956,20 +967,27 @@ impl Model {
         let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
         asm.rigid
             .set_supports(&supported_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
-        let solver = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
-            .map_err(Error::Scene)?;
+        // Free scalars come in slots of 3 with one pattern.
+        let solver =
+            SparseSolver::new_blocked(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone(), 3)
+                .map_err(Error::Scene)?;
         let nends = asm.creases.len();
         let mut rest = vec![Vec::new(); nends];
         let mut torque = vec![Vec::new(); nends];
+        // The actuators of each mesh edge, in actuator order.
+        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges.len()];
+        for (a, act) in sc.actuators.iter().enumerate() {
+            for &e in &act.edges {
+                if driven_by[e].last() != Some(&a) {
+                    driven_by[e].push(a);
+                }
+            }
+        }
         for (i, ce) in asm.creases.iter().enumerate() {
-            for (a, act) in sc.actuators.iter().enumerate() {
-                if act.edges.contains(&ce.edge) {
-                    match act.mode {
-                        ActuatorMode::RestAngle => {
-                            rest[i].push((a, mesh.edges[ce.edge].fold_target))
-                        }
-                        ActuatorMode::Torque => torque[i].push(a),
-                    }
+            for &a in &driven_by[ce.edge] {
+                match sc.actuators[a].mode {
+                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edges[ce.edge].fold_target)),
+                    ActuatorMode::Torque => torque[i].push(a),
                 }
             }
         }
@@ -983,14 +1001,21 @@ impl Model {
             asm.mass_mul(&qg, &mut f);
             f
         });
-        let angle_ends = fold_edges(sc)
-            .into_iter()
-            .map(|fe| {
-                (0..nends)
-                    .filter(|&i| mesh.edges[asm.creases[i].edge].fold_edge == Some(fe))
-                    .collect()
-            })
-            .collect();
+        // For each crease output (FOLD edge), its crease ends in order.
+        let outputs = fold_edges(sc);
+        let mut output_of: HashMap<usize, usize> = HashMap::with_capacity(outputs.len());
+        for (k, &fe) in outputs.iter().enumerate() {
+            output_of.insert(fe, k);
+        }
+        let mut angle_ends: Vec<Vec<usize>> = vec![Vec::new(); outputs.len()];
+        for (i, ce) in asm.creases.iter().enumerate() {
+            if let Some(&k) = mesh.edges[ce.edge]
+                .fold_edge
+                .and_then(|fe| output_of.get(&fe))
+            {
+                angle_ends[k].push(i);
+            }
+        }
         let length = mesh.size().max(f64::MIN_POSITIVE);
         let scales = asm.scales(length);
         // The explicit stepper's stable step, estimated on the unstressed sheet.

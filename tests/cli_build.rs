@@ -79,3 +79,156 @@ fn build_refuses_a_bad_scene() {
     );
     assert!(!out.exists());
 }
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_origami-fmu"))
+}
+
+/// A scratch directory for one test.
+fn scratch(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("origami_fmu_cli_{tag}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The FOLD specification's flat-folded diagonal on top, its crease
+/// pattern in file_frames[0].
+fn two_frame_file(dir: &Path) -> std::path::PathBuf {
+    let read = |n: &str| -> serde_json::Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(root().join("tests/data/fold-spec").join(n)).unwrap(),
+        )
+        .unwrap()
+    };
+    let mut top = read("diagonal-folded.fold");
+    top["file_frames"] = serde_json::json!([read("diagonal-cp.fold")]);
+    let path = dir.join("two_frames.fold");
+    std::fs::write(&path, top.to_string()).unwrap();
+    path
+}
+
+#[test]
+fn every_scene_command_takes_frame_size_unit_and_f_edges() {
+    let dir = scratch("frame");
+    let file = two_frame_file(&dir);
+    // Without --frame: refused, naming the frame that is a crease pattern.
+    for cmd in ["check", "build", "simulate"] {
+        let mut c = bin();
+        c.arg(cmd).arg(&file);
+        if cmd != "check" {
+            c.arg("-o").arg(dir.join("x.out"));
+        }
+        let r = c.output().unwrap();
+        assert!(!r.status.success(), "{cmd}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            err.contains("--frame 1") && err.contains("folded state"),
+            "{cmd}: {err}"
+        );
+    }
+    // With it: check, build and simulate read frame 1; --size scales it.
+    let r = bin()
+        .args(["check", "--frame", "1", "--size", "0.2"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let text = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        text.contains("size:      0.2 m x 0.2 m: --size 0.2"),
+        "{text}"
+    );
+    let fmu = dir.join("d.fmu");
+    let r = bin()
+        .args(["build", "--frame", "1", "--unit", "cm"])
+        .arg(&file)
+        .arg("-o")
+        .arg(&fmu)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let text = String::from_utf8_lossy(&r.stdout);
+    assert!(text.contains("size: 0.01 m x 0.01 m: --unit cm"), "{text}");
+    assert!(fmu.exists());
+    let csv = dir.join("d.csv");
+    let r = bin()
+        .args([
+            "simulate",
+            "--frame",
+            "1",
+            "--stop-time",
+            "0.02",
+            "--f-edges",
+            "smooth",
+        ])
+        .arg(&file)
+        .arg("-o")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("(wall-clock time)") && !err.contains("CPU wall"),
+        "{err}"
+    );
+    assert!(err.contains("size: 0.1 m x 0.1 m"), "{err}");
+    // --size and --unit exclude each other; options on a scene JSON are refused.
+    let r = bin()
+        .args(["check", "--size", "0.1", "--unit", "mm"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    let r = bin()
+        .args(["check", "--size", "0.1"])
+        .arg(root().join("tests/fmpy/scenes/square.json"))
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("apply to FOLD files"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn help_says_what_is_true() {
+    let r = bin().args(["build", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        text.contains("a FOLD file") && !text.contains("for now: JSON"),
+        "{text}"
+    );
+    for cmd in ["check", "build", "simulate"] {
+        let r = bin().args([cmd, "--help"]).output().unwrap();
+        let text = String::from_utf8_lossy(&r.stdout);
+        for opt in ["--frame", "--size", "--unit", "--f-edges"] {
+            assert!(text.contains(opt), "{cmd} --help lacks {opt}:\n{text}");
+        }
+    }
+}
+
+#[test]
+fn a_closed_pipe_ends_output_quietly() {
+    use std::process::Stdio;
+    // More output than a pipe holds, and a reader that leaves after one line.
+    for args in [
+        &["pattern", "miura", "--nx", "40", "--ny", "40"][..],
+        &["check", "tests/data/fold-spec/cube-cp.fold"][..],
+    ] {
+        let mut child = bin()
+            .args(args)
+            .current_dir(root())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut out = child.stdout.take().unwrap();
+        let mut first = [0u8; 1];
+        let _ = out.read(&mut first);
+        drop(out);
+        let r = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(r.status.success(), "{args:?}: {:?} {err}", r.status);
+    }
+}

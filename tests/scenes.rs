@@ -232,18 +232,30 @@ fn cli_pattern_then_check() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("miura --nx"));
     let bad = dir.join("bad.fold");
+    // one clockwise face among counter-clockwise ones: an error
     std::fs::write(
         &bad,
-        r#"{"vertices_coords": [[0,0],[1,0],[0,1]], "faces_vertices": [[0,2,1]]}"#,
+        r#"{"vertices_coords": [[0,0],[1,0],[1,1],[0,1],[2,0],[2,1]],
+            "faces_vertices": [[0,1,2,3],[2,5,4,1]]}"#,
     )
     .unwrap();
     let out = bin().arg("check").arg(&bad).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("faces_vertices[0]") && err.contains("clockwise"),
+        err.contains("faces_vertices[1]") && err.contains("clockwise"),
         "{err}"
     );
+    // every face clockwise: mirrored, with a warning
+    std::fs::write(
+        &bad,
+        r#"{"vertices_coords": [[0,0],[1,0],[0,1]], "faces_vertices": [[0,2,1]]}"#,
+    )
+    .unwrap();
+    let out = bin().arg("check").arg(&bad).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("every face is clockwise"), "{text}");
     std::fs::write(&bad, "{\n  \"vertices_coords\": [[0,0],\n").unwrap();
     let out = bin().arg("check").arg(&bad).output().unwrap();
     assert!(!out.status.success());
@@ -465,6 +477,16 @@ fn fuzz_bases() -> Vec<String> {
             {"frame_inherit": true, "frame_parent": 1, "frame_unit": "mm"}]}"#
             .to_string(),
     );
+    // edges only (faces traced), unitless
+    out.push(std::fs::read_to_string(repo().join("tests/data/fold-spec/vertex.fold")).unwrap());
+    // a cut across the sheet and a slit face (a crease ending inside it)
+    out.push(
+        r#"{"vertices_coords": [[0,0],[1,0],[2,0],[2,1],[1,1],[0,1],[1.5,0.5]],
+            "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4],[2,6]],
+            "edges_assignment": ["B","B","B","B","B","B","C","V"],
+            "faces_vertices": [[0,1,4,5],[1,2,6,2,3,4]]}"#
+            .to_string(),
+    );
     for b in &out {
         scene::from_str(b).unwrap_or_else(|e| panic!("fuzz base does not load: {e}\n{b}"));
     }
@@ -483,7 +505,7 @@ fn exercise(text: &str) {
         text,
         &scene::LoadOptions {
             frame: Some(scene::FrameSelector::Index(1)),
-            name: None,
+            ..Default::default()
         },
     );
 }
@@ -533,4 +555,58 @@ fn fuzzed_fold_files_never_panic() {
     eprintln!("fuzz: {cases} cases, {ok} loaded, {err} rejected");
     // The mutations must exercise both outcomes.
     assert!(ok > cases / 20 && err > cases / 20, "ok {ok}, err {err}");
+}
+
+/// A square grid of `n x n` unit quads (2 n^2 facets), without a unit.
+fn grid(n: usize) -> scene::FoldFile {
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    scene::FoldFile {
+        vertices_coords: (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| vec![i as f64, j as f64]))
+            .collect(),
+        faces_vertices: (0..n)
+            .flat_map(|j| {
+                (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn size_budget_refuses_a_million_facets_quickly() {
+    use std::time::{Duration, Instant};
+    let big = grid(708); // 1,002,528 facets
+    let text = big.to_json();
+    let t = Instant::now();
+    let e = scene::from_str(&text).unwrap_err().to_string();
+    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
+    assert!(
+        e.starts_with("faces_vertices: the pattern would triangulate into about 1002528 facets")
+            && e.contains("size budget is 200000"),
+        "{e}"
+    );
+    // Refinement past the budget, and a mesh built in code.
+    let mut small = grid(100); // 20,000 facets; two levels make 320,000
+    small
+        .ancf
+        .insert("ancf:refine".into(), serde_json::json!(2));
+    let e = scene::build::from_fold(&small, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("ancf:refine:") && e.contains("size budget"),
+        "{e}"
+    );
+    small.ancf.clear();
+    let (s, _) = scene::build::from_fold(&small, None).unwrap();
+    let e = refine::refine(&s, 2).unwrap_err().to_string();
+    assert!(e.contains("size budget"), "{e}");
+    // A mid-sized sheet sets up in seconds (the 131k-facet timings are
+    // `cargo bench --bench scene_size`).
+    let t = Instant::now();
+    let (s, _) = scene::build::from_fold(&grid(150), None).unwrap(); // 45,000 facets
+    let m = Model::new(s).unwrap();
+    assert!(m.n_dofs() > 200_000);
+    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
 }

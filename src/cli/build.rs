@@ -6,14 +6,17 @@
 //! next to the running executable unless `--library` names it) and the
 //! scene in `resources/`.
 
+use super::{SceneOptions, out};
 use crate::fmi::{self, MODEL_IDENTIFIER, SCENE_FILE};
+use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `origami-fmu build`.
 #[derive(clap::Args, Debug)]
 pub struct BuildArgs {
-    /// The scene file (for now: JSON of the scene data).
+    /// The scene: a FOLD file (.fold, optionally with ancf: physics keys; docs/scenes.md) or a
+    /// scene JSON (.json, as an FMU's resources/scene.json holds it).
     pub scene: PathBuf,
     /// Where to write the FMU.
     #[arg(short, long)]
@@ -22,26 +25,13 @@ pub struct BuildArgs {
     /// executable, as cargo builds it).
     #[arg(long)]
     pub library: Option<PathBuf>,
+    /// How a FOLD scene is read (--frame, --size, --unit, --f-edges).
+    #[command(flatten)]
+    pub read: SceneOptions,
 }
 
 /// The platform folder of the binary inside the FMU.
 const PLATFORM: &str = "linux64";
-
-/// Load a scene file given on the command line. The one place that knows
-/// which scene formats the CLI reads.
-/// FOLD files (any extension but `.json`) go through the FOLD reader, whose
-/// warnings are printed; `.json` files hold a serialized [`crate::scene::Scene`].
-pub fn load_scene(path: &Path) -> Result<crate::scene::Scene, String> {
-    if path.extension().is_some_and(|e| e == "json") {
-        return fmi::resources::load_scene_file(path);
-    }
-    let (scene, warnings) =
-        crate::scene::load(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    for w in warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok(scene)
-}
 
 /// The cdylib next to the running executable: `target/<profile>/` after
 /// `cargo build`, or `target/<profile>/deps/` where `cargo test` leaves it;
@@ -68,7 +58,8 @@ fn default_library() -> Result<PathBuf, String> {
 
 /// Run `origami-fmu build`.
 pub fn run(args: &BuildArgs) -> Result<(), String> {
-    let scene = load_scene(&args.scene)?;
+    let loaded = super::load_scene(&args.scene, &args.read)?;
+    let scene = loaded.scene;
     let contents = fmi::fmu_contents(&scene)?;
     let library = match &args.library {
         Some(l) => l.clone(),
@@ -101,24 +92,32 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
         files.push(("resources/scene.fold", f, 0o644));
     }
     write_zip(&args.output, &files)?;
-    println!(
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
         "built {}: scene {:?}, FMI 2.0 co-simulation, modelIdentifier {MODEL_IDENTIFIER}, guid {}",
         args.output.display(),
         contents.scene.name,
         contents.guid
     );
+    for n in &loaded.notes {
+        let _ = writeln!(o, "  {n}");
+    }
     let [np, ni, no] = contents.counts;
-    println!("  variables: {np} parameters, {ni} inputs, {no} outputs");
-    println!(
+    let _ = writeln!(o, "  variables: {np} parameters, {ni} inputs, {no} outputs");
+    let _ = writeln!(
+        o,
         "  modelDescription.xml ({} bytes)",
         contents.model_description.len()
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  {binary} ({} bytes, from {})",
         so.len(),
         library.display()
     );
-    println!("  {resource} ({} bytes)", contents.scene_file.len());
+    let _ = writeln!(o, "  {resource} ({} bytes)", contents.scene_file.len());
+    out(&o);
     Ok(())
 }
 

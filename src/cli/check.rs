@@ -3,35 +3,32 @@
 
 use crate::mesh::EdgeKind;
 use crate::model::Model;
-use crate::scene::{self, CreaseStiffness, Integrator, LoadOptions};
+use crate::scene::{self, CreaseStiffness, Integrator, Loaded};
 use clap::Args;
 use std::path::PathBuf;
 
 /// Validate a FOLD scene and print a summary of its mesh, variables and warnings.
 #[derive(Args, Debug)]
 pub struct CheckArgs {
-    /// The FOLD scene file.
+    /// The scene: a FOLD file (or a scene JSON).
     scene: PathBuf,
-    /// Frame to read from a multi-frame file: an index (0 = top level) or a frame_title.
-    #[arg(long)]
-    frame: Option<String>,
+    #[command(flatten)]
+    read: super::SceneOptions,
 }
 
 /// Run the check; an invalid scene is an error naming the key and reason.
 pub fn run(args: CheckArgs) -> Result<(), String> {
-    let options = LoadOptions {
-        frame: args
-            .frame
-            .as_deref()
-            .map(|f| f.parse().expect("infallible")),
-        name: None,
-    };
     let path = args.scene.display().to_string();
-    let (scene, warnings) = scene::load_with(&args.scene, &options).map_err(|e| match e {
-        scene::SceneError::Io { .. } => e.to_string(),
-        _ => format!("{path}: {e}"),
-    })?;
-    print!("{}", summary(&path, &scene, &warnings)?);
+    let loaded = if args.scene.extension().is_some_and(|e| e == "json") {
+        super::load_scene(&args.scene, &args.read)?
+    } else {
+        // The warnings go into the summary, not to stderr.
+        scene::load_report(&args.scene, &args.read.load_options()).map_err(|e| match e {
+            scene::SceneError::Io { .. } => e.to_string(),
+            _ => format!("{path}: {e}"),
+        })?
+    };
+    super::out(&report(&path, &loaded)?);
     Ok(())
 }
 
@@ -58,8 +55,23 @@ fn list(names: &[String]) -> String {
     s
 }
 
+/// The text `check` prints for a loaded scene: [`summary`] with the
+/// loader's notes (unit or scale, F edges, traced faces, split vertices).
+pub fn report(path: &str, loaded: &Loaded) -> Result<String, String> {
+    summary_with(path, &loaded.scene, &loaded.warnings, &loaded.notes)
+}
+
 /// The text `check` prints for a valid scene.
 pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<String, String> {
+    summary_with(path, scene, warnings, &[])
+}
+
+fn summary_with(
+    path: &str,
+    scene: &scene::Scene,
+    warnings: &[String],
+    notes: &[String],
+) -> Result<String, String> {
     use std::fmt::Write as _;
     let m = &scene.mesh;
     let count = |k: EdgeKind| m.edges.iter().filter(|e| e.kind == k).count();
@@ -78,6 +90,15 @@ pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<
         "  FOLD:      {} vertices, {} edges",
         scene.fold_vertex_count, scene.fold_edge_count
     );
+    for n in notes {
+        // "label: text" aligned with the lines around it.
+        let _ = match n.split_once(": ") {
+            Some((label, text)) if label.len() < 10 => {
+                writeln!(o, "  {:<11}{text}", format!("{label}:"))
+            }
+            _ => writeln!(o, "  {n}"),
+        };
+    }
     let _ = writeln!(
         o,
         "  mesh:      {} vertices, {} facets (triangles); {} creases ({mountains} mountain, \
@@ -89,12 +110,13 @@ pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<
         count(EdgeKind::Smooth),
         count(EdgeKind::Boundary)
     );
-    let layout = crate::dofs::DofLayout::new(m);
+    // One model build serves the DOF count and the variable tables.
+    let model = Model::new(scene.clone()).map_err(|e| format!("{path}: {e}"))?;
     let _ = writeln!(
         o,
         "  DOFs:      {} ({} vector slots: positions and sector gradients)",
-        layout.n_dofs(),
-        layout.n_slots()
+        model.n_dofs(),
+        model.n_dofs() / 3
     );
     let mat = &scene.material;
     let _ = writeln!(
@@ -158,7 +180,6 @@ pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<
         num(s.tolerance),
         num(s.stop_time)
     );
-    let model = Model::new(scene.clone()).map_err(|e| format!("{path}: {e}"))?;
     let inputs: Vec<String> = model.inputs().iter().map(|v| v.name.clone()).collect();
     let _ = writeln!(o, "  inputs ({}): {}", inputs.len(), list(&inputs));
     let outs = model.outputs();

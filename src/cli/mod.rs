@@ -1,12 +1,16 @@
 //! Command-line interface. Each subcommand lives in its own file and
 //! returns `Result<(), String>`; errors print to stderr with a non-zero exit.
+//! Output goes through [`out`] and [`err`], which stop quietly when the
+//! reader has gone (`origami-fmu build ... | head`) instead of panicking.
 
 pub mod build;
 pub mod check;
 pub mod pattern;
 pub mod simulate;
 
-use clap::{Parser, Subcommand};
+use crate::scene::{self, FlatEdges, LoadOptions, Loaded};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::Path;
 use std::process::ExitCode;
 
 /// origami-fmu: origami folding dynamics (iso-ANCF shells) as FMI 2.0 co-simulation FMUs.
@@ -29,6 +33,113 @@ enum Command {
     Simulate(simulate::SimulateArgs),
 }
 
+/// Write to standard output. A closed pipe ends the output quietly (the
+/// reader has what it wanted); other errors are reported once on stderr.
+pub fn out(text: &str) {
+    write_to(&mut std::io::stdout().lock(), text, "standard output");
+}
+
+/// Write to standard error, like [`out`].
+pub fn err(text: &str) {
+    write_to(&mut std::io::stderr().lock(), text, "");
+}
+
+fn write_to(w: &mut dyn std::io::Write, text: &str, what: &str) {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static GONE: AtomicBool = AtomicBool::new(false);
+    if GONE.load(Ordering::Relaxed) {
+        return;
+    }
+    if let Err(e) = w.write_all(text.as_bytes()).and_then(|()| w.flush()) {
+        GONE.store(true, Ordering::Relaxed);
+        if e.kind() != std::io::ErrorKind::BrokenPipe && !what.is_empty() {
+            err(&format!("warning: cannot write to {what}: {e}\n"));
+        }
+    }
+}
+
+/// What F edges are, on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FEdges {
+    /// A flat fold line: a crease with target 0 (the FOLD specification).
+    Crease,
+    /// A triangulation line: a smooth edge (as Origami Simulator writes them).
+    Smooth,
+}
+
+/// How a FOLD scene is read: the options of every command that reads one.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SceneOptions {
+    /// Frame of a multi-frame FOLD file: an index (0 = top level, k = file_frames[k-1]) or a
+    /// frame_title [default: the top level if it has vertices, else frame 1].
+    #[arg(long, value_name = "N|TITLE")]
+    pub frame: Option<String>,
+    /// Scale the sheet so that the longest side of its bounding box is LENGTH metres, whatever
+    /// the file's unit [default for files without a physical frame_unit: 0.1].
+    #[arg(long, value_name = "LENGTH", conflicts_with = "unit")]
+    pub size: Option<f64>,
+    /// Read the coordinates in UNIT (m, cm, mm, um, nm, in, pt) instead of the file's frame_unit.
+    #[arg(long, value_name = "UNIT")]
+    pub unit: Option<String>,
+    /// What FOLD F edges are [default: crease; smooth for Origami Simulator exports].
+    #[arg(long, value_name = "KIND")]
+    pub f_edges: Option<FEdges>,
+}
+
+impl SceneOptions {
+    fn any(&self) -> bool {
+        self.frame.is_some() || self.size.is_some() || self.unit.is_some() || self.f_edges.is_some()
+    }
+
+    /// The library's load options.
+    pub fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            frame: self
+                .frame
+                .as_deref()
+                .map(|f| f.parse().expect("infallible")),
+            name: None,
+            size: self.size,
+            unit: self.unit.clone(),
+            f_edges: self.f_edges.map(|f| match f {
+                FEdges::Crease => FlatEdges::Crease,
+                FEdges::Smooth => FlatEdges::Smooth,
+            }),
+        }
+    }
+}
+
+/// Load a scene file given on the command line: the one place that knows
+/// which scene formats the CLI reads. FOLD files (any extension but
+/// `.json`) go through the FOLD reader with `options`; `.json` files hold a
+/// serialized [`crate::scene::Scene`] (already in metres, so the options do
+/// not apply). Warnings are printed; the notes are returned.
+pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, String> {
+    if path.extension().is_some_and(|e| e == "json") {
+        if options.any() {
+            return Err(format!(
+                "{}: --frame, --size, --unit and --f-edges apply to FOLD files; this is a scene \
+                 JSON (as written into an FMU's resources), whose geometry is fixed",
+                path.display()
+            ));
+        }
+        let scene = crate::fmi::resources::load_scene_file(path)?;
+        return Ok(Loaded {
+            scene,
+            warnings: vec![],
+            notes: vec![],
+        });
+    }
+    let loaded = scene::load_report(path, &options.load_options()).map_err(|e| match e {
+        scene::SceneError::Io { .. } => e.to_string(),
+        _ => format!("{}: {e}", path.display()),
+    })?;
+    for w in &loaded.warnings {
+        err(&format!("warning: {w}\n"));
+    }
+    Ok(loaded)
+}
+
 /// Run the CLI with the process arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -41,7 +152,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
-            eprintln!("error: {msg}");
+            err(&format!("error: {msg}\n"));
             ExitCode::FAILURE
         }
     }

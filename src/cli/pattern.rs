@@ -226,9 +226,9 @@ pub fn run(args: PatternArgs) -> Result<(), String> {
         Some(path) => {
             std::fs::write(path, text)
                 .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-            eprintln!("wrote {}: {summary}", path.display());
+            super::err(&format!("wrote {}: {summary}\n", path.display()));
         }
-        None => print!("{text}"),
+        None => super::out(&text),
     }
     Ok(())
 }

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 /// Arguments of `simulate`.
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Scene file (FOLD, or a scene JSON).
+    /// The scene: a FOLD file (or a scene JSON).
     pub scene: PathBuf,
     /// Stop time in s (default: the scene's stop time).
     #[arg(long)]
@@ -30,6 +30,9 @@ pub struct SimulateArgs {
     /// the model's mesh, per-facet strain energy and per-crease fold angle.
     #[arg(long, value_name = "DIR")]
     pub pvd: Option<PathBuf>,
+    /// How a FOLD scene is read (--frame, --size, --unit, --f-edges).
+    #[command(flatten)]
+    pub read: super::SceneOptions,
 }
 
 /// Input signals: times and, per model input index, values.
@@ -122,7 +125,11 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
 
 /// Run `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<(), String> {
-    let scene = super::build::load_scene(&args.scene)?;
+    let loaded = super::load_scene(&args.scene, &args.read)?;
+    for n in &loaded.notes {
+        super::err(&format!("{n}\n"));
+    }
+    let scene = loaded.scene;
     let stop = args.stop_time.unwrap_or(scene.solver.stop_time);
     if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
         return Err("--step and --stop-time must be positive numbers".into());
@@ -182,10 +189,17 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     let mut total = crate::model::StepReport::default();
     for k in 1..=n {
         let t = (k as f64 * args.step).min(stop);
-        for (i, v) in signals.at(t) {
-            model.set_input(i, v).map_err(|e| e.to_string())?;
+        let t0 = model.time();
+        let h = t - t0;
+        // The table's value at the step start and its slope over the step
+        // (the FMU's held input plus derivative): the piecewise linear
+        // signal itself, never a staircase.
+        for ((i, v0), (_, v1)) in signals.at(t0).into_iter().zip(signals.at(t)) {
+            model.set_input(i, v0).map_err(|e| e.to_string())?;
+            model
+                .set_input_derivative(i, 1, (v1 - v0) / h)
+                .map_err(|e| e.to_string())?;
         }
-        let h = t - model.time();
         let r = model.advance(h).map_err(|e| e.to_string())?;
         total.accumulate(&r);
         let steps = total.steps;
@@ -194,25 +208,25 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             s.write(&model)?;
         }
         if last_report.elapsed().as_secs_f64() > 2.0 {
-            eprintln!(
-                "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps",
+            super::err(&format!(
+                "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps\n",
                 100.0 * t / stop
-            );
+            ));
             last_report = std::time::Instant::now();
         }
     }
     out.flush().map_err(io)?;
     if let Some(s) = &series {
-        eprintln!("ParaView series -> {}", s.finish()?.display());
+        super::err(&format!("ParaView series -> {}\n", s.finish()?.display()));
     }
-    eprintln!(
-        "simulated {stop} s in {:.2} s of CPU wall time -> {}",
+    super::err(&format!(
+        "simulated {stop} s in {:.2} s (wall-clock time) -> {}\n",
         started.elapsed().as_secs_f64(),
         args.output.display()
-    );
-    eprintln!(
+    ));
+    super::err(&format!(
         "{} internal steps ({} rejected, smallest {:.3e} s), {} Newton iterations, \
-         {} factorizations; assembly {:.2} s, factorization {:.2} s, solves {:.2} s",
+         {} factorizations; of that time assembly {:.2} s, factorization {:.2} s, solves {:.2} s\n",
         total.steps,
         total.rejected,
         total.min_step,
@@ -221,6 +235,6 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         total.assembly_time,
         total.factor_time,
         total.solve_time
-    );
+    ));
     Ok(())
 }

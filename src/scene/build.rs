@@ -1,24 +1,35 @@
 //! Building and validating a [`Scene`] from one FOLD frame.
 //!
-//! In order: the `ancf:` keys ([`super::keys`]); the faces (indices,
-//! repeated vertices); the reference coordinates (unit, flatness); face
-//! areas and orientation; edge sharing (non-manifold, overlapping faces);
-//! the edges with their assignments and fold angles; the triangulation of
-//! polygons ([`super::triangulate`]); the [`Mesh`]; and finally the physics
-//! checked against the mesh (crease and vertex indices, overlaps). Every
-//! error names the key and index; notes that do not stop the scene are
-//! returned as warnings.
+//! In order: the `ancf:` keys ([`super::keys`]); the size budget; the
+//! listed edges; the faces (given, or traced from the edges by
+//! [`super::planar`]); the reference coordinates (flatness, orientation:
+//! a sheet whose faces are all clockwise is mirrored, a mix of orientations
+//! is a folded state); the size (unit or scale, see [`DEFAULT_SIZE`]); face
+//! areas; edge sharing (non-manifold, overlapping faces); the edges with
+//! their assignments and fold angles; vertex splitting along cuts and where
+//! sheets touch; the triangulation of polygons ([`super::triangulate`]);
+//! the [`Mesh`]; and finally the physics checked against the mesh (crease
+//! and vertex indices, overlaps). Every error names the key and index and
+//! says what to do; notes that do not stop the scene are returned as
+//! warnings, and what the loader decided (unit, F edges, traced faces,
+//! split vertices) as notes.
 //!
-//! Index conventions: FOLD vertex `i` is mesh vertex `i`; FOLD edge `e` is
-//! mesh edge `e` with `fold_edge == Some(e)`; triangulation diagonals and
-//! face sides missing from `edges_vertices` come after them, with
-//! `fold_edge == None`.
+//! Index conventions: FOLD vertex `i` is mesh vertex `i`; copies of split
+//! vertices come after the FOLD vertices. FOLD edge `e` is mesh edge `e`
+//! with `fold_edge == Some(e)`; the second side of a cut edge, triangulation
+//! diagonals and face sides missing from `edges_vertices` come after them
+//! (the cut side tagged with its FOLD edge, the others with `None`).
+//!
+//! Everything here is linear or near-linear in the size of the pattern
+//! (hash maps keyed by vertex pairs, sorting), so that patterns up to the
+//! [`MAX_FACETS`] budget load in seconds.
 
 use super::error::SceneError;
 use super::fold::{Assignment, FoldFile, UNITS, unit_scale};
 use super::keys::{self, EdgeSelection};
+use super::planar::{self, SideAt, shoelace};
 use super::triangulate::ear_clip;
-use super::{ActuatorMode, Damping, Scene, Support, refine};
+use super::{ActuatorMode, Damping, FlatEdges, LoadOptions, Loaded, Scene, Support, refine};
 use crate::mesh::{Edge, EdgeKind, Mesh, MeshError};
 use nalgebra::{Vector2, Vector3};
 use std::collections::HashMap;
@@ -32,9 +43,46 @@ pub const MIN_EXTENT: f64 = 1e-9;
 /// Largest sheet size, and largest distance from the origin (m).
 pub const MAX_EXTENT: f64 = 1e6;
 
+/// The length (m) of the longest side of the bounding box of a sheet
+/// whose file gives no physical unit (no `frame_unit`, or FOLD's default
+/// `unit`): such a sheet is scaled to it, a 10 cm sheet of paper.
+pub const DEFAULT_SIZE: f64 = 0.1;
+
+/// The size budget: the most facets (triangles, after triangulation and
+/// refinement) a scene may have. Setting a scene up takes about 27 kB of
+/// memory per facet and time-stepping it about 75 kB per facet (the sparse
+/// Cholesky factor; it grows faster than linearly), so that a scene at the
+/// budget needs about 16 GB to simulate (docs/scenes.md, "Size budget").
+/// Checked before the large allocations: on the face count right after
+/// reading the file, on the triangle count after triangulation, by
+/// refinement, and by [`crate::model::Model::new`].
+pub const MAX_FACETS: usize = 200_000;
+
+/// The error above [`MAX_FACETS`]; `what` says where the count comes from.
+pub fn over_budget(key: &str, facets: usize, what: &str) -> SceneError {
+    invalid(
+        key,
+        format!(
+            "{what} {facets} facets (triangles); the size budget is {MAX_FACETS} facets (about \
+             16 GB of memory to simulate; docs/scenes.md, \"Size budget\"): use a coarser \
+             pattern, or simulate a part of it"
+        ),
+    )
+}
+
 /// Relative area (against the mean squared side length) below which a face
 /// is degenerate; the same threshold as [`Mesh::new`].
 const DEGENERATE_AREA: f64 = 1e-12;
+
+/// The phrase that marks an error as "this frame is a folded state": the
+/// loader then names the frames of the file that are crease patterns.
+const FOLDED_STATE: &str = "a folded state";
+
+/// True for the message of an error that says the frame read is a folded
+/// state rather than a crease pattern.
+pub(crate) fn is_folded_state(message: &str) -> bool {
+    message.contains(FOLDED_STATE)
+}
 
 fn invalid(key: impl Into<String>, message: impl Into<String>) -> SceneError {
     SceneError::invalid(key, message)
@@ -44,36 +92,76 @@ fn invalid(key: impl Into<String>, message: impl Into<String>) -> SceneError {
 /// file stem) used when `ancf:name` is absent; then `file_title`,
 /// `frame_title`, and `origami`. Returns the scene and the warnings.
 pub fn from_fold(fold: &FoldFile, name: Option<&str>) -> Result<(Scene, Vec<String>), SceneError> {
+    let options = LoadOptions {
+        name: name.map(str::to_string),
+        ..Default::default()
+    };
+    from_fold_with(fold, &options).map(|l| (l.scene, l.warnings))
+}
+
+/// True for a file written by Origami Simulator (its `file_creator`), whose
+/// F edges are triangulation lines.
+pub fn is_origami_simulator_export(fold: &FoldFile) -> bool {
+    fold.file_creator
+        .as_deref()
+        .is_some_and(|c| c.trim_start().starts_with("Origami Simulator"))
+}
+
+/// [`from_fold`] with the options of [`LoadOptions`] (`frame` is not used
+/// here: the frame is already picked), returning the loader's notes too.
+pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, SceneError> {
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     let physics = keys::parse(&fold.ancf, &mut warnings)?;
 
     let nv = fold.vertices_coords.len();
     if nv == 0 {
         return Err(invalid("vertices_coords", "is empty"));
     }
-    let faces = &fold.faces_vertices;
-    if faces.is_empty() {
-        return Err(invalid(
+    // The size budget, before anything large is allocated.
+    let estimate: usize = if fold.faces_vertices.is_empty() {
+        2 * nv // a planar triangulation has about two triangles per vertex
+    } else {
+        fold.faces_vertices
+            .iter()
+            .map(|f| f.len().saturating_sub(2))
+            .sum()
+    };
+    if estimate > MAX_FACETS {
+        return Err(over_budget(
             "faces_vertices",
-            "is empty; a scene needs at least one face",
+            estimate,
+            "the pattern would triangulate into about",
         ));
     }
-    check_faces(faces, nv)?;
+    let listed = read_edges(fold, nv, &mut warnings)?;
 
-    let scale = match &fold.frame_unit {
-        None => 1.0,
-        Some(u) => unit_scale(u).ok_or_else(|| {
-            invalid(
-                "frame_unit",
-                format!(
-                    "unknown unit \"{u}\"{}; expected one of {}",
-                    super::error::suggestion(u, UNITS),
-                    UNITS.join(", ")
-                ),
-            )
-        })?,
-    };
-    let coords = reference_coords(&fold.vertices_coords, faces, scale)?;
+    let f_mode = options.f_edges.or(physics.import.f_edges).unwrap_or(
+        if is_origami_simulator_export(fold) {
+            FlatEdges::Smooth
+        } else {
+            FlatEdges::Crease
+        },
+    );
+
+    // The flat reference in metres, and the faces (given, or traced).
+    let traced = fold.faces_vertices.is_empty();
+    if traced && listed.is_none() {
+        return Err(invalid(
+            "faces_vertices",
+            "is empty and there is no edges_vertices to trace faces from; a scene needs at \
+             least one face",
+        ));
+    }
+    if !traced {
+        check_faces(&fold.faces_vertices, nv)?;
+    }
+    let given = (!traced).then_some(&fold.faces_vertices[..]);
+    let mut coords = reference_coords(&fold.vertices_coords, given, fold)?;
+    let (scale, size_note) = choose_scale(fold, options, &physics.import, &coords)?;
+    for c in &mut coords {
+        *c *= scale;
+    }
     let (lo, hi) = bbox(&coords);
     let extent = (hi - lo).norm();
     let far = coords.iter().map(|c| c.amax()).fold(0.0, f64::max);
@@ -81,24 +169,73 @@ pub fn from_fold(fold: &FoldFile, name: Option<&str>) -> Result<(Scene, Vec<Stri
         return Err(invalid(
             "vertices_coords",
             format!(
-                "the sheet is {extent:.3e} m across and reaches {far:.3e} m from the origin;                  the model handles {MIN_EXTENT:e} m to {MAX_EXTENT:e} m (check frame_unit)"
+                "the sheet is {extent:.3e} m across and reaches {far:.3e} m from the origin; the \
+                 model handles {MIN_EXTENT:e} m to {MAX_EXTENT:e} m (check frame_unit, --unit or \
+                 --size)"
             ),
         ));
     }
-    let unit_given = matches!(fold.frame_unit.as_deref(), Some(u) if u != "unit");
-    if !unit_given && extent > 10.0 {
-        warnings.push(format!(
-            "frame_unit: the sheet is {extent:.3} m across; without frame_unit (or with \"unit\") \
-             coordinates are read as metres; set frame_unit (e.g. \"mm\") if they are not"
+    let mut faces: Vec<Vec<usize>> = match &listed {
+        Some(l) if traced => {
+            let boundary: Vec<bool> = l
+                .assignment
+                .iter()
+                .map(|&a| a == Assignment::Boundary)
+                .collect();
+            let faces = planar::trace_faces(&coords, &l.v, &boundary)?;
+            if faces.is_empty() {
+                return Err(invalid(
+                    "edges_vertices",
+                    "no face can be traced from the edges: they enclose no area (a scene \
+                     needs at least one face)",
+                ));
+            }
+            notes.push(format!(
+                "faces: faces_vertices is missing; {} faces were traced from the edges (planar \
+                 graph)",
+                faces.len()
+            ));
+            faces
+        }
+        _ => fold.faces_vertices.clone(),
+    };
+    check_areas(&faces, &coords)?;
+    orient(&mut coords, &faces, fold, &mut warnings)?;
+    notes.push(size_note);
+    let slits = faces.iter().filter(|f| has_slit(f)).count();
+    if slits > 0 {
+        notes.push(format!(
+            "slits: {slits} face(s) run along an edge and back (a crease or cut ending \
+             inside the face); such a crease folds and stops in the paper, such a cut opens"
         ));
     }
 
-    check_areas(faces, &coords)?;
-    let sides = Sides::new(faces)?;
-    let edges = fold_edges(fold, &sides, &coords, &mut warnings)?;
+    let sides = Sides::new(&faces)?;
+    let edges = fold_edges(listed, &sides, f_mode, &mut warnings)?;
+    let n_flat = (0..edges.v.len())
+        .filter(|&e| edges.assignment[e] == Assignment::Flat && edges.kind[e] != EdgeKind::Boundary)
+        .count();
+    if n_flat > 0 {
+        notes.push(match f_mode {
+            FlatEdges::Crease => format!(
+                "F edges: {n_flat} read as creases with target 0 unless edges_foldAngle gives \
+                 one (FOLD: a flat fold line); --f-edges smooth or ancf:import.f_edges reads \
+                 them as triangulation lines"
+            ),
+            FlatEdges::Smooth => format!(
+                "F edges: {n_flat} read as smooth edges (triangulation lines{}); --f-edges \
+                 crease reads them as creases",
+                if options.f_edges.or(physics.import.f_edges).is_none() {
+                    ", as Origami Simulator writes them"
+                } else {
+                    ""
+                }
+            ),
+        });
+    }
 
     let mut used = vec![false; nv];
-    for face in faces {
+    for face in &faces {
         for &v in face {
             used[v] = true;
         }
@@ -110,20 +247,8 @@ pub fn from_fold(fold: &FoldFile, name: Option<&str>) -> Result<(Scene, Vec<Stri
         ));
     }
 
-    let mut triangles = Vec::new();
-    let mut tri_face = Vec::new();
-    for (f, face) in faces.iter().enumerate() {
-        let tris = ear_clip(face, &coords).ok_or_else(|| {
-            invalid(
-                format!("faces_vertices[{f}]"),
-                "is not a simple polygon (it cannot be triangulated); check it for self-intersections",
-            )
-        })?;
-        tri_face.extend(std::iter::repeat_n(f, tris.len()));
-        triangles.extend(tris);
-    }
-
-    let listed: Vec<Edge> = (0..edges.v.len())
+    // Cuts and vertices where sheets touch: split into copies.
+    let mut mesh_edges: Vec<Edge> = (0..edges.v.len())
         .map(|e| Edge {
             v: edges.v[e],
             kind: edges.kind[e],
@@ -131,19 +256,62 @@ pub fn from_fold(fold: &FoldFile, name: Option<&str>) -> Result<(Scene, Vec<Stri
             fold_edge: Some(e),
         })
         .collect();
-    let mesh = Mesh::new(coords, triangles, listed).map_err(|e| translate(e, &tri_face))?;
+    let copies = split(
+        &mut faces,
+        &mut coords,
+        &sides,
+        &edges,
+        &mut mesh_edges,
+        &mut warnings,
+        &mut notes,
+    )?;
+
+    let mut triangles = Vec::new();
+    let mut tri_face = Vec::new();
+    for (f, face) in faces.iter().enumerate() {
+        let tris = ear_clip(face, &coords).ok_or_else(|| {
+            invalid(
+                format!("faces_vertices[{f}]"),
+                "is not a simple polygon (it cannot be triangulated); check it for \
+                 self-intersections",
+            )
+        })?;
+        tri_face.extend(std::iter::repeat_n(f, tris.len()));
+        triangles.extend(tris);
+    }
+    if triangles.len() > MAX_FACETS {
+        return Err(over_budget(
+            "faces_vertices",
+            triangles.len(),
+            "the pattern triangulates into",
+        ));
+    }
+    let refined = triangles
+        .len()
+        .saturating_mul(4usize.saturating_pow(physics.refine as u32));
+    if refined > MAX_FACETS {
+        return Err(over_budget(
+            "ancf:refine",
+            refined,
+            &format!("{} level(s) of refinement would make", physics.refine),
+        ));
+    }
+
+    let mesh = Mesh::new(coords, triangles, mesh_edges).map_err(|e| translate(e, &tri_face))?;
 
     let scene_name = physics
         .name
         .clone()
-        .or(name.map(str::to_string))
+        .or(options.name.clone())
         .or(fold.file_title.clone())
         .or(fold.frame_title.clone())
         .unwrap_or_else(|| "origami".to_string());
     let mut scene = Scene::with_defaults(&scene_name, mesh);
     scene.fold_vertex_count = nv;
     scene.fold_edge_count = edges.v.len();
-    apply_physics(&mut scene, physics.clone(), &edges, &mut warnings)?;
+    // with_defaults drives every mesh crease: the FOLD creases (mesh edges
+    // after the FOLD edges are diagonals and cut sides, never creases).
+    apply_physics(&mut scene, physics.clone(), &edges, &copies, &mut warnings)?;
 
     // Thin-shell sanity: thickness against the shortest edge.
     let shortest = (0..scene.mesh.edges.len())
@@ -160,7 +328,11 @@ pub fn from_fold(fold: &FoldFile, name: Option<&str>) -> Result<(Scene, Vec<Stri
     if physics.refine > 0 {
         scene = refine::refine(&scene, physics.refine)?;
     }
-    Ok((scene, warnings))
+    Ok(Loaded {
+        scene,
+        warnings,
+        notes,
+    })
 }
 
 fn bbox(coords: &[Vector2<f64>]) -> (Vector2<f64>, Vector2<f64>) {
@@ -171,6 +343,119 @@ fn bbox(coords: &[Vector2<f64>]) -> (Vector2<f64>, Vector2<f64>) {
         hi = hi.sup(c);
     }
     (lo, hi)
+}
+
+/// A number for a note: four significant digits.
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e4).contains(&x.abs()) {
+        let s = format!("{x:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+/// The factor from file coordinates to metres, and the note that says how
+/// it was chosen: `--size`/`--unit` ([`LoadOptions`]), else
+/// `ancf:import.size`/`unit`, else a real `frame_unit`, else
+/// [`DEFAULT_SIZE`] on the longest side.
+fn choose_scale(
+    fold: &FoldFile,
+    options: &LoadOptions,
+    import: &keys::Import,
+    coords: &[Vector2<f64>],
+) -> Result<(f64, String), SceneError> {
+    let (lo, hi) = bbox(coords);
+    let side = (hi - lo).amax();
+    if !(side > 0.0 && side.is_finite()) {
+        return Err(invalid(
+            "vertices_coords",
+            "the sheet has no extent (all vertices at one point)",
+        ));
+    }
+    if options.size.is_some() && options.unit.is_some() {
+        return Err(invalid("--size", "give either a size or a unit, not both"));
+    }
+    if let Some(s) = options.size {
+        if !(s > 0.0 && s.is_finite()) {
+            return Err(invalid(
+                "--size",
+                format!("{s} is not a positive length (m)"),
+            ));
+        }
+    }
+    let dims = |k: f64| {
+        format!(
+            "{} m x {} m",
+            short(k * (hi.x - lo.x)),
+            short(k * (hi.y - lo.y))
+        )
+    };
+    let by_size = |s: f64, why: String| -> (f64, String) {
+        let k = s / side;
+        (
+            k,
+            format!(
+                "size: {}: {why} scales the longest side to {} m (1 file unit = {} m)",
+                dims(k),
+                short(s),
+                short(k)
+            ),
+        )
+    };
+    let by_unit = |u: &str, why: String| -> (f64, String) {
+        let k = unit_scale(u).expect("checked unit");
+        (
+            k,
+            format!("size: {}: {why} (1 file unit = {} m)", dims(k), short(k)),
+        )
+    };
+    if let Some(s) = options.size {
+        return Ok(by_size(s, format!("--size {}", short(s))));
+    }
+    if let Some(u) = &options.unit {
+        let u = keys::check_unit("--unit", u)?;
+        return Ok(by_unit(&u, format!("--unit {u}")));
+    }
+    if let Some(s) = import.size {
+        return Ok(by_size(s, format!("ancf:import.size {}", short(s))));
+    }
+    if let Some(u) = &import.unit {
+        return Ok(by_unit(u, format!("ancf:import.unit \"{u}\"")));
+    }
+    match fold.frame_unit.as_deref() {
+        Some("unit") | None => {
+            let (k, note) = by_size(
+                DEFAULT_SIZE,
+                format!(
+                    "{} (no physical unit): the default size",
+                    if fold.frame_unit.is_some() {
+                        "frame_unit \"unit\""
+                    } else {
+                        "no frame_unit"
+                    }
+                ),
+            );
+            Ok((
+                k,
+                format!("{note}; --size, --unit or ancf:import change it"),
+            ))
+        }
+        Some(u) => {
+            if unit_scale(u).is_none() {
+                return Err(invalid(
+                    "frame_unit",
+                    format!(
+                        "unknown unit \"{u}\"{}; expected one of {} (or give --unit or --size)",
+                        super::error::suggestion(u, UNITS),
+                        UNITS.join(", ")
+                    ),
+                ));
+            }
+            Ok(by_unit(u, format!("frame_unit \"{u}\"")))
+        }
+    }
 }
 
 /// Indices in range, at least three vertices, no repeated vertex.
@@ -194,20 +479,41 @@ fn check_faces(faces: &[Vec<usize>], nv: usize) -> Result<(), SceneError> {
         let mut sorted = face.clone();
         sorted.sort_unstable();
         if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-            return Err(invalid(key, format!("repeats vertex {}", w[0])));
+            // Allowed where the boundary runs out along an edge and back (a
+            // crease or cut ending inside the face: a slit).
+            if !has_slit(face) {
+                return Err(invalid(
+                    key,
+                    format!(
+                        "repeats vertex {} without a slit (no side of the face is run along \
+                         both ways): the face touches itself there; split it into simple \
+                         polygons at that vertex",
+                        w[0]
+                    ),
+                ));
+            }
         }
     }
     Ok(())
 }
 
-/// The flat reference coordinates in metres (see the module docs of
+/// True when a face runs along one of its sides in both directions (a
+/// crease or cut that ends inside the face: a slit).
+fn has_slit(face: &[usize]) -> bool {
+    let n = face.len();
+    let sides: std::collections::HashSet<(usize, usize)> =
+        (0..n).map(|k| (face[k], face[(k + 1) % n])).collect();
+    (0..n).any(|k| sides.contains(&(face[(k + 1) % n], face[k])))
+}
+
+/// The flat reference coordinates in file units (see the module docs of
 /// [`crate::scene`]): 2D as given; 3D with one z as x, y; otherwise the
 /// vertices must be coplanar and are expressed in their plane, oriented by
-/// the faces' winding.
+/// the faces' winding (without faces: seen from +z, else +y, else +x).
 fn reference_coords(
     raw: &[Vec<f64>],
-    faces: &[Vec<usize>],
-    scale: f64,
+    faces: Option<&[Vec<usize>]>,
+    fold: &FoldFile,
 ) -> Result<Vec<Vector2<f64>>, SceneError> {
     let dim = raw[0].len();
     for (i, p) in raw.iter().enumerate() {
@@ -228,10 +534,7 @@ fn reference_coords(
         }
     }
     if dim == 2 || raw.iter().all(|p| p[2] == raw[0][2]) {
-        return Ok(raw
-            .iter()
-            .map(|p| Vector2::new(p[0] * scale, p[1] * scale))
-            .collect());
+        return Ok(raw.iter().map(|p| Vector2::new(p[0], p[1])).collect());
     }
     let pts: Vec<Vector3<f64>> = raw.iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect();
     let mut lo = pts[0];
@@ -242,26 +545,58 @@ fn reference_coords(
     }
     let extent = (hi - lo).norm();
     let centroid = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
-    // Newell's area vector of all faces: the normal of their best-fit plane,
-    // pointing to the side from which the faces are counter-clockwise.
-    let mut n = Vector3::zeros();
-    for face in faces {
-        for k in 0..face.len() {
-            let a = pts[face[k]] - centroid;
-            let b = pts[face[(k + 1) % face.len()]] - centroid;
-            n += a.cross(&b);
+    let mut n = match faces {
+        Some(faces) => {
+            // Newell's area vector of all faces: the normal of their best-fit
+            // plane, pointing to the side from which the faces are
+            // counter-clockwise.
+            let mut n = Vector3::zeros();
+            for face in faces {
+                for k in 0..face.len() {
+                    let a = pts[face[k]] - centroid;
+                    let b = pts[face[(k + 1) % face.len()]] - centroid;
+                    n += a.cross(&b);
+                }
+            }
+            if n.norm() <= 1e-12 * extent * extent {
+                return Err(invalid(
+                    "vertices_coords",
+                    format!(
+                        "the faces have no common plane (their total area is zero): this frame \
+                         is {FOLDED_STATE} or not a sheet; the reference must be a flat crease \
+                         pattern"
+                    ),
+                ));
+            }
+            n.normalize()
         }
-    }
-    if n.norm() <= 1e-12 * extent * extent {
-        return Err(invalid(
-            "vertices_coords",
-            "the faces have no common plane (their total area is zero); \
-             the reference must be a flat crease pattern",
-        ));
-    }
-    let mut n = n.normalize();
+        None => {
+            // No faces yet: the normal of the best-fit plane (the smallest
+            // principal axis), seen from +z (else +y, else +x).
+            let mut m = nalgebra::Matrix3::zeros();
+            for p in &pts {
+                let d = p - centroid;
+                m += d * d.transpose();
+            }
+            let eig = m.symmetric_eigen();
+            let k = eig.eigenvalues.imin();
+            let mut n: Vector3<f64> = eig.eigenvectors.column(k).into_owned();
+            let flip = if n.z.abs() > 1e-9 {
+                n.z < 0.0
+            } else if n.y.abs() > 1e-9 {
+                n.y < 0.0
+            } else {
+                n.x < 0.0
+            };
+            if flip {
+                n = -n;
+            }
+            n
+        }
+    };
     if n.z.abs() > 1.0 - 1e-9 {
-        // (Nearly) the xy plane: keep +z up so clockwise faces are reported.
+        // (Nearly) the xy plane: keep +z up; clockwise faces are then
+        // handled (and reported) like those of a 2D file.
         n = Vector3::z();
     }
     let (worst, dist) = pts
@@ -270,13 +605,18 @@ fn reference_coords(
         .enumerate()
         .fold((0, 0.0), |acc, (i, d)| if d > acc.1 { (i, d) } else { acc });
     if dist > COPLANAR_TOLERANCE * extent {
+        let hint = if fold.frame_classes.iter().any(|c| c == "foldedForm") {
+            " (its frame_classes says foldedForm)"
+        } else {
+            ""
+        };
         return Err(invalid(
             format!("vertices_coords[{worst}]"),
             format!(
-                "the reference must be a flat crease pattern, but this vertex is {:.3e} m off \
-                 the plane of the others (is this frame a folded state? use the unfolded \
-                 crease pattern)",
-                dist * scale
+                "this vertex is {:.3e} of the sheet size off the plane of the others: this frame \
+                 is {FOLDED_STATE}{hint}, not a flat crease pattern; the model starts from the \
+                 flat, unfolded crease pattern",
+                dist / extent
             ),
         ));
     }
@@ -288,20 +628,11 @@ fn reference_coords(
     let v = n.cross(&u);
     Ok(pts
         .iter()
-        .map(|p| Vector2::new(p.dot(&u) * scale, p.dot(&v) * scale))
+        .map(|p| Vector2::new(p.dot(&u), p.dot(&v)))
         .collect())
 }
 
-fn shoelace(face: &[usize], c: &[Vector2<f64>]) -> f64 {
-    let mut a = 0.0;
-    for k in 0..face.len() {
-        let (p, q) = (c[face[k]], c[face[(k + 1) % face.len()]]);
-        a += p.perp(&q);
-    }
-    0.5 * a
-}
-
-/// No zero-length side, no zero-area face, all counter-clockwise.
+/// No zero-length side, no zero-area face.
 fn check_areas(faces: &[Vec<usize>], c: &[Vector2<f64>]) -> Result<(), SceneError> {
     let mut sum = 0.0;
     let mut count = 0usize;
@@ -322,43 +653,84 @@ fn check_areas(faces: &[Vec<usize>], c: &[Vector2<f64>]) -> Result<(), SceneErro
                 ));
             }
         }
-    }
-    let areas: Vec<f64> = faces.iter().map(|f| shoelace(f, c)).collect();
-    let all_cw = areas.iter().all(|&a| a < 0.0);
-    for (f, &area) in areas.iter().enumerate() {
-        let key = format!("faces_vertices[{f}]");
+        let area = shoelace(face, c);
         if area.abs() <= DEGENERATE_AREA * mean_len2 {
             return Err(invalid(
-                key,
-                format!("has zero area ({area:.3e} m^2): its vertices are collinear"),
-            ));
-        }
-        if area < 0.0 {
-            let hint = if all_cw {
-                " (every face is clockwise: the file may use a y-down convention; \
-                 reverse the vertex order of every face)"
-            } else {
-                ""
-            };
-            return Err(invalid(
-                key,
-                format!(
-                    "is clockwise (inverted); faces must be counter-clockwise seen from +z{hint}"
-                ),
+                format!("faces_vertices[{f}]"),
+                format!("has zero area ({area:.3e}): its vertices are collinear"),
             ));
         }
     }
     Ok(())
 }
 
-/// Face sides, keyed by sorted vertex pair: which faces have them, and in
-/// which direction.
+/// Faces counter-clockwise seen from +z: a sheet whose faces are all
+/// clockwise (drawn with y pointing down) is mirrored in y, with a warning,
+/// so that it is seen from the side from which its faces are
+/// counter-clockwise (the rule for 3D coordinates too); a mix of clockwise
+/// and counter-clockwise faces is a flat-folded state (or one wrongly
+/// ordered face) and an error.
+fn orient(
+    coords: &mut [Vector2<f64>],
+    faces: &[Vec<usize>],
+    fold: &FoldFile,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let cw: Vec<usize> = (0..faces.len())
+        .filter(|&f| shoelace(&faces[f], coords) < 0.0)
+        .collect();
+    if cw.is_empty() {
+        return Ok(());
+    }
+    if cw.len() == faces.len() {
+        for c in coords.iter_mut() {
+            c.y = 0.0 - c.y; // (not -0.0)
+        }
+        warnings.push(
+            "faces_vertices: every face is clockwise seen from +z (the file draws with y \
+             pointing down): the sheet is read mirrored in y (y -> -y), seen from the side from \
+             which its faces are counter-clockwise, so that its valleys fold towards +z"
+                .to_string(),
+        );
+        return Ok(());
+    }
+    let f = cw[0];
+    let folded_hint = fold.frame_classes.iter().any(|c| c == "foldedForm");
+    if cw.len() >= 2 || folded_hint {
+        return Err(invalid(
+            format!("faces_vertices[{f}]"),
+            format!(
+                "is clockwise while {} of the {} faces are counter-clockwise: faces lie flipped \
+                 over others, so this frame is {FOLDED_STATE} (flat-folded){}, not a crease \
+                 pattern; the model starts from the flat, unfolded crease pattern, whose faces \
+                 are all counter-clockwise",
+                faces.len() - cw.len(),
+                faces.len(),
+                if folded_hint {
+                    ", as its frame_classes foldedForm says"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    Err(invalid(
+        format!("faces_vertices[{f}]"),
+        "is clockwise (inverted) while every other face is counter-clockwise; faces must be \
+         counter-clockwise seen from +z: reverse its vertex order",
+    ))
+}
+
+/// Where a side occurs: face, position in it, and whether it runs from the
+/// smaller vertex index to the larger.
+type Occurrence = (usize, usize, bool);
+
+/// Face sides, keyed by sorted vertex pair: where they occur (face,
+/// position) and in which direction.
 struct Sides {
-    map: HashMap<(usize, usize), Vec<(usize, bool)>>,
+    map: HashMap<(usize, usize), Vec<Occurrence>>,
     /// Keys in the order of first appearance (face by face).
     order: Vec<(usize, usize)>,
-    /// For each key, the direction of its first appearance.
-    first: HashMap<(usize, usize), [usize; 2]>,
 }
 
 fn key(a: usize, b: usize) -> (usize, usize) {
@@ -367,18 +739,17 @@ fn key(a: usize, b: usize) -> (usize, usize) {
 
 impl Sides {
     fn new(faces: &[Vec<usize>]) -> Result<Sides, SceneError> {
-        let mut map: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
-        let mut order = Vec::new();
-        let mut first = HashMap::new();
+        let n: usize = faces.iter().map(Vec::len).sum();
+        let mut map: HashMap<(usize, usize), Vec<Occurrence>> = HashMap::with_capacity(n);
+        let mut order = Vec::with_capacity(n / 2 + 1);
         for (f, face) in faces.iter().enumerate() {
             for k in 0..face.len() {
                 let (a, b) = (face[k], face[(k + 1) % face.len()]);
                 let list = map.entry(key(a, b)).or_insert_with(|| {
                     order.push(key(a, b));
-                    first.insert(key(a, b), [a, b]);
                     Vec::new()
                 });
-                list.push((f, a < b));
+                list.push((f, k, a < b));
             }
         }
         for k in &order {
@@ -394,7 +765,7 @@ impl Sides {
                     ),
                 ));
             }
-            if list.len() == 2 && list[0].1 == list[1].1 {
+            if list.len() == 2 && list[0].2 == list[1].2 {
                 return Err(invalid(
                     format!("faces_vertices[{}]", list[1].0),
                     format!(
@@ -405,7 +776,7 @@ impl Sides {
                 ));
             }
         }
-        Ok(Sides { map, order, first })
+        Ok(Sides { map, order })
     }
     fn count(&self, a: usize, b: usize) -> usize {
         self.map.get(&key(a, b)).map_or(0, Vec::len)
@@ -415,6 +786,104 @@ impl Sides {
             .get(&key(a, b))
             .map_or(vec![], |l| l.iter().map(|x| x.0).collect())
     }
+    /// The occurrences (face, position) of side a-b.
+    fn at(&self, a: usize, b: usize) -> Vec<SideAt> {
+        self.map
+            .get(&key(a, b))
+            .map_or(vec![], |l| l.iter().map(|x| (x.0, x.1)).collect())
+    }
+}
+
+/// The edges as listed in the file, checked: indices, loops, repeats,
+/// array lengths.
+struct Listed {
+    v: Vec<[usize; 2]>,
+    assignment: Vec<Assignment>,
+    angles: Vec<Option<f64>>,
+}
+
+fn read_edges(
+    fold: &FoldFile,
+    nv: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Listed>, SceneError> {
+    let Some(ev) = &fold.edges_vertices else {
+        if fold.edges_assignment.is_some() || fold.edges_fold_angle.is_some() {
+            return Err(invalid(
+                "edges_vertices",
+                "is missing, but edges_assignment or edges_foldAngle is given; they refer to \
+                 edges_vertices",
+            ));
+        }
+        return Ok(None);
+    };
+    let ne = ev.len();
+    let mut seen: HashMap<(usize, usize), usize> = HashMap::with_capacity(ne);
+    for (e, &[a, b]) in ev.iter().enumerate() {
+        for (j, x) in [a, b].into_iter().enumerate() {
+            if x >= nv {
+                return Err(invalid(
+                    format!("edges_vertices[{e}][{j}]"),
+                    format!("vertex {x} does not exist (there are {nv} vertices)"),
+                ));
+            }
+        }
+        if a == b {
+            return Err(invalid(
+                format!("edges_vertices[{e}]"),
+                format!("both ends are vertex {a}: an edge needs two vertices; remove it"),
+            ));
+        }
+        if let Some(first) = seen.insert(key(a, b), e) {
+            return Err(invalid(
+                format!("edges_vertices[{e}]"),
+                format!(
+                    "repeats edges_vertices[{first}] (vertices {a}-{b}); an edge may be listed \
+                     once: remove one of them"
+                ),
+            ));
+        }
+    }
+    let assignment = match &fold.edges_assignment {
+        Some(a) if a.len() != ne => {
+            return Err(invalid(
+                "edges_assignment",
+                format!(
+                    "has {} entries but edges_vertices has {ne}; the arrays must have the same \
+                     length",
+                    a.len()
+                ),
+            ));
+        }
+        Some(a) => a.clone(),
+        None => {
+            warnings.push(
+                "edges_assignment is missing: interior edges are read as U (creases with the \
+                 angle of edges_foldAngle, else 0), boundary edges as B"
+                    .to_string(),
+            );
+            vec![Assignment::Unassigned; ne]
+        }
+    };
+    let angles = match &fold.edges_fold_angle {
+        Some(a) if a.len() != ne => {
+            return Err(invalid(
+                "edges_foldAngle",
+                format!(
+                    "has {} entries but edges_vertices has {ne}; the arrays must have the same \
+                     length",
+                    a.len()
+                ),
+            ));
+        }
+        Some(a) => a.clone(),
+        None => vec![None; ne],
+    };
+    Ok(Some(Listed {
+        v: ev.clone(),
+        assignment,
+        angles,
+    }))
 }
 
 /// The FOLD edges of the scene, with their mechanical kinds and targets.
@@ -427,85 +896,30 @@ pub(crate) struct FoldEdges {
 }
 
 fn fold_edges(
-    fold: &FoldFile,
+    listed: Option<Listed>,
     sides: &Sides,
-    coords: &[Vector2<f64>],
+    f_mode: FlatEdges,
     warnings: &mut Vec<String>,
 ) -> Result<FoldEdges, SceneError> {
-    let nv = coords.len();
-    let (v, assignment, angles): (Vec<[usize; 2]>, Vec<Assignment>, Vec<Option<f64>>) = match &fold
-        .edges_vertices
-    {
-        Some(ev) => {
-            let ne = ev.len();
-            let mut seen: HashMap<(usize, usize), usize> = HashMap::new();
-            for (e, &[a, b]) in ev.iter().enumerate() {
-                for (j, x) in [a, b].into_iter().enumerate() {
-                    if x >= nv {
-                        return Err(invalid(
-                            format!("edges_vertices[{e}][{j}]"),
-                            format!("vertex {x} does not exist (there are {nv} vertices)"),
-                        ));
-                    }
-                }
-                if a == b {
-                    return Err(invalid(
-                        format!("edges_vertices[{e}]"),
-                        format!("both ends are vertex {a}"),
-                    ));
-                }
-                if let Some(first) = seen.insert(key(a, b), e) {
-                    return Err(invalid(
-                        format!("edges_vertices[{e}]"),
-                        format!(
-                            "repeats edges_vertices[{first}] (vertices {a}-{b}); an edge may be listed once"
-                        ),
-                    ));
-                }
-            }
-            let asg = match &fold.edges_assignment {
-                Some(a) if a.len() != ne => {
-                    return Err(invalid(
-                        "edges_assignment",
-                        format!(
-                            "has {} entries but edges_vertices has {ne}; the arrays must have the same length",
-                            a.len()
-                        ),
-                    ));
-                }
-                Some(a) => a.clone(),
-                None => {
-                    warnings.push(
-                        "edges_assignment is missing: interior edges are read as U (creases \
-                             with the angle of edges_foldAngle, else 0), boundary edges as B"
-                            .to_string(),
-                    );
-                    vec![Assignment::Unassigned; ne]
-                }
-            };
-            let ang = match &fold.edges_fold_angle {
-                Some(a) if a.len() != ne => {
-                    return Err(invalid(
-                        "edges_foldAngle",
-                        format!(
-                            "has {} entries but edges_vertices has {ne}; the arrays must have the same length",
-                            a.len()
-                        ),
-                    ));
-                }
-                Some(a) => a.clone(),
-                None => vec![None; ne],
-            };
-            (ev.clone(), asg, ang)
-        }
+    let Listed {
+        v,
+        assignment,
+        angles,
+    } = match listed {
+        Some(l) => l,
         None => {
-            if fold.edges_assignment.is_some() || fold.edges_fold_angle.is_some() {
-                return Err(invalid(
-                    "edges_vertices",
-                    "is missing, but edges_assignment or edges_foldAngle is given; they refer to edges_vertices",
-                ));
-            }
-            let v: Vec<[usize; 2]> = sides.order.iter().map(|k| sides.first[k]).collect();
+            let v: Vec<[usize; 2]> = sides
+                .order
+                .iter()
+                // In the direction of the first appearance.
+                .map(|k| {
+                    if sides.map[k][0].2 {
+                        [k.0, k.1]
+                    } else {
+                        [k.1, k.0]
+                    }
+                })
+                .collect();
             let asg = sides
                 .order
                 .iter()
@@ -518,19 +932,26 @@ fn fold_edges(
                 })
                 .collect();
             warnings.push(format!(
-                "edges_vertices is missing: {} edges were derived from faces_vertices \
-                     (interior edges as U creases with target 0, boundary edges as B), numbered \
-                     in order of first appearance in faces_vertices",
+                "edges_vertices is missing: {} edges were derived from faces_vertices (interior \
+                 edges as U creases with target 0, boundary edges as B), numbered in order of \
+                 first appearance in faces_vertices",
                 v.len()
             ));
             let n = v.len();
-            (v, asg, vec![None; n])
+            Listed {
+                v,
+                assignment: asg,
+                angles: vec![None; n],
+            }
         }
     };
 
     let ne = v.len();
+    let is_crease =
+        |a: Assignment| a.is_crease() || (a == Assignment::Flat && f_mode == FlatEdges::Crease);
     let mut kind = Vec::with_capacity(ne);
     let mut target = Vec::with_capacity(ne);
+    let mut crease_on_boundary: Vec<usize> = Vec::new();
     for e in 0..ne {
         let [a, b] = v[e];
         let nf = sides.count(a, b);
@@ -539,41 +960,31 @@ fn fold_edges(
                 format!("edges_vertices[{e}]"),
                 format!(
                     "edge {a}-{b} is not a side of any face; every edge must border one or two \
-                     faces (split the faces along it)"
+                     faces (it may cross a face or end inside one): split the faces along it, or \
+                     remove faces_vertices to have the faces traced from the edges"
                 ),
             ));
         }
         let asg_key = format!("edges_assignment[{e}]");
         let k = match assignment[e] {
-            Assignment::Cut => {
-                return Err(invalid(
-                    asg_key,
-                    format!("cut edges (C) are not supported yet (edge {a}-{b})"),
-                ));
-            }
             Assignment::Mountain | Assignment::Valley if nf == 1 => {
-                return Err(invalid(
-                    asg_key,
-                    format!(
-                        "crease ({}) on the boundary edge {a}-{b}, which borders only face {}; \
-                         a crease needs a face on each side",
-                        assignment[e].letter(),
-                        sides.faces(a, b)[0]
-                    ),
-                ));
+                crease_on_boundary.push(e);
+                EdgeKind::Boundary
             }
             Assignment::Boundary if nf == 2 => {
                 let fs = sides.faces(a, b);
                 return Err(invalid(
                     asg_key,
                     format!(
-                        "edge {a}-{b} is marked B (boundary) but borders two faces ({} and {})",
+                        "edge {a}-{b} is marked B (boundary) but borders two faces ({} and {}): \
+                         mark it C to cut the sheet there, or M, V, F or J",
                         fs[0], fs[1]
                     ),
                 ));
             }
+            Assignment::Cut => EdgeKind::Boundary,
             _ if nf == 1 => EdgeKind::Boundary,
-            x if x.is_crease() => EdgeKind::Crease,
+            x if is_crease(x) => EdgeKind::Crease,
             _ => EdgeKind::Smooth,
         };
         let angle_key = format!("edges_foldAngle[{e}]");
@@ -618,6 +1029,17 @@ fn fold_edges(
         kind.push(k);
         target.push(deg.to_radians());
     }
+    if let Some(&e) = crease_on_boundary.first() {
+        let [a, b] = v[e];
+        warnings.push(format!(
+            "edges_assignment[{e}]: {} crease(s) on the boundary (first: {} on edge {a}-{b}, \
+             which borders only face {}) are read as boundary edges; a crease needs a face on \
+             each side",
+            crease_on_boundary.len(),
+            assignment[e].letter(),
+            sides.faces(a, b)[0]
+        ));
+    }
 
     // Face sides that are not FOLD edges (only possible with edges_vertices).
     let listed: std::collections::HashSet<(usize, usize)> =
@@ -641,8 +1063,117 @@ fn fold_edges(
     })
 }
 
-/// A [`MeshError`] in FOLD terms (these are caught earlier in all but rare
-/// cases; the mapping keeps the message precise anyway).
+/// Split vertices along cut edges and where sheets only touch at a vertex
+/// ([`planar::split_vertices`]); renumber the mesh edges on split vertices
+/// and add the second side of every cut. Returns, for each copy (mesh
+/// vertex `nv + j`), the FOLD vertex it copies.
+fn split(
+    faces: &mut [Vec<usize>],
+    coords: &mut Vec<Vector2<f64>>,
+    sides: &Sides,
+    edges: &FoldEdges,
+    mesh_edges: &mut Vec<Edge>,
+    warnings: &mut Vec<String>,
+    notes: &mut Vec<String>,
+) -> Result<Vec<usize>, SceneError> {
+    let cut: HashMap<(usize, usize), usize> = (0..edges.v.len())
+        .filter(|&e| edges.assignment[e] == Assignment::Cut)
+        .map(|e| (key(edges.v[e][0], edges.v[e][1]), e))
+        .collect();
+    let shared: Vec<(SideAt, SideAt, bool)> = sides
+        .order
+        .iter()
+        .filter_map(|k| {
+            let l = &sides.map[k];
+            (l.len() == 2).then(|| ((l[0].0, l[0].1), (l[1].0, l[1].1), cut.contains_key(k)))
+        })
+        .collect();
+    let original: Vec<Vec<usize>> = faces.to_vec();
+    let nv = coords.len();
+    let copies = planar::split_vertices(faces, coords, &shared);
+    if copies.is_empty() {
+        let closed = (0..edges.v.len()).find(|&e| {
+            edges.assignment[e] == Assignment::Cut && sides.count(edges.v[e][0], edges.v[e][1]) == 2
+        });
+        if let Some(e) = closed {
+            let [a, b] = edges.v[e];
+            return Err(invalid(
+                format!("edges_vertices[{e}]"),
+                format!(
+                    "the cut {a}-{b} cannot open: both of its ends stay joined to the sheet (a \
+                     cut inside the sheet must run along at least two edges, or reach the \
+                     boundary)"
+                ),
+            ));
+        }
+        return Ok(copies);
+    }
+    // Where a side of an original face now runs.
+    let now = |(f, k): SideAt, a: usize| -> [usize; 2] {
+        let n = faces[f].len();
+        let (p, q) = (faces[f][k], faces[f][(k + 1) % n]);
+        if original[f][k] == a { [p, q] } else { [q, p] }
+    };
+    for (e, edge) in mesh_edges.iter_mut().enumerate() {
+        let [a, _] = edges.v[e];
+        let at = sides.at(edges.v[e][0], edges.v[e][1]);
+        edge.v = now(at[0], a);
+        if edges.assignment[e] == Assignment::Cut && at.len() == 2 {
+            let other = now(at[1], a);
+            if key(other[0], other[1]) == key(edge.v[0], edge.v[1]) {
+                let [a, b] = edges.v[e];
+                return Err(invalid(
+                    format!("edges_vertices[{e}]"),
+                    format!(
+                        "the cut {a}-{b} cannot open: both of its ends stay joined to the sheet \
+                         (a cut inside the sheet must run along at least two edges, or reach the \
+                         boundary)"
+                    ),
+                ));
+            }
+        }
+    }
+    for (e, &[a, b]) in edges.v.iter().enumerate() {
+        if edges.assignment[e] == Assignment::Cut {
+            let at = sides.at(a, b);
+            if at.len() == 2 {
+                let v = now(at[1], a);
+                mesh_edges.push(Edge {
+                    v,
+                    kind: EdgeKind::Boundary,
+                    fold_target: 0.0,
+                    fold_edge: Some(e),
+                });
+            }
+        }
+    }
+    // Which copies come from cuts, which from sheets touching at a point.
+    let mut on_cut = vec![false; nv];
+    for k in cut.keys() {
+        on_cut[k.0] = true;
+        on_cut[k.1] = true;
+    }
+    let (by_cut, touching): (Vec<usize>, Vec<usize>) = copies.iter().partition(|&&v| on_cut[v]);
+    if !by_cut.is_empty() {
+        notes.push(format!(
+            "cuts: {} cut edge(s) (C) open the sheet; {} vertex copies were made along them \
+             (mesh vertices {} on); outputs vertex[i] follow the first copy, supports hold all",
+            cut.len(),
+            by_cut.len(),
+            nv
+        ));
+    }
+    if let Some(&v) = touching.first() {
+        warnings.push(format!(
+            "vertices_coords[{v}]: at {} vertex(es) (first: {v}) the faces form separate fans \
+             (sheets touching only at a point); each is split into one vertex per fan, so the \
+             sheets are free to move apart there",
+            touching.len()
+        ));
+    }
+    Ok(copies)
+}
+
 fn translate(e: MeshError, tri_face: &[usize]) -> SceneError {
     let face = |t: usize| format!("faces_vertices[{}]", tri_face.get(t).copied().unwrap_or(0));
     match e {
@@ -674,6 +1205,7 @@ fn apply_physics(
     scene: &mut Scene,
     p: keys::Physics,
     edges: &FoldEdges,
+    copies: &[usize],
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let nv = scene.fold_vertex_count;
@@ -694,6 +1226,7 @@ fn apply_physics(
     let creases: Vec<usize> = (0..ne)
         .filter(|&e| edges.kind[e] == EdgeKind::Crease)
         .collect();
+    let zero = |list: &[usize]| list.iter().all(|&e| edges.target[e] == 0.0);
     match p.actuators {
         None => {
             // with_defaults made `fold` over every mesh crease (= FOLD creases).
@@ -702,6 +1235,13 @@ fn apply_physics(
                     "the pattern has no creases; the default actuator 'fold' drives nothing"
                         .to_string(),
                 );
+            } else if zero(&creases) {
+                warnings.push(format!(
+                    "the default actuator 'fold' drives nothing: all {} creases have the target \
+                     0 (U or F edges without edges_foldAngle); give the creases M/V assignments \
+                     or edges_foldAngle, or drive them with a torque actuator (ancf:actuators)",
+                    creases.len()
+                ));
             }
         }
         Some(list) => {
@@ -764,6 +1304,14 @@ fn apply_physics(
                         s
                     }
                 };
+                if a.mode == ActuatorMode::RestAngle && !selected.is_empty() && zero(&selected) {
+                    warnings.push(format!(
+                        "{sel_key}: every crease the rest_angle actuator '{}' drives has the \
+                         target 0, so it drives nothing; give them edges_foldAngle, or use \
+                         \"mode\": \"torque\"",
+                        a.name
+                    ));
+                }
                 if a.mode == ActuatorMode::RestAngle {
                     for &e in &selected {
                         if let Some((name, key)) = rest_owner.get(&e) {
@@ -806,8 +1354,20 @@ fn apply_physics(
             }
             supported.insert(v, s.key.clone());
         }
+        // A support on a split vertex holds all its copies.
+        let mut vertices = s.vertices;
+        if !copies.is_empty() {
+            let held: std::collections::HashSet<usize> = vertices.iter().copied().collect();
+            vertices.extend(
+                copies
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| held.contains(v))
+                    .map(|(j, _)| nv + j),
+            );
+        }
         scene.supports.push(Support {
-            vertices: s.vertices,
+            vertices,
             fix: s.fix,
         });
     }
@@ -867,13 +1427,16 @@ fn apply_physics(
 mod tests {
     use super::*;
     use crate::scene::{Fix, from_str};
+    use crate::scene::{FlatEdges, LoadOptions};
     use serde_json::{Value, json};
     use std::f64::consts::PI;
 
-    /// Two unit squares side by side with the valley crease 1-4 (FOLD edge 6).
+    /// Two unit squares side by side with the valley crease 1-4 (FOLD edge 6),
+    /// in metres.
     fn base() -> Value {
         json!({
             "file_spec": 1.2,
+            "frame_unit": "m",
             "vertices_coords": [[0,0],[1,0],[2,0],[2,1],[1,1],[0,1]],
             "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4]],
             "edges_assignment": ["B","B","B","B","B","B","V"],
@@ -1002,7 +1565,38 @@ mod tests {
             ),
             "faces_vertices[0]",
         );
-        assert!(e.contains("repeats vertex 1"), "{e}");
+        assert!(e.contains("zero area"), "{e}");
+        // two triangles touching at vertex 2: a face that touches itself
+        let v = json!({
+            "frame_unit": "m",
+            "vertices_coords": [[0,0],[2,0],[1,1],[2,2],[0,2]],
+            "faces_vertices": [[0,1,2,3,4,2]]
+        });
+        let e = err(&v, "faces_vertices[0]");
+        assert!(e.contains("repeats vertex 2 without a slit"), "{e}");
+        // a crease from a corner to the centre of a square: a slit face,
+        // triangulated with the crease between two triangles
+        let v = json!({
+            "frame_unit": "m",
+            "vertices_coords": [[0,0],[1,0],[1,1],[0,1],[0.5,0.5]],
+            "edges_vertices": [[0,1],[1,2],[2,3],[3,0],[0,4]],
+            "edges_assignment": ["B","B","B","B","V"],
+            "edges_foldAngle": [0,0,0,0,90],
+            "faces_vertices": [[0,4,0,1,2,3]]
+        });
+        let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
+        let l = from_fold_with(&parsed, &LoadOptions::default()).unwrap();
+        assert!(
+            l.notes.iter().any(|n| n.starts_with("slits: 1 face")),
+            "{:?}",
+            l.notes
+        );
+        let m = &l.scene.mesh;
+        assert_eq!(m.edges[4].kind, EdgeKind::Crease);
+        assert_eq!(m.edge_faces[4].len(), 2);
+        assert_eq!(m.triangles.len(), 4);
+        let mut model = crate::model::Model::new(l.scene.clone()).unwrap();
+        model.initialize().unwrap();
         let e = err(
             &with(base(), "faces_vertices", json!([[0, 1], [1, 2, 3, 4]])),
             "faces_vertices[0]",
@@ -1018,15 +1612,28 @@ mod tests {
         );
         assert!(e.contains("clockwise"), "{e}");
         assert!(!e.contains("every face"), "{e}");
-        let e = err(
-            &with(
-                base(),
-                "faces_vertices",
-                json!([[0, 5, 4, 1], [1, 4, 3, 2]]),
-            ),
-            "faces_vertices[0]",
+        // every face clockwise: mirrored in y, with a warning
+        let (s, w) = load(&with(
+            base(),
+            "faces_vertices",
+            json!([[0, 5, 4, 1], [1, 4, 3, 2]]),
+        ))
+        .unwrap();
+        assert!(w[0].contains("every face is clockwise"), "{w:?}");
+        assert_eq!(s.mesh.coords[3], Vector2::new(2.0, -1.0));
+        assert!((s.mesh.edges[6].fold_target - PI / 2.0).abs() < 1e-15);
+        // clockwise and counter-clockwise faces: a flat-folded state
+        let v = json!({
+            "frame_unit": "m",
+            "frame_classes": ["foldedForm"],
+            "vertices_coords": [[0,0],[1,0],[0,0],[0,1]],
+            "faces_vertices": [[0,1,3],[1,2,3]]
+        });
+        let e = err(&v, "faces_vertices[1]");
+        assert!(
+            e.contains("folded state (flat-folded)") && e.contains("foldedForm"),
+            "{e}"
         );
-        assert!(e.contains("every face is clockwise"), "{e}");
         // collinear: vertices 0, 1, 2 on the x axis
         let mut v = with(
             base(),
@@ -1072,30 +1679,83 @@ mod tests {
         v["edges_vertices"][5] = json!([1, 0]);
         let e = err(&v, "edges_vertices[5]");
         assert!(e.contains("repeats edges_vertices[0]"), "{e}");
+        // a crease on the boundary: read as boundary, with a warning
         let v = with(
             base(),
             "edges_assignment",
             json!(["V", "B", "B", "B", "B", "B", "V"]),
         );
-        let e = err(&v, "edges_assignment[0]");
-        assert!(e.contains("crease (V) on the boundary edge 0-1"), "{e}");
+        let (s, w) = load(&v).unwrap();
+        assert_eq!(s.mesh.edges[0].kind, EdgeKind::Boundary);
+        assert!(
+            w[0].starts_with("edges_assignment[0]: 1 crease(s) on the boundary"),
+            "{w:?}"
+        );
         let v = with(
             base(),
             "edges_assignment",
             json!(["B", "B", "B", "B", "B", "B", "B"]),
         );
         let e = err(&v, "edges_assignment[6]");
-        assert!(e.contains("borders two faces"), "{e}");
+        assert!(
+            e.contains("borders two faces") && e.contains("mark it C"),
+            "{e}"
+        );
+        // a cut across the sheet: two separate panels, vertices 1 and 4 split
         let v = with(
             base(),
             "edges_assignment",
             json!(["B", "B", "B", "B", "B", "B", "C"]),
         );
-        let e = err(&v, "edges_assignment[6]");
+        let l = from_fold_with(
+            &crate::scene::fold::parse(&v.to_string(), None).unwrap().0,
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let s = &l.scene;
+        assert_eq!(s.mesh.n_vertices(), 8);
+        assert_eq!(s.fold_vertex_count, 6);
+        assert_eq!(s.mesh.coords[6], s.mesh.coords[1]);
+        assert_eq!(s.mesh.coords[7], s.mesh.coords[4]);
         assert!(
-            e.contains("cut edges (C) are not supported yet (edge 1-4)"),
-            "{e}"
+            l.notes.iter().any(|n| n.starts_with("cuts: 1 cut edge")),
+            "{:?}",
+            l.notes
         );
+        assert!(
+            l.warnings[0].contains("angle 90 of the C edge 1-4 is ignored"),
+            "{:?}",
+            l.warnings
+        );
+        // both sides of the cut are boundary edges on FOLD edge 6
+        let cut: Vec<&Edge> = s
+            .mesh
+            .edges
+            .iter()
+            .filter(|e| e.fold_edge == Some(6))
+            .collect();
+        assert_eq!(cut.len(), 2);
+        assert!(cut.iter().all(|e| e.kind == EdgeKind::Boundary));
+        assert!(s.actuators[0].edges.is_empty());
+        // a support on a split vertex holds both copies
+        let (s, _) = load(&with(
+            v.clone(),
+            "ancf:supports",
+            json!([{"vertices": [1]}]),
+        ))
+        .unwrap();
+        assert_eq!(s.supports[0].vertices, vec![1, 6]);
+        crate::model::Model::new(s).unwrap();
+        // a cut of one edge inside the sheet cannot open
+        let v = json!({
+            "frame_unit": "m",
+            "vertices_coords": [[0,0],[3,0],[3,3],[0,3],[1,1],[2,2]],
+            "edges_vertices": [[0,1],[1,2],[2,3],[3,0],[4,5],[0,4],[4,3],[1,5],[5,2],[1,4],[3,5]],
+            "edges_assignment": ["B","B","B","B","C","F","F","F","F","F","F"],
+            "faces_vertices": [[0,1,4],[1,5,4],[1,2,5],[2,3,5],[3,4,5],[3,0,4]]
+        });
+        let e = err(&v, "edges_vertices[4]");
+        assert!(e.contains("cannot open"), "{e}");
         let v = with(base(), "edges_foldAngle", json!([0, 0, 0, 0, 0, 0, 180.5]));
         let e = err(&v, "edges_foldAngle[6]");
         assert!(e.contains("outside [-180, 180]"), "{e}");
@@ -1106,14 +1766,51 @@ mod tests {
         v["edges_vertices"][6] = json!([0, 4]);
         let e = err(&v, "edges_vertices[6]");
         assert!(e.contains("not a side of any face"), "{e}");
-        // U on the boundary is a boundary edge, F inside is smooth
+        // U on the boundary is a boundary edge; F inside is a crease with
+        // target 0 (FOLD), or smooth when asked or in an Origami Simulator
+        // export; J is smooth
         let v = with(
             base(),
             "edges_assignment",
             json!(["U", "B", "B", "B", "B", "B", "F"]),
         );
-        let (s, _) = load(&v).unwrap();
+        let mut v = v;
+        v.as_object_mut().unwrap().remove("edges_foldAngle");
+        let (s, w) = load(&v).unwrap();
         assert_eq!(s.mesh.edges[0].kind, EdgeKind::Boundary);
+        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Crease);
+        assert_eq!(s.mesh.edges[6].fold_target, 0.0);
+        assert_eq!(s.actuators[0].edges, vec![6]);
+        assert!(w.iter().any(|w| w.contains("drives nothing")), "{w:?}");
+        let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
+        let smooth = LoadOptions {
+            f_edges: Some(FlatEdges::Smooth),
+            ..Default::default()
+        };
+        let l = from_fold_with(&parsed, &smooth).unwrap();
+        assert_eq!(l.scene.mesh.edges[6].kind, EdgeKind::Smooth);
+        assert!(
+            l.notes
+                .iter()
+                .any(|n| n.starts_with("F edges: 1 read as smooth")),
+            "{:?}",
+            l.notes
+        );
+        let os = with(
+            v.clone(),
+            "file_creator",
+            json!("Origami Simulator: http://git.amandaghassaei.com/OrigamiSimulator/"),
+        );
+        let (s, _) = load(&os).unwrap();
+        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Smooth);
+        let keyed = with(v.clone(), "ancf:import", json!({"f_edges": "smooth"}));
+        assert_eq!(load(&keyed).unwrap().0.mesh.edges[6].kind, EdgeKind::Smooth);
+        let j = with(
+            base(),
+            "edges_assignment",
+            json!(["B", "B", "B", "B", "B", "B", "J"]),
+        );
+        let (s, _) = load(&j).unwrap();
         assert_eq!(s.mesh.edges[6].kind, EdgeKind::Smooth);
         assert!(s.actuators[0].edges.is_empty());
     }
@@ -1186,14 +1883,72 @@ mod tests {
         assert!((inch.mesh.coords[2].x - 0.0508).abs() < 1e-15);
         let e = err(&with(base(), "frame_unit", json!("mn")), "frame_unit");
         assert!(e.contains("did you mean"), "{e}");
-        // big unitless sheet: a warning
-        let v = with(
-            base(),
-            "vertices_coords",
-            json!([[0, 0], [100, 0], [200, 0], [200, 100], [100, 100], [0, 100]]),
+        // a unitless sheet is scaled to DEFAULT_SIZE on its longest side,
+        // whatever its coordinates; "unit" is no unit
+        for unit in [None, Some("unit")] {
+            let mut v = with(
+                base(),
+                "vertices_coords",
+                json!([[0, 0], [100, 0], [200, 0], [200, 100], [100, 100], [0, 100]]),
+            );
+            match unit {
+                Some(u) => v["frame_unit"] = json!(u),
+                None => {
+                    v.as_object_mut().unwrap().remove("frame_unit");
+                }
+            }
+            let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
+            let l = from_fold_with(&parsed, &LoadOptions::default()).unwrap();
+            assert!(l.warnings.is_empty(), "{:?}", l.warnings);
+            assert_eq!(l.scene.mesh.coords[2].x, DEFAULT_SIZE);
+            assert!((l.scene.mesh.coords[3].y - 0.5 * DEFAULT_SIZE).abs() < 1e-15);
+            assert!(
+                l.notes[0].starts_with("size: 0.1 m x 0.05 m:") && l.notes[0].contains("default"),
+                "{:?}",
+                l.notes
+            );
+            // --size and --unit, and the ancf:import key
+            let o = LoadOptions {
+                size: Some(0.3),
+                ..Default::default()
+            };
+            let l = from_fold_with(&parsed, &o).unwrap();
+            assert!((l.scene.mesh.coords[2].x - 0.3).abs() < 1e-15);
+            let o = LoadOptions {
+                unit: Some("mm".into()),
+                ..Default::default()
+            };
+            let l = from_fold_with(&parsed, &o).unwrap();
+            assert!((l.scene.mesh.coords[2].x - 0.2).abs() < 1e-15);
+            assert!(l.notes[0].contains("--unit mm"), "{:?}", l.notes);
+            let o = LoadOptions {
+                unit: Some("mn".into()),
+                ..Default::default()
+            };
+            let e = from_fold_with(&parsed, &o).unwrap_err().to_string();
+            assert!(
+                e.starts_with("--unit:") && e.contains("did you mean"),
+                "{e}"
+            );
+            let (s, _) = load(&with(v.clone(), "ancf:import", json!({"size": 0.5}))).unwrap();
+            assert!((s.mesh.coords[2].x - 0.5).abs() < 1e-15);
+            let (s, _) = load(&with(v.clone(), "ancf:import", json!({"unit": "cm"}))).unwrap();
+            assert!((s.mesh.coords[2].x - 2.0).abs() < 1e-15);
+        }
+        // a real unit is kept; --size rescales it anyway
+        let v = with(base(), "frame_unit", json!("cm"));
+        let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
+        let l = from_fold_with(&parsed, &LoadOptions::default()).unwrap();
+        assert_eq!(l.scene.mesh.coords[2].x, 0.02);
+        assert!(l.notes[0].contains("frame_unit \"cm\""), "{:?}", l.notes);
+        let o = LoadOptions {
+            size: Some(1.0),
+            ..Default::default()
+        };
+        assert_eq!(
+            from_fold_with(&parsed, &o).unwrap().scene.mesh.coords[2].x,
+            1.0
         );
-        let (_, w) = load(&v).unwrap();
-        assert!(w[0].starts_with("frame_unit:"), "{w:?}");
         // 3D with one z: as 2D
         let v = with(
             base(),
@@ -1282,6 +2037,7 @@ mod tests {
     #[test]
     fn non_convex_face_is_triangulated_inside() {
         let v = json!({
+            "frame_unit": "m",
             "vertices_coords": [[0,0],[2,0],[2,1],[1,1],[1,2],[0,2]],
             "faces_vertices": [[0,1,2,3,4,5]]
         });

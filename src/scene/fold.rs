@@ -30,16 +30,20 @@ pub enum Assignment {
     Mountain,
     /// `V`: valley crease.
     Valley,
-    /// `F`: flat (smooth) edge, e.g. a triangulation line.
+    /// `F`: flat fold: a fold line that is unfolded (0 degrees) in this
+    /// state. Read as a crease with target 0, except in Origami Simulator
+    /// exports (and when `ancf:import.f_edges` or `--f-edges` says
+    /// `smooth`), where F marks triangulation lines: smooth edges.
     Flat,
-    /// `J`: join (smooth) edge.
+    /// `J`: join: not a fold line, it only joins two faces (a smooth edge).
     Join,
     /// `B`: boundary edge.
     Boundary,
     /// `U`: unassigned; read as a crease with a free (zero) target unless
     /// `edges_foldAngle` gives one.
     Unassigned,
-    /// `C`: cut; not supported by the model yet.
+    /// `C`: cut: the sheet is cut along the edge; both sides become
+    /// boundary edges (the vertices along the cut are split).
     Cut,
 }
 
@@ -134,16 +138,20 @@ pub struct FoldFile {
     /// JSON `null` (no target given). Read from the pre-1.1 spelling
     /// `edges_foldAngles` too.
     pub edges_fold_angle: Option<Vec<Option<f64>>>,
-    /// `faces_vertices`: polygons, counter-clockwise.
+    /// `faces_vertices`: polygons, counter-clockwise. Empty when the file
+    /// has none: the scene builder then traces the faces of the planar
+    /// graph of `edges_vertices`.
     pub faces_vertices: Vec<Vec<usize>>,
     /// The `ancf:` physics keys, raw (full key including the prefix).
     pub ancf: Map<String, Value>,
 }
 
-/// Metres per FOLD `frame_unit`; `unit` (the FOLD default) is read as metres.
+/// Metres per FOLD `frame_unit` for the real units; `None` for `unit` (the
+/// FOLD default: no physical unit, see [`crate::scene::build::DEFAULT_SIZE`])
+/// and for unknown names.
 pub fn unit_scale(unit: &str) -> Option<f64> {
     Some(match unit {
-        "unit" | "m" => 1.0,
+        "m" => 1.0,
         "cm" => 1e-2,
         "mm" => 1e-3,
         "um" | "µm" => 1e-6,
@@ -157,7 +165,10 @@ pub fn unit_scale(unit: &str) -> Option<f64> {
 /// The `frame_unit` values [`unit_scale`] knows.
 pub const UNITS: &[&str] = &["unit", "m", "cm", "mm", "um", "nm", "in", "pt"];
 
-/// FOLD keys this reader uses or knows (for misspelling warnings).
+/// FOLD keys this reader uses or knows (for misspelling warnings): the
+/// keys of the FOLD 1.2 specification, every `vertices_`/`edges_`/`faces_`
+/// relation between the three (Rabbit Ear writes `edges_edges`, for
+/// example), and the keys FOLD's own converters write.
 const KNOWN_KEYS: &[&str] = &[
     "file_spec",
     "file_creator",
@@ -177,7 +188,9 @@ const KNOWN_KEYS: &[&str] = &[
     "vertices_vertices",
     "vertices_faces",
     "vertices_edges",
+    "vertices_flatUnfoldCoords",
     "edges_vertices",
+    "edges_edges",
     "edges_faces",
     "edges_assignment",
     "edges_foldAngle",
@@ -187,6 +200,8 @@ const KNOWN_KEYS: &[&str] = &[
     "faces_vertices",
     "faces_edges",
     "faces_faces",
+    "faces_flatFoldTransform",
+    "faces_flatFoldOrientation",
     "faceOrders",
     "edgeOrders",
 ];
@@ -263,6 +278,22 @@ fn string_list(v: &Value, key: &str) -> Result<Vec<String>, SceneError> {
         .enumerate()
         .map(|(i, x)| expect_string(x, &format!("{key}[{i}]")).map(str::to_string))
         .collect()
+}
+
+/// The titles of a file's frames (index 0 is the top level, `k` is
+/// `file_frames[k-1]`); `None` for a frame without `frame_title`.
+pub fn frame_titles(text: &str) -> Result<Vec<Option<String>>, SceneError> {
+    let root: Value = serde_json::from_str(text).map_err(|e| SceneError::from_json(&e))?;
+    let title = |f: &Value| {
+        f.get("frame_title")
+            .and_then(Value::as_str)
+            .map(str::to_string)
+    };
+    let mut out = vec![title(&root)];
+    if let Some(Value::Array(ff)) = root.get("file_frames") {
+        out.extend(ff.iter().map(title));
+    }
+    Ok(out)
 }
 
 /// Parse FOLD text and pick a frame (`None`: the top level if it has
@@ -417,20 +448,27 @@ pub fn parse(
         out.vertices_coords.push(p);
     }
 
-    let (v, key) = get("faces_vertices").ok_or_else(|| {
-        SceneError::invalid(
-            "faces_vertices",
-            "missing; a scene needs the facets as counter-clockwise polygons in faces_vertices",
-        )
-    })?;
-    for (f, face) in expect_array(v, &key)?.iter().enumerate() {
-        let kf = format!("{key}[{f}]");
-        let idx = expect_array(face, &kf)?
-            .iter()
-            .enumerate()
-            .map(|(j, x)| expect_index(x, &format!("{kf}[{j}]")))
-            .collect::<Result<Vec<usize>, _>>()?;
-        out.faces_vertices.push(idx);
+    match get("faces_vertices") {
+        Some((v, key)) => {
+            for (f, face) in expect_array(v, &key)?.iter().enumerate() {
+                let kf = format!("{key}[{f}]");
+                let idx = expect_array(face, &kf)?
+                    .iter()
+                    .enumerate()
+                    .map(|(j, x)| expect_index(x, &format!("{kf}[{j}]")))
+                    .collect::<Result<Vec<usize>, _>>()?;
+                out.faces_vertices.push(idx);
+            }
+        }
+        None if get("edges_vertices").is_none() => {
+            return Err(SceneError::invalid(
+                "faces_vertices",
+                "missing, and so is edges_vertices; a scene needs the facets as \
+                 counter-clockwise polygons in faces_vertices, or the crease pattern's \
+                 edges in edges_vertices (the faces are then traced from them)",
+            ));
+        }
+        None => {} // traced from edges_vertices by the scene builder
     }
 
     if let Some((v, key)) = get("edges_vertices") {
@@ -639,6 +677,9 @@ mod tests {
         assert_eq!(e.key(), Some("vertices_coords"));
         let e = err(r#"{"vertices_coords": []}"#);
         assert_eq!(e.key(), Some("faces_vertices"));
+        // edges without faces: the faces are traced later
+        let (f, _) = parse(r#"{"vertices_coords": [], "edges_vertices": []}"#, None).unwrap();
+        assert!(f.faces_vertices.is_empty() && f.edges_vertices.is_some());
         let e = err("[1, 2]");
         assert!(e.to_string().contains("JSON object"), "{e}");
     }
@@ -688,7 +729,7 @@ mod tests {
     #[test]
     fn misspelt_keys_warn_and_unknown_keys_are_ignored() {
         let (_, w) = parse(
-            r#"{"vertices_coords": [[0,0]], "faces_vertices": [], "edges_foldangle": [], "my_key": 1, "other:x": 2}"#,
+            r#"{"vertices_coords": [[0,0]], "faces_vertices": [], "edges_foldangle": [], "my_key": 1, "other:x": 2, "edges_edges": [], "faces_flatFoldOrientation": []}"#,
             None,
         )
         .unwrap();

@@ -14,6 +14,7 @@
 //! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
+//! | `ancf:import` | `{size, unit, f_edges}`: how the FOLD geometry is read |
 //!
 //! This module checks each key on its own (types, ranges, names, unknown
 //! fields with a "did you mean"); checks against the mesh (indices, crease
@@ -24,8 +25,8 @@ use super::fold::{
     Assignment, expect_array, expect_index, expect_number, expect_string, type_name,
 };
 use super::{
-    ActuatorMode, CreaseStiffness, Fix, InputTiming, Integrator, Material, NewtonMode, Outputs,
-    SolverSettings, VertexInput,
+    ActuatorMode, CreaseStiffness, Fix, FlatEdges, InputTiming, Integrator, Material, NewtonMode,
+    Outputs, SolverSettings, VertexInput,
 };
 use serde_json::{Map, Value};
 
@@ -43,6 +44,7 @@ pub const KEYS: &[&str] = &[
     "ancf:solver",
     "ancf:outputs",
     "ancf:refine",
+    "ancf:import",
 ];
 
 /// First components of generated variable names; user-chosen input names
@@ -59,7 +61,8 @@ pub const MAX_REFINE: usize = 6;
 pub enum EdgeSelection {
     /// Every crease.
     All,
-    /// Every crease with this assignment (M, V or U).
+    /// Every crease with this assignment (M, V, U, or F when F edges are
+    /// creases).
     Assignment(Assignment),
     /// These FOLD edge indices.
     List(Vec<usize>),
@@ -120,6 +123,21 @@ pub struct Physics {
     pub outputs: Outputs,
     /// `ancf:refine`.
     pub refine: usize,
+    /// `ancf:import`.
+    pub import: Import,
+}
+
+/// `ancf:import`: how the FOLD geometry is read (command-line options
+/// override it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Import {
+    /// `size`: the longest side of the sheet's bounding box, m.
+    pub size: Option<f64>,
+    /// `unit`: the unit of the coordinates (one of [`super::fold::UNITS`]
+    /// but `unit`), instead of `frame_unit`.
+    pub unit: Option<String>,
+    /// `f_edges`: what F edges are.
+    pub f_edges: Option<FlatEdges>,
 }
 
 /// A JSON object with a fixed set of allowed fields.
@@ -246,6 +264,27 @@ pub fn check_name(key: &str, name: &str) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// A real length unit (one of [`super::fold::UNITS`] but `unit`): the
+/// name, checked, with a "did you mean" for a misspelling.
+pub fn check_unit(key: &str, unit: &str) -> Result<String, SceneError> {
+    if super::fold::unit_scale(unit).is_some() {
+        return Ok(unit.to_string());
+    }
+    let real: Vec<&str> = super::fold::UNITS
+        .iter()
+        .copied()
+        .filter(|u| *u != "unit")
+        .collect();
+    Err(SceneError::invalid(
+        key,
+        format!(
+            "unknown unit \"{unit}\"{}; expected one of {}",
+            suggestion(unit, &real),
+            real.join(", ")
+        ),
+    ))
+}
+
 fn enum_value<T: Copy>(key: &str, s: &str, options: &[(&str, T)]) -> Result<T, SceneError> {
     options
         .iter()
@@ -322,6 +361,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
         solver: SolverSettings::default(),
         outputs: Outputs::default(),
         refine: 0,
+        import: Import::default(),
     };
     let positive = |x: f64| x > 0.0;
     let non_negative = |x: f64| x >= 0.0;
@@ -409,12 +449,13 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                     "M" => EdgeSelection::Assignment(Assignment::Mountain),
                     "V" => EdgeSelection::Assignment(Assignment::Valley),
                     "U" => EdgeSelection::Assignment(Assignment::Unassigned),
+                    "F" => EdgeSelection::Assignment(Assignment::Flat),
                     other => {
                         return Err(SceneError::invalid(
                             o.path("edges"),
                             format!(
-                                "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\" \
-                                 or a list of FOLD edge indices"
+                                "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\", \
+                                 \"F\" or a list of FOLD edge indices"
                             ),
                         ));
                     }
@@ -433,7 +474,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                     return Err(SceneError::invalid(
                         o.path("edges"),
                         format!(
-                            "expected \"all\", \"M\", \"V\", \"U\" or a list of FOLD edge indices, found {}",
+                            "expected \"all\", \"M\", \"V\", \"U\", \"F\" or a list of FOLD edge indices, found {}",
                             type_name(other)
                         ),
                     ));
@@ -656,6 +697,27 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
         p.refine = n;
     }
 
+    if let Some(v) = ancf.get("ancf:import") {
+        let o = Obj::new("ancf:import", v, &["size", "unit", "f_edges"])?;
+        p.import.size = o.num_where("size", positive, "positive (m)")?;
+        if let Some(u) = o.string("unit")? {
+            p.import.unit = Some(check_unit(&o.path("unit"), u)?);
+        }
+        if p.import.size.is_some() && p.import.unit.is_some() {
+            return Err(SceneError::invalid(
+                "ancf:import",
+                "give either size or unit, not both",
+            ));
+        }
+        if let Some(s) = o.string("f_edges")? {
+            p.import.f_edges = Some(enum_value(
+                &o.path("f_edges"),
+                s,
+                &[("crease", FlatEdges::Crease), ("smooth", FlatEdges::Smooth)],
+            )?);
+        }
+    }
+
     // Input names must be unique across actuators, forces and motions.
     let mut seen: Vec<(&str, String)> = Vec::new();
     let names = p
@@ -721,7 +783,8 @@ mod tests {
             "ancf:solver": {"integrator": "central-difference", "rho_inf": 0.5, "max_step": 1e-4,
                             "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "newton": "full", "stop_time": 2},
             "ancf:outputs": ["positions", "energies"],
-            "ancf:refine": 2
+            "ancf:refine": 2,
+            "ancf:import": {"size": 0.2, "f_edges": "smooth"}
         }"#,
         )
         .unwrap();
@@ -744,6 +807,8 @@ mod tests {
         assert_eq!(p.solver.newton, NewtonMode::Full);
         assert!(p.outputs.positions && !p.outputs.fold_angles && p.outputs.energies);
         assert_eq!(p.refine, 2);
+        assert_eq!(p.import.size, Some(0.2));
+        assert_eq!(p.import.f_edges, Some(FlatEdges::Smooth));
     }
 
     #[test]
@@ -836,6 +901,25 @@ mod tests {
         assert!(e.contains("too large"), "{e}");
         let e = err(r#"{"ancf:loads": {"gravity": [0, 0, -1e31]}}"#);
         assert!(e.starts_with("ancf:loads.gravity[2]:"), "{e}");
+        let e = err(r#"{"ancf:import": {"size": 0.1, "unit": "mm"}}"#);
+        assert!(e.contains("not both"), "{e}");
+        let e = err(r#"{"ancf:import": {"unit": "mn"}}"#);
+        assert!(
+            e.starts_with("ancf:import.unit:") && e.contains("did you mean"),
+            "{e}"
+        );
+        let e = err(r#"{"ancf:import": {"unit": "unit"}}"#);
+        assert!(e.starts_with("ancf:import.unit:"), "{e}");
+        let e = err(r#"{"ancf:import": {"f_edges": "flat"}}"#);
+        assert!(e.starts_with("ancf:import.f_edges:"), "{e}");
+        assert_eq!(
+            keys(r#"{"ancf:import": {"unit": "in"}}"#)
+                .unwrap()
+                .import
+                .unit
+                .as_deref(),
+            Some("in")
+        );
         let e = err(r#"{"ancf:damping": "none"}"#);
         assert!(e.starts_with("ancf:damping:"), "{e}");
         assert_eq!(keys(r#"{"ancf:damping": "auto"}"#).unwrap().damping, None);

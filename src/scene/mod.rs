@@ -31,8 +31,13 @@
 //! pattern. 2D `vertices_coords` are used as they are; 3D ones with a single
 //! z as x, y; other 3D ones must be coplanar (within [`build::COPLANAR_TOLERANCE`]
 //! of the sheet size) and are expressed in their own plane, seen from the
-//! side where the faces are counter-clockwise. `frame_unit` scales to metres
-//! (`unit`, the FOLD default, is read as metres).
+//! side where the faces are counter-clockwise (a 2D sheet whose faces are all
+//! clockwise is mirrored in y, with a warning). Sizes: a real `frame_unit`
+//! (`m`, `cm`, `mm`, `um`, `nm`, `in`, `pt`) scales to metres; a file without
+//! one (or with `unit`, the FOLD default) is scaled so that the longest side
+//! of its bounding box is [`build::DEFAULT_SIZE`] (0.1 m);
+//! [`LoadOptions::size`], [`LoadOptions::unit`] and the `ancf:import` key
+//! change that (docs/scenes.md, "Size").
 
 use crate::mesh::Mesh;
 use serde::{Deserialize, Serialize};
@@ -44,6 +49,7 @@ pub mod fold;
 pub mod keys;
 pub mod limits;
 pub mod patterns;
+mod planar;
 pub mod refine;
 pub mod triangulate;
 
@@ -51,7 +57,9 @@ pub use build::from_fold;
 pub use error::SceneError;
 pub use fold::{FoldFile, FrameSelector};
 
-/// Options of [`load_with`] and [`from_str_with`].
+/// Options of [`load_with`] and [`from_str_with`]: what the command-line
+/// options `--frame`, `--size`, `--unit` and `--f-edges` set. The geometry
+/// options override the file's `ancf:import` key and `frame_unit`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// Which frame of a multi-frame file (default: the top level if it has
@@ -59,6 +67,38 @@ pub struct LoadOptions {
     pub frame: Option<FrameSelector>,
     /// Model name when the file has no `ancf:name` (e.g. the file stem).
     pub name: Option<String>,
+    /// Scale the sheet so that the longest side of its bounding box is this
+    /// many metres, whatever the file's unit.
+    pub size: Option<f64>,
+    /// Read the coordinates in this unit (`m`, `cm`, `mm`, `um`, `nm`, `in`,
+    /// `pt`) instead of the file's `frame_unit`.
+    pub unit: Option<String>,
+    /// What FOLD `F` edges are (default: creases, smooth edges in Origami
+    /// Simulator exports).
+    pub f_edges: Option<FlatEdges>,
+}
+
+/// How FOLD `F` edges are read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlatEdges {
+    /// As the FOLD specification says: a flat (unfolded) fold line, i.e. a
+    /// crease whose target is 0 unless `edges_foldAngle` gives one.
+    Crease,
+    /// Triangulation lines (Origami Simulator's meaning): smooth edges.
+    Smooth,
+}
+
+/// A loaded scene with what the loader said about it.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The validated scene.
+    pub scene: Scene,
+    /// Things that may be wrong (also returned by [`load`]).
+    pub warnings: Vec<String>,
+    /// What the loader did: the unit or scale it used, how F edges were
+    /// read, faces traced, vertices split. One line each, for `check` and
+    /// `build` to print.
+    pub notes: Vec<String>,
 }
 
 /// Load a FOLD scene file. Returns the validated scene and warnings; the
@@ -72,6 +112,11 @@ pub fn load_with(
     path: impl AsRef<Path>,
     options: &LoadOptions,
 ) -> Result<(Scene, Vec<String>), SceneError> {
+    load_report(path, options).map(|l| (l.scene, l.warnings))
+}
+
+/// [`load_with`], returning the loader's notes too.
+pub fn load_report(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Loaded, SceneError> {
     let path = path.as_ref();
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
         path: path.display().to_string(),
@@ -81,7 +126,7 @@ pub fn load_with(
     if options.name.is_none() {
         options.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
     }
-    from_str_with(&text, &options)
+    from_str_report(&text, &options)
 }
 
 /// A scene from FOLD text (the first frame, default name).
@@ -94,10 +139,72 @@ pub fn from_str_with(
     text: &str,
     options: &LoadOptions,
 ) -> Result<(Scene, Vec<String>), SceneError> {
-    let (file, mut warnings) = fold::parse(text, options.frame.as_ref())?;
-    let (scene, more) = from_fold(&file, options.name.as_deref())?;
-    warnings.extend(more);
-    Ok((scene, warnings))
+    from_str_report(text, options).map(|l| (l.scene, l.warnings))
+}
+
+/// [`from_str_with`], returning the loader's notes too. When the frame read
+/// is a folded state, the error names the frames of the file that are
+/// crease patterns.
+pub fn from_str_report(text: &str, options: &LoadOptions) -> Result<Loaded, SceneError> {
+    let (file, warnings) = fold::parse(text, options.frame.as_ref())?;
+    match build::from_fold_with(&file, options) {
+        Ok(mut loaded) => {
+            let mut all = warnings;
+            all.append(&mut loaded.warnings);
+            loaded.warnings = all;
+            Ok(loaded)
+        }
+        Err(SceneError::Invalid { key, message }) if build::is_folded_state(&message) => {
+            Err(SceneError::Invalid {
+                key,
+                message: format!("{message}{}", crease_pattern_frames(text, &file, options)),
+            })
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// "; frame 1 ('cp') is a crease pattern: read it with --frame 1", or what
+/// to do when no frame is one.
+fn crease_pattern_frames(text: &str, failed: &FoldFile, options: &LoadOptions) -> String {
+    let titles = fold::frame_titles(text).unwrap_or_default();
+    let mut good = Vec::new();
+    for (k, title) in titles.iter().enumerate() {
+        let sel = FrameSelector::Index(k);
+        let Ok((f, _)) = fold::parse(text, Some(&sel)) else {
+            continue;
+        };
+        if f == *failed {
+            continue;
+        }
+        let o = LoadOptions {
+            frame: Some(sel),
+            ..options.clone()
+        };
+        if build::from_fold_with(&f, &o).is_ok() {
+            good.push(match title {
+                Some(t) => format!("{k} ('{t}')"),
+                None => format!("{k}"),
+            });
+        }
+    }
+    match good.len() {
+        0 if titles.len() > 1 => "; no frame of this file is a flat crease pattern: export the \
+             unfolded crease pattern from the program that made it"
+            .to_string(),
+        0 => "; this file has no other frame: export the unfolded crease pattern from the \
+             program that made it"
+            .to_string(),
+        1 => format!(
+            "; frame {} is a crease pattern: read it with --frame {} (LoadOptions::frame)",
+            good[0],
+            good[0].split(' ').next().unwrap_or("1")
+        ),
+        _ => format!(
+            "; frames {} are crease patterns: pick one with --frame N (LoadOptions::frame)",
+            good.join(", ")
+        ),
+    }
 }
 
 /// Sheet material, SI units.

@@ -12,8 +12,9 @@ use super::Scene;
 use super::error::SceneError;
 use crate::mesh::{Edge, EdgeKind, Mesh, MeshError};
 
-/// Most triangles a refinement may produce.
-pub const MAX_TRIANGLES: usize = 1_000_000;
+/// Most triangles a refinement may produce: the size budget
+/// [`super::build::MAX_FACETS`].
+pub const MAX_TRIANGLES: usize = super::build::MAX_FACETS;
 
 /// One level of refinement of a mesh; returns the new mesh (old edge `e`
 /// is new edges `2e`, `2e + 1`).
@@ -59,7 +60,10 @@ pub fn refine(scene: &Scene, levels: usize) -> Result<Scene, SceneError> {
     if grown.is_none() {
         return Err(SceneError::invalid(
             "ancf:refine",
-            format!("{levels} level(s) would turn {tris} triangles into more than {MAX_TRIANGLES}"),
+            format!(
+                "{levels} level(s) would turn {tris} triangles into more than {MAX_TRIANGLES}, \
+                 the size budget; use fewer levels"
+            ),
         ));
     }
     let mut out = scene.clone();

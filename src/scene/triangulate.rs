@@ -1,6 +1,9 @@
 //! Ear-clipping triangulation of a simple counter-clockwise polygon in the
 //! reference plane. Convex and non-convex faces both work; vertices lying on
-//! a straight side (180 degree corners) are kept.
+//! a straight side (180 degree corners) are kept. Weakly simple polygons
+//! work too: a polygon that runs out along a crease ending inside it and
+//! back (visiting the crease's vertices twice, a "slit") is triangulated
+//! with the crease as a side of the triangles on both of its sides.
 //!
 //! Among the available ears the best-shaped one is cut first (largest
 //! `4 sqrt(3) A / (a^2 + b^2 + c^2)`), which avoids the slivers of a plain fan;
@@ -23,8 +26,9 @@ fn quality(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>) -> f64 {
 }
 
 /// Triangulate `poly` (vertex indices into `coords`, counter-clockwise, at
-/// least 3, no repeats). Returns counter-clockwise triangles, or `None` when
-/// the polygon is not simple (no ear can be cut).
+/// least 3; a vertex may repeat where the boundary runs along a slit and
+/// back). Returns counter-clockwise triangles, or `None` when the polygon is
+/// not simple (no ear can be cut).
 pub fn ear_clip(poly: &[usize], coords: &[Vector2<f64>]) -> Option<Vec<[usize; 3]>> {
     let n = poly.len();
     if n < 3 {
@@ -50,9 +54,14 @@ pub fn ear_clip(poly: &[usize], coords: &[Vector2<f64>]) -> Option<Vec<[usize; 3
             if cross(a, b, c) <= eps {
                 continue; // reflex or straight corner
             }
-            // No other corner inside or on the candidate triangle.
+            // No other corner inside or on the candidate triangle (the
+            // triangle's own vertices, visited again along a slit, aside).
+            let own = [rest[ip], rest[i], rest[inx]];
             let blocked = (0..m).filter(|&j| j != ip && j != i && j != inx).any(|j| {
                 let p = coords[rest[j]];
+                if own.contains(&rest[j]) || p == a || p == b || p == c {
+                    return false;
+                }
                 cross(a, b, p) >= -eps && cross(b, c, p) >= -eps && cross(c, a, p) >= -eps
             });
             if blocked {
@@ -124,6 +133,25 @@ mod tests {
         assert_eq!(ear_clip(&[0, 1, 2, 3], &c), None);
         let c = vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.)];
         assert_eq!(ear_clip(&[3, 2, 1, 0], &c), None);
+    }
+
+    #[test]
+    fn slit_polygon() {
+        // A square 0-1-2-3 with a crease from corner 0 to the centre 4:
+        // the boundary runs 0 -> 4 -> 0.
+        let c = vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.), v(0.5, 0.5)];
+        let tris = ear_clip(&[0, 4, 0, 1, 2, 3], &c).unwrap();
+        assert_eq!(tris.len(), 4);
+        let total: f64 = tris.iter().map(|t| area(t, &c)).sum();
+        assert!((total - 1.0).abs() < 1e-12);
+        assert!(tris.iter().all(|t| area(t, &c) > 1e-9));
+        // the crease is a side of two triangles, once in each direction
+        let along = |a: usize, b: usize| {
+            tris.iter()
+                .filter(|t| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b))
+                .count()
+        };
+        assert_eq!((along(0, 4), along(4, 0)), (1, 1));
     }
 
     #[test]

@@ -47,6 +47,62 @@ pub struct SolverStats {
     pub solve_time: Duration,
 }
 
+/// Systems from this many unknowns on are ordered on their block graph
+/// (see [`SparseSolver::new_blocked`]).
+pub const BLOCK_ORDERING_MIN: usize = 100_000;
+
+/// An AMD ordering of a block-structured pattern, computed on the graph of
+/// its blocks and expanded to scalars (`block` consecutive scalars per
+/// block, kept together and in order).
+fn block_amd(
+    pattern: &SymbolicSparseColMat<usize>,
+    block: usize,
+) -> Result<(Vec<usize>, Vec<usize>), String> {
+    let n = pattern.nrows();
+    let nb = n / block;
+    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    let mut bcol = Vec::with_capacity(nb + 1);
+    bcol.push(0usize);
+    let mut brow = Vec::new();
+    for j in 0..nb {
+        let c = j * block;
+        let mut last = usize::MAX;
+        for &r in &ri[cp[c]..cp[c + 1]] {
+            let b = r / block;
+            if b != last {
+                brow.push(b);
+                last = b;
+            }
+        }
+        bcol.push(brow.len());
+    }
+    let nnz = brow.len();
+    let bpat = SymbolicSparseColMat::new_checked(nb, nb, bcol, None, brow);
+    let mut fwd = vec![0usize; nb];
+    let mut inv = vec![0usize; nb];
+    let mut mem = MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<
+        usize,
+    >(nb, nnz))
+    .map_err(|_| "out of memory for the ordering".to_string())?;
+    faer::sparse::linalg::amd::order_maybe_unsorted(
+        &mut fwd,
+        &mut inv,
+        bpat.as_ref(),
+        Default::default(),
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| format!("block ordering failed: {e:?}"))?;
+    let sfwd: Vec<usize> = fwd
+        .iter()
+        .flat_map(|&b| (0..block).map(move |k| b * block + k))
+        .collect();
+    let mut sinv = vec![0usize; n];
+    for (i, &p) in sfwd.iter().enumerate() {
+        sinv[p] = i;
+    }
+    Ok((sfwd, sinv))
+}
+
 /// A fixed sparsity pattern (full symmetric storage, sorted rows) with its
 /// symbolic factorizations and the latest numeric factorization.
 pub struct SparseSolver {
@@ -69,11 +125,38 @@ impl SparseSolver {
     /// Analyse the pattern given as CSC column pointers and sorted row
     /// indices (both triangles present).
     pub fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Result<Self, String> {
+        Self::new_blocked(n, col_ptr, row_idx, 1)
+    }
+
+    /// [`SparseSolver::new`] for a pattern made of dense `block x block`
+    /// blocks (scalars `block i .. block i + block - 1` share their
+    /// pattern, as the 3 coordinates of a slot do). From
+    /// [`BLOCK_ORDERING_MIN`] unknowns on, the fill-reducing ordering is
+    /// computed on the block graph (`block^2` times fewer entries) and
+    /// expanded: the same quality at a fraction of the time and memory of
+    /// ordering the scalar graph. Smaller systems keep the scalar ordering.
+    pub fn new_blocked(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        block: usize,
+    ) -> Result<Self, String> {
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let perm = if block > 1 && n >= BLOCK_ORDERING_MIN && n % block == 0 {
+            Some(block_amd(&pattern, block)?)
+        } else {
+            None
+        };
+        let ordering = match &perm {
+            Some((fwd, inv)) => {
+                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n))
+            }
+            None => SymmetricOrdering::Amd,
+        };
         let symbolic = factorize_symbolic_cholesky(
             pattern.as_ref(),
             Side::Lower,
-            SymmetricOrdering::Amd,
+            ordering,
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| format!("symbolic Cholesky failed: {e:?}"))?;

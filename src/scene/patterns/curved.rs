@@ -10,7 +10,7 @@ use crate::scene::fold::{Assignment, FoldFile};
 /// bulging towards +x by the sagitta `s = R - sqrt(R^2 - (length/2)^2)`,
 /// centred so that `x0 = (width - s) / 2`. The arc is cut into `segments`
 /// straight crease edges; each side of it is one column of quads whose
-/// rungs (the lines y = const) are smooth `F` edges.
+/// rungs (the lines y = const) are smooth `J` (join) edges.
 ///
 /// Every crease edge gets the same target `angle`. Folding a curved crease
 /// bends the panels, so this target is not reachable rigidly: this is the
@@ -104,7 +104,7 @@ impl CurvedCrease {
                 if creases.contains(&(a.min(b), a.max(b))) {
                     crease(angle)
                 } else {
-                    (Assignment::Flat, 0.0)
+                    (Assignment::Join, 0.0)
                 }
             },
         ))

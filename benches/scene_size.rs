@@ -1,0 +1,88 @@
+//! Scene set-up against pattern size: the time of what `origami-fmu check`
+//! and `origami-fmu build` do (read the FOLD text, build the scene, build
+//! the model; build also writes the FMU description, which rebuilds the
+//! model), on Miura-ori sheets from 2k to 131k facets, and the time to
+//! refuse a 1,000,000-facet pattern (above the size budget
+//! `scene::build::MAX_FACETS`). Near-linear set-up shows as a constant
+//! time per facet.
+//!
+//! `cargo bench --bench scene_size -- [--max 128]` (the largest Miura
+//! size n, n x n cells, 8 n^2 facets; 128 is 131,072 facets)
+
+use origami_fmu::fmi;
+use origami_fmu::model::Model;
+use origami_fmu::scene::{self, FoldFile, patterns::Miura};
+use std::time::Instant;
+
+fn arg(name: &str, default: usize) -> usize {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .map(|v| v.parse().expect("a number"))
+        .unwrap_or(default)
+}
+
+/// A square grid of `n x n` unit quads (2 n^2 facets), without a unit.
+fn grid(n: usize) -> FoldFile {
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    FoldFile {
+        vertices_coords: (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| vec![i as f64, j as f64]))
+            .collect(),
+        faces_vertices: (0..n)
+            .flat_map(|j| {
+                (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+fn main() {
+    let max = arg("--max", 128);
+    println!(
+        "| Miura n x n | facets | DOFs | read + scene s | model s | check s | FMU description s | build s |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let mut n = 16;
+    while n <= max {
+        let text = Miura {
+            nx: n,
+            ny: n,
+            ..Default::default()
+        }
+        .generate()
+        .expect("valid")
+        .to_json();
+        let t = Instant::now();
+        let (s, _) = scene::from_str(&text).expect("loads");
+        let t_scene = t.elapsed().as_secs_f64();
+        let facets = s.mesh.triangles.len();
+        let t = Instant::now();
+        let m = Model::new(s.clone()).expect("model");
+        let t_model = t.elapsed().as_secs_f64();
+        let dofs = m.n_dofs();
+        drop(m);
+        let t = Instant::now();
+        let c = fmi::fmu_contents(&s).expect("FMU contents");
+        let t_fmu = t.elapsed().as_secs_f64();
+        drop(c);
+        println!(
+            "| {n} x {n} | {facets} | {dofs} | {t_scene:.2} | {t_model:.2} | {:.2} | {t_fmu:.2} | {:.2} |",
+            t_scene + t_model,
+            t_scene + t_fmu
+        );
+        n *= 2;
+    }
+    let n = 708;
+    let text = grid(n).to_json();
+    let t = Instant::now();
+    let e = scene::from_str(&text).expect_err("over the budget");
+    println!(
+        "\n{} facets refused in {:.2} s (budget {}): {e}",
+        2 * n * n,
+        t.elapsed().as_secs_f64(),
+        scene::build::MAX_FACETS
+    );
+}
