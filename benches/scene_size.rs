@@ -11,33 +11,10 @@
 
 use origami_fmu::fmi;
 use origami_fmu::model::Model;
-use origami_fmu::scene::{self, FoldFile, patterns::Miura};
+use origami_fmu::scene::{self, patterns::Miura};
 use std::time::Instant;
 
-fn arg(name: &str, default: usize) -> usize {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .map(|v| v.parse().expect("a number"))
-        .unwrap_or(default)
-}
-
-/// A square grid of `n x n` unit quads (2 n^2 facets), without a unit.
-fn grid(n: usize) -> FoldFile {
-    let id = |i: usize, j: usize| j * (n + 1) + i;
-    FoldFile {
-        vertices_coords: (0..=n)
-            .flat_map(|j| (0..=n).map(move |i| vec![i as f64, j as f64]))
-            .collect(),
-        faces_vertices: (0..n)
-            .flat_map(|j| {
-                (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
-            })
-            .collect(),
-        ..Default::default()
-    }
-}
+use origami_fmu::benchmarks::arg;
 
 fn main() {
     let max = arg("--max", 128);
@@ -76,7 +53,7 @@ fn main() {
         n *= 2;
     }
     let n = 708;
-    let text = grid(n).to_json();
+    let text = origami_fmu::benchmarks::unit_grid_fold(n).to_json();
     let t = Instant::now();
     let e = scene::from_str(&text).expect_err("over the budget");
     println!(

@@ -14,14 +14,7 @@ use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::VertexInput;
 use std::time::Instant;
 
-fn arg(name: &str, default: usize) -> usize {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .map(|v| v.parse().expect("a number"))
-        .unwrap_or(default)
-}
+use origami_fmu::benchmarks::arg;
 
 /// Deterministic pseudo-random numbers in [-1, 1].
 fn noise(i: usize) -> f64 {

@@ -295,3 +295,31 @@ pub fn fold_by_ramp(
 ) -> crate::model::StepReport {
     fold_by_ramp_with(m, steps, dt, ramp_time, true)
 }
+
+/// A square grid of `n x n` unit quads (2 n^2 facets) as a FOLD file
+/// without a unit: the large unitless scene of the size test and bench.
+pub fn unit_grid_fold(n: usize) -> crate::scene::FoldFile {
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    crate::scene::FoldFile {
+        vertices_coords: (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| vec![i as f64, j as f64]))
+            .collect(),
+        faces_vertices: (0..n)
+            .flat_map(|j| {
+                (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+/// The whole-number value after `name` on the bench's command line, or
+/// `default` (the benches' one argument reader).
+pub fn arg(name: &str, default: usize) -> usize {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .map(|v| v.parse().expect("a number"))
+        .unwrap_or(default)
+}

@@ -557,26 +557,10 @@ fn fuzzed_fold_files_never_panic() {
     assert!(ok > cases / 20 && err > cases / 20, "ok {ok}, err {err}");
 }
 
-/// A square grid of `n x n` unit quads (2 n^2 facets), without a unit.
-fn grid(n: usize) -> scene::FoldFile {
-    let id = |i: usize, j: usize| j * (n + 1) + i;
-    scene::FoldFile {
-        vertices_coords: (0..=n)
-            .flat_map(|j| (0..=n).map(move |i| vec![i as f64, j as f64]))
-            .collect(),
-        faces_vertices: (0..n)
-            .flat_map(|j| {
-                (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
-            })
-            .collect(),
-        ..Default::default()
-    }
-}
-
 #[test]
 fn size_budget_refuses_a_million_facets_quickly() {
     use std::time::{Duration, Instant};
-    let big = grid(708); // 1,002,528 facets
+    let big = origami_fmu::benchmarks::unit_grid_fold(708); // 1,002,528 facets
     let text = big.to_json();
     let t = Instant::now();
     let e = scene::from_str(&text).unwrap_err().to_string();
@@ -587,7 +571,7 @@ fn size_budget_refuses_a_million_facets_quickly() {
         "{e}"
     );
     // Refinement past the budget, and a mesh built in code.
-    let mut small = grid(100); // 20,000 facets; two levels make 320,000
+    let mut small = origami_fmu::benchmarks::unit_grid_fold(100); // 20,000 facets; two levels make 320,000
     small
         .ancf
         .insert("ancf:refine".into(), serde_json::json!(2));
@@ -605,7 +589,8 @@ fn size_budget_refuses_a_million_facets_quickly() {
     // A mid-sized sheet sets up in seconds (the 131k-facet timings are
     // `cargo bench --bench scene_size`).
     let t = Instant::now();
-    let (s, _) = scene::build::from_fold(&grid(150), None).unwrap(); // 45,000 facets
+    let (s, _) =
+        scene::build::from_fold(&origami_fmu::benchmarks::unit_grid_fold(150), None).unwrap(); // 45,000 facets
     let m = Model::new(s).unwrap();
     assert!(m.n_dofs() > 200_000);
     assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
