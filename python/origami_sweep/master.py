@@ -53,7 +53,8 @@ class Variables:
             if self.causality.get(n) != causality:
                 known = self.names(causality)
                 hint = ", ".join(known[:12]) + (" ..." if len(known) > 12 else "")
-                raise KeyError(f"{what} '{n}' is not an {causality} of the FMU (its {causality}s: {hint})")
+                article = "an" if causality[0] in "aeiou" else "a"
+                raise KeyError(f"{what} '{n}' is not {article} {causality} of the FMU (its {causality}s: {hint})")
 
 
 def crease_targets(fmu):
