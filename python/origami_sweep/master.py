@@ -13,6 +13,7 @@ import base64
 import ctypes
 import json
 import math
+import time
 import zipfile
 
 import numpy as np
@@ -119,7 +120,9 @@ def drive(unzipdir, spec):
     [output names], state (base64 of a serialized FMU state to restore
     before step k0, or None), save_state (serialize the state after k1).
     The result has status ("ok", "discard", "error", "fatal"), reason,
-    times, series (one row of the recorded outputs per time), state."""
+    times, series (one row of the recorded outputs per time), state, t_end
+    (the last time reached) and cpu_s (CPU seconds of this run)."""
+    cpu_start = time.process_time()
     md = read_model_description(unzipdir)
     var = Variables(md)
     h, k0, k1 = spec["step"], spec["k0"], spec["k1"]
@@ -177,6 +180,7 @@ def drive(unzipdir, spec):
         if slave is not None:
             _close(slave, instantiated=phase != "instantiation")
     result["t_end"] = times[-1] if times else None
+    result["cpu_s"] = time.process_time() - cpu_start
     return result
 
 

@@ -72,10 +72,10 @@ def plot(df: pd.DataFrame, study, path, title=None):
 def progress_line(done, total, row):
     """One line per finished run: its values, status and metrics."""
     vals = ", ".join(f"{k}={_fmt(v)}" for k, v in row.items() if k not in ("run", "case", "status", "reason")
-                     and not k.startswith("final:") and k not in ("t_end", "wall_s"))
+                     and not k.startswith("final:") and k not in ("t_end", "wall_s", "cpu_s"))
     status = row["status"] + ("" if row["status"] == "ok" else f" ({row['reason'][:120]})")
-    wall = row.get("wall_s", math.nan)
-    print(f"[{done}/{total}] run {row['run']}: {vals}: {status}, {wall:.1f} s", flush=True)
+    wall, cpu = row.get("wall_s", math.nan), row.get("cpu_s", math.nan)
+    print(f"[{done}/{total}] run {row['run']}: {vals}: {status}, {wall:.1f} s ({cpu:.1f} s CPU)", flush=True)
 
 
 def _fmt(v):

@@ -127,6 +127,7 @@ def make_row(task, result):
     row["status"] = result["status"]
     row["reason"] = result["reason"]
     row["t_end"] = result["t_end"] if result["t_end"] is not None else float("nan")
+    row["cpu_s"] = result.get("cpu_s", float("nan"))
     record = task["drive"]["record"]
     ok = result["status"] == "ok"
     if ok:
