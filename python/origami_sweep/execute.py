@@ -37,7 +37,7 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
     whatif_from_start, each branch runs from t = 0 with the base inputs up
     to whatif.at and the branch's after it (no saved state: to check it)."""
     out_dir = pathlib.Path(out_dir)
-    fmu_paths = {}
+    fmu_paths, build_errors = {}, {}
 
     def fmu_of(run):
         src = study.source
@@ -49,8 +49,13 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
             args = run["scene_args"]
             key = scenes.scene_key(src["pattern"], args)
             make = lambda: scenes.pattern_fmu(src["pattern"], args, out_dir / "fmus")  # noqa: E731
-        if key not in fmu_paths:
-            fmu_paths[key] = make()
+        if key not in fmu_paths and key not in build_errors:
+            try:
+                fmu_paths[key] = make()
+            except scenes.BuildError as e:
+                if "pattern" not in src:
+                    raise  # the study's one FMU: nothing can run
+                build_errors[key] = str(e)  # one scene of a geometry sweep: its rows say why
         return key
 
     limit = study.time_limit if time_limit is None else time_limit
@@ -59,7 +64,9 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
     base_of_case = {}
     for run in study.runs():
         key = fmu_of(run)
-        if key not in checked:
+        if key in build_errors:
+            checked.setdefault(key, ([], list(study.outputs)))
+        elif key not in checked:
             var = master.Variables.of_fmu(fmu_paths[key])
             var.check(run["start_values"], "parameter", "swept or set parameter")
             var.check(study.inputs, "input", "input")
@@ -93,7 +100,11 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
             "save_state": False,
         }
         task = {**common, "run": run["run"], "branch": run["branch"], "drive": drive}
-        if branch_inputs is None:
+        if key in build_errors:
+            task["failed"] = {"status": "error", "reason": "building the scene failed: " + build_errors[key],
+                              "times": [], "series": [], "t_end": None}
+            drive["segments"] = []
+        elif branch_inputs is None:
             drive["segments"] = _segments((0, base_inputs))
         else:
             k_at = round(study.whatif["at"] / study.step)
@@ -123,7 +134,10 @@ def run_serial(p: Plan, isolate=True, progress=None):
     done, results = {}, []
     for task in p.tasks:
         base = done.get(task.get("after"))
-        r = worker.run_task(task, p.fmus[task["fmu"]], base, isolate=isolate)
+        if "failed" in task:
+            r = worker.failed_task(task)
+        else:
+            r = worker.run_task(task, p.fmus[task["fmu"]], base, isolate=isolate)
         if task.get("base"):
             done[task["run"]] = r
         else:
@@ -174,8 +188,11 @@ def run_dask(p: Plan, client, progress=None):
         z.write_bytes(package_zip())
         client.upload_file(str(z))
     fmu_futures = {k: client.scatter(b, hash=True) for k, b in p.fmus.items()}
-    futures, by_future = {}, {}
+    futures, by_future, results = {}, {}, []
     for task in p.tasks:
+        if "failed" in task:
+            results.append(worker.failed_task(task))
+            continue
         args = [task, fmu_futures[task["fmu"]]]
         if task.get("after"):
             args.append(futures[task["after"]])
@@ -183,17 +200,19 @@ def run_dask(p: Plan, client, progress=None):
         futures[task["run"]] = f
         if not task.get("base"):
             by_future[f] = task
-    results = []
+    total = len(results) + len(by_future)
+    if progress:
+        for i, r in enumerate(results):
+            progress(i + 1, total, r["row"])
     for f in as_completed(list(by_future)):
         task = by_future[f]
         try:
             r = f.result()
         except Exception as e:  # the task, not the run, failed: still a row
-            result = {"status": "error", "reason": f"task failed on the worker: {type(e).__name__}: {e}",
-                      "times": [], "series": [], "t_end": None}
-            r = {"row": worker.make_row(task, result), "times": [], "series": [], "record": task["drive"]["record"]}
-            r["row"]["wall_s"] = float("nan")
+            task = {**task, "failed": {"status": "error", "reason": f"task failed on the worker: "
+                                       f"{type(e).__name__}: {e}", "times": [], "series": [], "t_end": None}}
+            r = worker.failed_task(task)
         results.append(r)
         if progress:
-            progress(len(results), len(by_future), r["row"])
+            progress(len(results), total, r["row"])
     return sorted(results, key=lambda r: r["row"]["run"])

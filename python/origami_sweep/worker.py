@@ -117,6 +117,13 @@ def run_task(task: dict, fmu_bytes: bytes, base: dict | None = None, isolate: bo
     return {"row": row, "times": result["times"], "series": result["series"], "record": spec["record"]}
 
 
+def failed_task(task):
+    """The result of a task that could not run (task["failed"] says why)."""
+    row = make_row(task, task["failed"])
+    row["wall_s"] = float("nan")
+    return {"row": row, "times": [], "series": [], "record": task["drive"]["record"]}
+
+
 def make_row(task, result):
     """The table row of a run: its swept values, status and reason, the time
     reached, the metrics (NaN unless the run completed) and final outputs."""

@@ -142,15 +142,19 @@ def test_study_on_a_separately_started_scheduler_and_workers(tmp_path, fmu):
 
 
 def test_failing_runs_are_rows_with_their_reason(tmp_path, fmu, client):
-    # A NaN start value is refused at initialization; a NaN input at the
+    # A NaN start value is refused at initialization, a NaN input at the
     # first step; the runs around them go on.
     study = make_study(tmp_path, {"fmu": str(fmu("square"))}, {"damping.alpha": [0.0, math.nan, 20.0]})
     p = execute.plan(study, tmp_path / "out")
     nan_input = make_study(tmp_path, {"fmu": str(fmu("square"))}, {"damping.alpha": [0.0]},
                            inputs={"times": [0.0, 0.05], "values": [0.0, math.nan]})
     q = execute.plan(nan_input, tmp_path / "out")
-    rows = [r["row"] for r in execute.run_dask(p, client)] + [r["row"] for r in execute.run_dask(q, client)]
-    assert [r["status"] for r in rows] == ["ok", "error", "ok", "error"]
+    # A scene the generator refuses: its row says why; the other scene runs.
+    bad_scene = make_study(tmp_path, {"pattern": "single-crease"}, {"scene.angle": [60.0, 200.0]})
+    s = execute.plan(bad_scene, tmp_path / "out")
+    rows = [r["row"] for plan in (p, q, s) for r in execute.run_dask(plan, client)]
+    assert [r["status"] for r in rows] == ["ok", "error", "ok", "error", "ok", "error"]
+    assert "building the scene failed" in rows[5]["reason"] and "200 must be in [-180, 180]" in rows[5]["reason"]
     bad, bad_input = rows[1], rows[3]
     assert "fmi2SetReal" in bad["reason"] and "damping.alpha" in bad["reason"] and "initialization" in bad["reason"]
     assert math.isnan(bad["fold_time"]) and math.isnan(bad["t_end"])
