@@ -32,6 +32,28 @@ def _segments(*parts):
     return [[k, {n: s.to_dict() for n, s in sig.items()}] for k, sig in parts]
 
 
+def _check_fmu(study, run, fmu):
+    """Check the study's names against an FMU (KeyError naming a wrong one);
+    return its crease targets and the outputs a run records."""
+    var = master.Variables.of_fmu(fmu)
+    var.check(run["start_values"], "parameter", "swept or set parameter")
+    var.check(study.inputs, "input", "input")
+    for b in (study.whatif or {}).get("branches", {}).values():
+        var.check(b, "input", "what-if input")
+    var.check(study.outputs, "output", "output")
+    targets = master.crease_targets(fmu)
+    record = list(dict.fromkeys(study.outputs + metrics.needed_outputs(study.metrics, targets)))
+    var.check(record, "output", "metric output")
+    return targets, record
+
+
+def _given_fmu(path):
+    p = pathlib.Path(path)
+    if not zipfile.is_zipfile(p):
+        raise scenes.BuildError(f"scene.fmu: {p} is not an FMU (missing or not a zip file)")
+    return p
+
+
 def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
     """Build the study's FMUs (one per scene) and describe every run. With
     whatif_from_start, each branch runs from t = 0 with the base inputs up
@@ -42,7 +64,7 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
     def fmu_of(run):
         src = study.source
         if "fmu" in src:
-            key, make = "fmu", lambda: pathlib.Path(src["fmu"])
+            key, make = "fmu", lambda: _given_fmu(src["fmu"])
         elif "scene" in src:
             key, make = "scene", lambda: scenes.scene_fmu(src["scene"], out_dir / "fmus")
         else:
@@ -67,16 +89,7 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
         if key in build_errors:
             checked.setdefault(key, ([], list(study.outputs)))
         elif key not in checked:
-            var = master.Variables.of_fmu(fmu_paths[key])
-            var.check(run["start_values"], "parameter", "swept or set parameter")
-            var.check(study.inputs, "input", "input")
-            for b in (study.whatif or {}).get("branches", {}).values():
-                var.check(b, "input", "what-if input")
-            var.check(study.outputs, "output", "output")
-            targets = master.crease_targets(fmu_paths[key])
-            record = list(dict.fromkeys(study.outputs + metrics.needed_outputs(study.metrics, targets)))
-            var.check(record, "output", "metric output")
-            checked[key] = (targets, record)
+            checked[key] = _check_fmu(study, run, fmu_paths[key])
         targets, record = checked[key]
         base_inputs, branch_inputs = study.signals_of(run["branch"])
         last = study.inputs if branch_inputs is None else branch_inputs
