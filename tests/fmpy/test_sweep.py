@@ -14,6 +14,7 @@ import time
 
 import pandas as pd
 import pytest
+from dask.distributed import Client
 
 from fmu_helpers import ROOT
 
@@ -125,11 +126,17 @@ def test_study_on_a_separately_started_scheduler_and_workers(tmp_path, fmu):
         procs.append(subprocess.Popen(dask + ["worker", address, "--nworkers", "2", "--nthreads", "1",
                                               "--no-dashboard"],
                                       cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        with Client(address, timeout=30) as c:  # fail here, not hang, if the workers do not come
+            c.wait_for_workers(2, timeout=60)
         assert sweep_main([str(study_file), "--scheduler", address, "-o", str(tmp_path / "out")]) == 0
     finally:
         for proc in reversed(procs):
             proc.terminate()
-            proc.wait(timeout=30)
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
     df = pd.read_csv(tmp_path / "out" / "remote.csv", keep_default_na=False)
     assert (tmp_path / "out" / "remote.png").stat().st_size > 0
     p = execute.plan(parse_study(raw, study_file), tmp_path / "serial")
