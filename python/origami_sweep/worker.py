@@ -3,8 +3,8 @@ the study's time limit (so a hung run never hangs the study), and its row.
 
 The FMU travels as bytes (a cluster's workers need not share a disk); each
 worker machine unpacks it once into its temporary folder. The subprocess is
-`python -m origami_sweep.worker SPEC RESULT` (JSON files; floats round-trip
-exactly through Python's JSON)."""
+`python -m origami_sweep.worker`, kept between runs, with JSON lines in and
+out (floats round-trip exactly through Python's JSON)."""
 
 from __future__ import annotations
 
@@ -13,10 +13,12 @@ import json
 import os
 import pathlib
 import shutil
+import select
 import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import zipfile
 
@@ -44,49 +46,87 @@ def unpack(fmu_bytes: bytes, cache_dir=CACHE) -> str:
     return str(target)
 
 
-def drive_isolated(unzipdir: str, spec: dict, time_limit: float | None):
-    """master.drive in a subprocess, killed after `time_limit` seconds (None:
-    in this process, without a limit). A killed or crashed subprocess is a
-    result with status "timeout" or "crashed"."""
-    if time_limit is None:
-        return master.drive(unzipdir, spec)
-    with tempfile.TemporaryDirectory(prefix="origami_sweep_run.") as tmp:
-        spec_file, result_file = pathlib.Path(tmp, "spec.json"), pathlib.Path(tmp, "result.json")
-        spec_file.write_text(json.dumps({"unzipdir": unzipdir, "spec": spec}))
+def _no_result(status, reason):
+    return {"status": status, "reason": reason, "times": [], "series": [], "state": None, "t_end": None}
+
+
+class RunProcess:
+    """A subprocess (`python -m origami_sweep.worker`) that runs specs one
+    after the other: a JSON line in on its stdin, a JSON line out. It stays
+    warm between runs (no interpreter start per run); a run over its time
+    limit gets the process group killed (SIGKILL), and the next run starts a
+    new process."""
+
+    def __init__(self):
+        self.proc = None
+        self.stderr = None
+
+    def _start(self):
         env = dict(os.environ)
         package_parent = str(pathlib.Path(__file__).resolve().parent.parent)
         env["PYTHONPATH"] = os.pathsep.join([package_parent] + [p for p in [env.get("PYTHONPATH")] if p])
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "origami_sweep.worker", str(spec_file), str(result_file)],
+        self.stderr = tempfile.TemporaryFile()
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "origami_sweep.worker"],
             env=env,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self.stderr,
             start_new_session=True,
         )
+
+    def _stop(self):
         try:
-            _, err = proc.communicate(timeout=time_limit)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-            return {
-                "status": "timeout",
-                "reason": f"stopped at the time limit of {time_limit:g} s (process {proc.pid} killed)",
-                "times": [],
-                "series": [],
-                "state": None,
-                "t_end": None,
-            }
-        if proc.returncode != 0 or not result_file.is_file():
-            tail = err.decode(errors="replace").strip().splitlines()[-3:]
-            return {
-                "status": "crashed",
-                "reason": f"run process exited with code {proc.returncode}: " + " | ".join(tail),
-                "times": [],
-                "series": [],
-                "state": None,
-                "t_end": None,
-            }
-        return json.loads(result_file.read_text())
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        self.proc.wait()
+        self.proc = None
+
+    def _stderr_tail(self):
+        self.stderr.seek(0)
+        lines = self.stderr.read().decode(errors="replace").strip().splitlines()
+        return " | ".join(lines[-3:])
+
+    def run(self, unzipdir, spec, time_limit):
+        if self.proc is None or self.proc.poll() is not None:
+            self._start()
+        deadline = time.monotonic() + time_limit
+        try:
+            self.proc.stdin.write((json.dumps({"unzipdir": unzipdir, "spec": spec}) + "\n").encode())
+            self.proc.stdin.flush()
+        except BrokenPipeError:
+            pass  # it died: reading says how
+        fd, buf = self.proc.stdout.fileno(), b""
+        while not buf.endswith(b"\n"):
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                pid = self.proc.pid
+                self._stop()
+                return _no_result("timeout", f"stopped at the time limit of {time_limit:g} s (process {pid} killed)")
+            if not select.select([fd], [], [], remaining)[0]:
+                continue
+            chunk = os.read(fd, 1 << 20)
+            if not chunk:
+                code = self.proc.wait()
+                self.proc = None
+                return _no_result("crashed", f"run process exited with code {code}: {self._stderr_tail()}")
+            buf += chunk
+        return json.loads(buf)
+
+
+_local = threading.local()
+
+
+def drive_isolated(unzipdir: str, spec: dict, time_limit: float | None):
+    """master.drive in this thread's RunProcess, stopped after `time_limit`
+    seconds (None: in this process, without a limit). A killed or crashed
+    run is a result with status "timeout" or "crashed"."""
+    if time_limit is None:
+        return master.drive(unzipdir, spec)
+    if not hasattr(_local, "runner"):
+        _local.runner = RunProcess()
+    return _local.runner.run(unzipdir, spec, time_limit)
 
 
 def run_task(task: dict, fmu_bytes: bytes, base: dict | None = None, isolate: bool = True):
@@ -148,13 +188,17 @@ def make_row(task, result):
     return row
 
 
-def _child(spec_file, result_file):
-    job = json.loads(pathlib.Path(spec_file).read_text())
-    result = master.drive(job["unzipdir"], job["spec"])
-    tmp = pathlib.Path(str(result_file) + ".part")
-    tmp.write_text(json.dumps(result))
-    tmp.rename(result_file)
+def _serve():
+    """The RunProcess side: one JSON job per stdin line, one JSON result per
+    stdout line. Anything else written to stdout (by a library) goes to
+    /dev/null, so it cannot garble the answers."""
+    answers = os.fdopen(os.dup(1), "w")
+    os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+    for line in sys.stdin:
+        job = json.loads(line)
+        answers.write(json.dumps(master.drive(job["unzipdir"], job["spec"])) + "\n")
+        answers.flush()
 
 
 if __name__ == "__main__":
-    _child(sys.argv[1], sys.argv[2])
+    _serve()
