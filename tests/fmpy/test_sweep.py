@@ -240,3 +240,19 @@ def test_example_study_file_is_valid():
 
     study = load_study(ROOT / "studies" / "miura_sector_angle.toml")
     assert study.scene_level and len(study.runs()) == 8
+
+
+def test_a_run_process_that_dies_is_reported_and_replaced(tmp_path, fmu):
+    # The run process dies (here: an exception outside the run's own error
+    # handling, as a segfaulting FMU would): the result says so with the
+    # last lines of its stderr, and the next run gets a new process.
+    from origami_sweep import worker
+
+    study = make_study(tmp_path, {"fmu": str(fmu("square"))}, {"damping.alpha": [0.0]})
+    (task,) = execute.plan(study, tmp_path / "out").tasks
+    dead = worker.drive_isolated(str(tmp_path / "no_such_fmu"), task["drive"], 30)
+    assert dead["status"] == "crashed"
+    assert "exited with code 1" in dead["reason"] and "no_such_fmu" in dead["reason"]
+    p = execute.plan(study, tmp_path / "out")
+    (r,) = execute.run_serial(p)
+    assert r["row"]["status"] == "ok"
