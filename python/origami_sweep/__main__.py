@@ -9,7 +9,6 @@ import sys
 import time
 
 from . import execute, report
-from .master import Variables  # noqa: F401  (imported early: fmpy errors show before the cluster starts)
 from .scenes import BuildError
 from .study import StudyError, load_study
 

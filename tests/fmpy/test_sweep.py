@@ -7,7 +7,6 @@ same branches run from the start."""
 import json
 import math
 import os
-import pathlib
 import subprocess
 import sys
 import time
@@ -16,13 +15,10 @@ import pandas as pd
 import pytest
 from dask.distributed import Client
 
-from fmu_helpers import ROOT
-
-sys.path.insert(0, str(ROOT / "python"))
-
-from origami_sweep import execute  # noqa: E402
-from origami_sweep.__main__ import main as sweep_main  # noqa: E402
-from origami_sweep.study import StudyError, parse_study  # noqa: E402
+from fmu_helpers import ROOT  # also puts python/ (origami_sweep) on the path
+from origami_sweep import execute
+from origami_sweep.__main__ import main as sweep_main
+from origami_sweep.study import StudyError, parse_study
 
 TIMES = ("wall_s", "cpu_s")  # measured, so never equal between runs
 FOLD = {"times": [0.0, 0.05], "values": [0.0, 1.0]}
