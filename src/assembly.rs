@@ -11,6 +11,7 @@ use crate::crease;
 use crate::dofs::{Combo, DofLayout, SlotKind};
 use crate::element::{ElemVec, MASS_HAT, Rule, ShellElement};
 use crate::mesh::{EdgeKind, Mesh};
+use crate::rigid::RigidModes;
 use crate::scene::Material;
 use nalgebra::{SMatrix, SVector, Vector2};
 use std::collections::{BTreeSet, HashMap};
@@ -53,7 +54,8 @@ pub struct Physics {
     pub crease_k_per_length: f64,
     /// Crease dashpot per unit length, N s/rad.
     pub crease_c_per_length: f64,
-    /// Rayleigh alpha (1/s).
+    /// Mass-proportional damping (1/s) of the deformation rate: it acts on
+    /// the velocity less its rigid-body part, so rigid motion is undamped.
     pub alpha: f64,
     /// Rayleigh beta (s).
     pub beta: f64,
@@ -118,6 +120,8 @@ pub struct Assembler {
     /// Mass matrix by slots: for each slot, (other slot, coefficient of I3).
     pub mass_rows: Vec<Vec<(usize, f64)>>,
     mass_values: Vec<f64>,
+    /// The sheet's rigid-body modes (what mass damping leaves alone).
+    pub rigid: RigidModes,
     /// Physics in force.
     pub physics: Physics,
 }
@@ -246,6 +250,7 @@ impl Assembler {
             crease_maps,
             mass_rows: Vec::new(),
             mass_values: Vec::new(),
+            rigid: RigidModes::default(),
             physics,
         };
         asm.set_physics(physics);
@@ -300,6 +305,8 @@ impl Assembler {
         }
         self.mass_rows = rows;
         self.mass_values = vals;
+        let positions: Vec<usize> = self.layout.position_slot.clone();
+        self.rigid = RigidModes::new(n_slots, positions, |x, y| self.mass_mul(x, y));
     }
 
     /// Number of scalar DOFs (free and fixed).
@@ -460,10 +467,19 @@ impl Assembler {
             }
         }
         if p.alpha != 0.0 {
+            // alpha M (v - P v): P v the M-orthogonal rigid part of v. The
+            // iteration matrix keeps alpha M (the rank-6 correction is left
+            // out: modified Newton converges with it at a rate ~ alpha h).
             let mut mv = vec![0.0; n];
             self.mass_mul(st.v, &mut mv);
-            for (f, x) in out.force.iter_mut().zip(mv) {
-                *f += p.alpha * x;
+            let mut mq = vec![0.0; n];
+            self.mass_mul(st.q, &mut mq);
+            let mut pv = vec![0.0; n];
+            if self.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
+                pv.fill(0.0);
+            }
+            for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {
+                *f += p.alpha * (x - r);
             }
         }
         if out.force.iter().any(|x| !x.is_finite()) || !out.strain_energy.is_finite() {

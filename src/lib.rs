@@ -21,5 +21,6 @@ pub mod element;
 pub mod fmi;
 pub mod mesh;
 pub mod model;
+pub mod rigid;
 pub mod scene;
 pub mod solver;

@@ -7,8 +7,10 @@
 //! Life cycle: [`Model::new`] validates and builds the scene;
 //! [`Model::set_parameter`] may change parameters until
 //! [`Model::initialize`]; then [`Model::set_input`] and [`Model::advance`]
-//! alternate. Inputs are ramped linearly over each step from the value in
-//! force at its start to the value last set (never held, never jumped).
+//! alternate. As in FMI 2.0 co-simulation, an input set before an advance
+//! from t is the input at t, held over the advance (plus a slope given with
+//! [`Model::set_input_derivative`]); a scene with `input_timing: "ramp"`
+//! instead ramps each input over the advance to the value set.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -115,7 +117,7 @@ impl StepReport {
 
 use crate::assembly::{Assembler, Evaluation, Physics, State};
 use crate::element::Rule;
-use crate::scene::{ActuatorMode, CreaseStiffness, Fix, Integrator, Scene};
+use crate::scene::{ActuatorMode, CreaseStiffness, Fix, InputTiming, Integrator, Scene};
 use crate::solver::SparseSolver;
 use crate::solver::central_difference::CentralDifference;
 use crate::solver::generalized_alpha::{self as ga, Dynamics};
@@ -140,8 +142,19 @@ pub struct ModelState {
     pub crease_theta: Vec<f64>,
     /// Input values in force at `time`.
     pub inputs_now: Vec<f64>,
-    /// Input values set for the end of the next step.
+    /// Input values at the end of the next advance before slopes (equal to
+    /// `inputs_now` unless the scene ramps its inputs).
     pub inputs_next: Vec<f64>,
+    /// First time derivative of each input over the next advance.
+    #[serde(default)]
+    pub input_slopes: Vec<f64>,
+    /// Whether a damping parameter was set (automatic damping is then off).
+    #[serde(default)]
+    pub damping_set: bool,
+    /// Where the implicit stepper's iteration matrix was formed (kept across
+    /// advances by modified Newton; None: the next step forms one).
+    #[serde(default)]
+    pub jacobian: Option<ga::JacobianPoint>,
     /// Parameter values.
     pub parameters: Vec<f64>,
     /// Phase.
@@ -168,6 +181,7 @@ struct System {
     cd: Option<CentralDifference>,
     max_step: f64,
     min_step: f64,
+    max_internal_steps: usize,
 }
 
 /// How input values become rest angles, moments, forces and prescribed
@@ -200,6 +214,8 @@ pub struct Model {
     sys: Option<System>,
     /// Parameter values the current `sys` was built with.
     built_with: Option<Vec<f64>>,
+    /// Whether the scene asked for automatic damping.
+    auto_damping: bool,
 }
 
 impl Model {
@@ -219,13 +235,18 @@ impl Model {
             crease_theta: vec![],
             inputs_now: inputs.iter().map(|v| v.start).collect(),
             inputs_next: inputs.iter().map(|v| v.start).collect(),
+            input_slopes: vec![0.0; inputs.len()],
+            damping_set: false,
+            jacobian: None,
             parameters: parameters.iter().map(|v| v.start).collect(),
             phase: Phase::Setup,
             h_next: scene.solver.max_step,
             outputs: outputs.iter().map(|v| v.start).collect(),
         };
         // Build once now so that a bad scene fails at instantiation.
+        let auto_damping = scene.auto_damping;
         let mut m = Model {
+            auto_damping,
             scene,
             parameters,
             inputs,
@@ -292,61 +313,47 @@ impl Model {
                 spec.name
             )));
         }
-        let bad = |reason: &str| Error::BadValue {
+        let bad = |reason: String| Error::BadValue {
             name: spec.name.clone(),
             value,
-            reason: reason.into(),
+            reason,
         };
-        if !value.is_finite() {
-            return Err(bad("not a finite number"));
+        crate::scene::limits::check(&spec.name, value).map_err(bad)?;
+        if spec.name == "solver.max_step" {
+            let mut so = self.scene.solver;
+            so.max_step = value;
+            crate::scene::limits::check_solver_relations(&so).map_err(|(_, why)| bad(why))?;
         }
-        match spec.name.as_str() {
-            "material.youngs_modulus"
-            | "material.thickness"
-            | "material.density"
-            | "crease.length_scale"
-            | "solver.max_step"
-            | "solver.tolerance"
-                if value <= 0.0 =>
-            {
-                return Err(bad("must be positive"));
-            }
-            "material.poisson_ratio" if !(value > -1.0 && value < 0.5) => {
-                return Err(bad("must be in (-1, 0.5)"));
-            }
-            "solver.rho_inf" if !(0.0..=1.0).contains(&value) => {
-                return Err(bad("must be in [0, 1]"));
-            }
-            "crease.stiffness_per_length" | "damping.alpha" | "damping.beta" | "damping.crease"
-                if value < 0.0 =>
-            {
-                return Err(bad("must not be negative"));
-            }
-            _ => {}
+        if spec.name.starts_with("damping.") {
+            self.state.damping_set = true;
         }
         self.state.parameters[i] = value;
         Ok(())
     }
 
-    /// Value of input `i` as last set.
+    /// Value of input `i` as last set (in force now; with ramped inputs,
+    /// the value the next advance ends at).
     pub fn input(&self, i: usize) -> Result<f64, Error> {
-        self.state
-            .inputs_next
-            .get(i)
-            .copied()
-            .ok_or(Error::NoSuchVariable {
-                kind: "input",
-                index: i,
-            })
+        self.input_spec(i)?;
+        Ok(match self.scene.solver.input_timing {
+            InputTiming::Hold => self.state.inputs_now[i],
+            InputTiming::Ramp => self.state.inputs_next[i],
+        })
     }
 
-    /// Set input `i`: the value reached at the end of the next step (ramped
-    /// from the value in force now). Non-finite values are rejected.
-    pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
-        let spec = self.inputs.get(i).ok_or(Error::NoSuchVariable {
+    fn input_spec(&self, i: usize) -> Result<&VariableSpec, Error> {
+        self.inputs.get(i).ok_or(Error::NoSuchVariable {
             kind: "input",
             index: i,
-        })?;
+        })
+    }
+
+    /// Set input `i`. Held inputs (the default): the value is in force from
+    /// now and held over the next advance; its slope is reset to zero.
+    /// Ramped inputs: the value the next advance ends at. Non-finite values
+    /// are rejected.
+    pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
+        let spec = self.input_spec(i)?;
         if !value.is_finite() {
             return Err(Error::BadValue {
                 name: spec.name.clone(),
@@ -355,8 +362,85 @@ impl Model {
             });
         }
         self.state.inputs_next[i] = value;
-        if self.state.phase == Phase::Setup {
+        if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
             self.state.inputs_now[i] = value;
+        }
+        self.state.input_slopes[i] = 0.0;
+        Ok(())
+    }
+
+    /// Set the `order`-th time derivative of input `i` (only order 1: the
+    /// input then grows linearly from its value over the advance, as
+    /// `fmi2SetRealInputDerivatives` asks). It applies until the input or
+    /// its derivative is set again. Not with ramped inputs.
+    pub fn set_input_derivative(&mut self, i: usize, order: i32, value: f64) -> Result<(), Error> {
+        let spec = self.input_spec(i)?;
+        let bad = |reason: &str| Error::BadValue {
+            name: format!("derivative of order {order} of {}", spec.name),
+            value,
+            reason: reason.into(),
+        };
+        if order != 1 {
+            return Err(bad("only first derivatives are taken (order 1)"));
+        }
+        if self.scene.solver.input_timing == InputTiming::Ramp {
+            return Err(bad(
+                "the scene ramps its inputs (solver input_timing \"ramp\"); derivatives need held inputs",
+            ));
+        }
+        if !value.is_finite() {
+            return Err(bad("not a finite number"));
+        }
+        self.state.input_slopes[i] = value;
+        Ok(())
+    }
+
+    /// Give the sheet a rigid velocity field v(x) = linear + angular x (x -
+    /// center), on every free DOF (supports and prescribed motions keep
+    /// theirs), and make the accelerations consistent with it. Allowed after
+    /// [`Model::initialize`]; the next advance starts from this state.
+    pub fn set_rigid_velocity(
+        &mut self,
+        linear: [f64; 3],
+        angular: [f64; 3],
+        center: [f64; 3],
+    ) -> Result<(), Error> {
+        if self.state.phase != Phase::Running {
+            return Err(Error::Phase(
+                "set_rigid_velocity needs an initialized model".into(),
+            ));
+        }
+        if linear
+            .iter()
+            .chain(&angular)
+            .chain(&center)
+            .any(|x| !x.is_finite())
+        {
+            return Err(Error::BadValue {
+                name: "rigid velocity".into(),
+                value: f64::NAN,
+                reason: "every component must be finite".into(),
+            });
+        }
+        let sys = self.sys.as_ref().expect("initialized");
+        let q = &self.state.dynamics.q;
+        let mut v = vec![0.0; q.len()];
+        sys.asm
+            .rigid
+            .rigid_velocity(q, linear.into(), angular.into(), center.into(), &mut v);
+        // Supports and prescribed motions keep their velocities.
+        for (i, x) in v.iter_mut().enumerate() {
+            if sys.asm.free[i] == crate::assembly::FIXED {
+                *x = self.state.dynamics.v[i];
+            }
+        }
+        let saved = self.state.clone();
+        self.state.dynamics.v = v;
+        let theta = self.state.crease_theta.clone();
+        let u = self.state.inputs_now.clone();
+        if let Err(e) = self.consistent_accelerations(&u, &theta) {
+            self.state = saved;
+            return Err(e);
         }
         Ok(())
     }
@@ -368,32 +452,53 @@ impl Model {
             return Err(Error::Phase("model is already initialized".into()));
         }
         self.apply_parameters();
-        self.build()?;
+        // Built once per life unless the parameters changed since.
+        if self.built_with.as_deref() != Some(&self.state.parameters[..]) {
+            self.build()?;
+        }
         let sys = self.sys.as_mut().expect("built");
         let n = sys.asm.n_dofs();
         let mut q = sys.asm.layout.reference_state(&self.scene.mesh);
         let u = self.state.inputs_now.clone();
-        let d = sys.inputs.drive(&u);
-        for &(i, x) in &d.prescribed {
+        for &(i, x) in &sys.inputs.drive(&u).prescribed {
             q[i] = x;
         }
-        let v = vec![0.0; n];
         let theta_prev = vec![std::f64::consts::PI; sys.asm.creases.len()];
+        self.state.dynamics = Dynamics {
+            q,
+            v: vec![0.0; n],
+            qdd: vec![0.0; n],
+            abar: vec![0.0; n],
+        };
+        self.consistent_accelerations(&u, &theta_prev)?;
+        self.state.h_next = self.sys.as_ref().expect("built").max_step;
+        self.state.phase = Phase::Running;
+        Ok(())
+    }
+
+    /// Accelerations from the equation of motion at the current positions
+    /// and velocities, M qdd = f_ext - f_int on the free DOFs (the mass
+    /// matrix is factored in the stepper's solver, so its iteration matrix
+    /// is forgotten); also the crease angles and outputs.
+    fn consistent_accelerations(&mut self, u: &[f64], theta_prev: &[f64]) -> Result<(), Error> {
+        let sys = self.sys.as_mut().expect("built");
+        let n = sys.asm.n_dofs();
+        let d = sys.inputs.drive(u);
+        let dynm = &self.state.dynamics;
         let mut ev = Evaluation::default();
         sys.asm
             .evaluate(
                 &State {
-                    q: &q,
-                    v: &v,
+                    q: &dynm.q,
+                    v: &dynm.v,
                     theta0: &d.theta0,
                     moment: &d.moment,
-                    theta_prev: &theta_prev,
+                    theta_prev,
                 },
                 &mut ev,
                 None,
             )
             .map_err(Error::Scene)?;
-        // M qdd = f_ext - f_int on the free DOFs.
         let mut rhs = vec![0.0; sys.asm.n_free];
         for i in 0..n {
             let fi = sys.asm.free[i];
@@ -401,6 +506,8 @@ impl Model {
                 rhs[fi] = d.f_ext[i] - ev.force[i];
             }
         }
+        sys.ws.invalidate_jacobian();
+        self.state.jacobian = None;
         let mvals = sys.asm.mass_values().to_vec();
         sys.solver
             .factor(&mvals)
@@ -415,22 +522,18 @@ impl Model {
                 qdd[i] = rhs[fi];
             }
         }
-        self.state.dynamics = Dynamics {
-            q,
-            v,
-            abar: qdd.clone(),
-            qdd,
-        };
+        self.state.dynamics.abar = qdd.clone();
+        self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
-        self.state.h_next = sys.max_step;
-        self.state.phase = Phase::Running;
         self.state.outputs = self.compute_outputs(&ev);
         Ok(())
     }
 
     /// Advance from the current time by `h` seconds with internal steps,
-    /// ramping the inputs from their values in force to the values last
-    /// set. On failure the state is exactly as before the call.
+    /// the inputs held at their values in force (plus their slopes), or
+    /// ramped to the values last set when the scene ramps its inputs. The
+    /// step size and the iteration matrix carry over from the last advance.
+    /// On failure the state is exactly as before the call.
     pub fn advance(&mut self, h: f64) -> Result<StepReport, Error> {
         if self.state.phase != Phase::Running {
             return Err(Error::Phase("advance before initialize".into()));
@@ -463,23 +566,49 @@ impl Model {
         let mut h = self.state.h_next.min(sys.max_step);
         let u0 = self.state.inputs_now.clone();
         let u1 = self.state.inputs_next.clone();
-        // Every advance starts with a fresh iteration matrix: its result is a
-        // function of the state alone (restored states repeat bit for bit).
-        sys.ws.invalidate_jacobian();
+        let slopes = self.state.input_slopes.clone();
+        // The inputs at elapsed time `e` of this advance.
+        let inputs_at = |e: f64, u: &mut [f64]| {
+            let frac = e / big_h;
+            for k in 0..u.len() {
+                u[k] = u0[k] + (u1[k] - u0[k]) * frac + slopes[k] * e;
+            }
+        };
+        let cap = sys.max_internal_steps;
+        let too_many = || Error::StepFailed {
+            time: t0,
+            reason: format!(
+                "the step needs more than {cap} internal steps (solver.max_internal_steps); \
+                 use a smaller communication step or raise the limit"
+            ),
+        };
+        // The iteration matrix of the state's history (a restored state
+        // re-forms the one it was saved with), so that modified Newton
+        // keeps it across communication points.
+        if sys.cd.is_none() {
+            ga::restore_jacobian(
+                &sys.asm,
+                &mut sys.solver,
+                sys.coeffs,
+                self.state.jacobian.as_ref(),
+                &mut sys.ws,
+            )
+            .map_err(|reason| Error::StepFailed { time: t0, reason })?;
+        }
         let stats0 = sys.solver.stats();
         let mut u = u0.clone();
         let mut d = DriveValues::default();
         if let Some(cd) = sys.cd.as_mut() {
             // Explicit: equal substeps below the stability limit.
             let n_sub = (big_h / cd.stable_step().min(sys.max_step)).ceil().max(1.0);
+            if n_sub > cap as f64 {
+                return Err(too_many());
+            }
             let h = big_h / n_sub;
             let t_asm = cd.assembly_time;
             let t_solve = cd.solve_time();
             for k in 1..=n_sub as usize {
-                let frac = k as f64 / n_sub;
-                for k in 0..u.len() {
-                    u[k] = u0[k] + (u1[k] - u0[k]) * frac;
-                }
+                inputs_at(k as f64 * h, &mut u);
                 sys.inputs.drive_into(&u, &mut d);
                 let gd = ga::Drive {
                     theta0: &d.theta0,
@@ -502,14 +631,14 @@ impl Model {
             s = big_h;
         }
         while s < big_h {
+            if report.steps + report.rejected >= cap {
+                return Err(too_many());
+            }
             let remaining = big_h - s;
             if h >= remaining || remaining - h < 1e-3 * h {
                 h = remaining;
             }
-            let frac = (s + h) / big_h;
-            for k in 0..u.len() {
-                u[k] = u0[k] + (u1[k] - u0[k]) * frac;
-            }
+            inputs_at(s + h, &mut u);
             sys.inputs.drive_into(&u, &mut d);
             let gd = ga::Drive {
                 theta0: &d.theta0,
@@ -529,6 +658,9 @@ impl Model {
                 sys.settings,
                 &mut sys.ws,
             );
+            // Keep the step within [min_step, max_step] (max wins, so a bad
+            // pair of settings cannot panic here).
+            let bounded = |x: f64| x.max(sys.min_step).min(sys.max_step);
             match res {
                 Ok((next, out)) => {
                     report.newton_iterations += out.iterations;
@@ -548,7 +680,7 @@ impl Model {
                         } else {
                             2.0
                         };
-                        let hn = (h * grow.clamp(0.2, 2.0)).clamp(sys.min_step, sys.max_step);
+                        let hn = bounded(h * grow.clamp(0.2, 2.0));
                         // A short final step must not shrink the next advance's step.
                         self.state.h_next = if h < remaining {
                             hn
@@ -558,8 +690,7 @@ impl Model {
                         h = hn;
                     } else {
                         report.rejected += 1;
-                        h = (h * (0.9 * out.error.powf(-1.0 / 3.0)).clamp(0.2, 0.9))
-                            .max(sys.min_step);
+                        h = bounded(h * (0.9 * out.error.powf(-1.0 / 3.0)).clamp(0.2, 0.9));
                     }
                 }
                 Err(reason) => {
@@ -578,13 +709,16 @@ impl Model {
         if sys.cd.is_none() {
             report.factor_time = (stats.factor_time - stats0.factor_time).as_secs_f64();
             report.solve_time = (stats.solve_time - stats0.solve_time).as_secs_f64();
+            self.state.jacobian = sys.ws.jacobian().cloned();
         }
         let ev = match &sys.cd {
             Some(cd) => cd.evaluation().clone(),
             None => sys.ws.evaluation().clone(),
         };
+        inputs_at(big_h, &mut u);
         self.state.time = t0 + big_h;
-        self.state.inputs_now = u1;
+        self.state.inputs_now.clone_from(&u);
+        self.state.inputs_next = u;
         self.state.outputs = self.compute_outputs(&ev);
         if self.state.outputs.iter().any(|x| !x.is_finite()) {
             return Err(Error::StepFailed {
@@ -683,7 +817,13 @@ impl Model {
                         == self.sys.as_ref().map(|s| s.asm.creases.len()).unwrap_or(0)
             }
         };
+        let mut s = s.clone();
+        if s.input_slopes.is_empty() {
+            // A state saved before inputs had slopes.
+            s.input_slopes = vec![0.0; s.inputs_now.len()];
+        }
         let ok = dyn_ok
+            && s.input_slopes.len() == self.inputs.len()
             && s.inputs_now.len() == self.inputs.len()
             && s.inputs_next.len() == self.inputs.len()
             && s.parameters.len() == self.parameters.len()
@@ -702,12 +842,17 @@ impl Model {
                 return Err(e);
             }
         }
-        self.state = s.clone();
+        self.state = s;
         Ok(())
     }
 
+    /// Put the parameter values into the scene. Automatic damping stays on
+    /// until a damping parameter is set; while on, the damping parameters
+    /// show the values it chose for the current material.
     fn apply_parameters(&mut self) {
         let sc = &mut self.scene;
+        sc.auto_damping = self.auto_damping && !self.state.damping_set;
+        let auto = sc.auto_damping;
         for (spec, &x) in self.parameters.iter().zip(&self.state.parameters) {
             match spec.name.as_str() {
                 "material.youngs_modulus" => sc.material.youngs_modulus = x,
@@ -716,9 +861,9 @@ impl Model {
                 "material.density" => sc.material.density = x,
                 "crease.length_scale" => sc.crease = CreaseStiffness::LengthScale(x),
                 "crease.stiffness_per_length" => sc.crease = CreaseStiffness::PerLength(x),
-                "damping.alpha" => sc.damping.alpha = x,
-                "damping.beta" => sc.damping.beta = x,
-                "damping.crease" => sc.damping.crease = x,
+                "damping.alpha" if !auto => sc.damping.alpha = x,
+                "damping.beta" if !auto => sc.damping.beta = x,
+                "damping.crease" if !auto => sc.damping.crease = x,
                 "gravity.x" | "gravity.y" | "gravity.z" => {
                     let c = match spec.name.as_bytes()[8] {
                         b'x' => 0,
@@ -732,7 +877,19 @@ impl Model {
                 "solver.rho_inf" => sc.solver.rho_inf = x,
                 "solver.max_step" => sc.solver.max_step = x,
                 "solver.tolerance" => sc.solver.tolerance = x,
+                "solver.max_internal_steps" => sc.solver.max_internal_steps = x as usize,
                 _ => {}
+            }
+        }
+        if auto {
+            let ph = physics(sc);
+            for (spec, x) in self.parameters.iter().zip(&mut self.state.parameters) {
+                match spec.name.as_str() {
+                    "damping.alpha" => *x = ph.alpha,
+                    "damping.beta" => *x = ph.beta,
+                    "damping.crease" => *x = ph.crease_c_per_length,
+                    _ => {}
+                }
             }
         }
     }
@@ -853,6 +1010,7 @@ impl Model {
             ws: ga::Workspace::default(),
             max_step: sc.solver.max_step,
             min_step: sc.solver.min_step,
+            max_internal_steps: sc.solver.max_internal_steps,
             asm,
         };
         self.sys = Some(sys);
@@ -912,29 +1070,33 @@ impl InputMap {
 }
 
 /// The physics a scene asks for: material, crease stiffness per unit
-/// length, damping (the automatic mass damping when the scene sets none).
+/// length, damping (the automatic damping when the scene sets none).
 pub fn physics(sc: &Scene) -> Physics {
     let material = sc.material;
     let k_pl = match sc.crease {
         CreaseStiffness::LengthScale(l) => material.bending_stiffness() / l,
         CreaseStiffness::PerLength(k) => k,
     };
+    let (alpha, beta, crease) = if sc.auto_damping {
+        (auto_alpha(sc, k_pl), 0.0, 0.0)
+    } else {
+        (sc.damping.alpha, sc.damping.beta, sc.damping.crease)
+    };
     Physics {
         material,
         crease_k_per_length: k_pl,
-        crease_c_per_length: sc.damping.crease,
-        alpha: if sc.auto_damping {
-            auto_alpha(sc, k_pl)
-        } else {
-            sc.damping.alpha
-        },
-        beta: sc.damping.beta,
+        crease_c_per_length: crease,
+        alpha,
+        beta,
     }
 }
 
-/// Default mass-proportional damping: damping ratio 0.2 on the folding mode
-/// of a panel of the mean facet size hinged on its crease,
-/// omega = sqrt(3 k / (rho h w^3)) per unit crease length.
+/// Default damping: mass-proportional damping of the deformation rate
+/// (rigid motion undamped, see [`crate::rigid`]) with damping ratio
+/// [`AUTO_DAMPING_RATIO`] on the folding mode of a panel of the mean facet
+/// size w hinged on its crease, omega = sqrt(3 k / (rho h w^3)) per unit
+/// crease length. Every deformation mode then decays at the same rate
+/// alpha / 2, so a fold settles within a few of its periods.
 fn auto_alpha(sc: &Scene, k_per_length: f64) -> f64 {
     let mesh = &sc.mesh;
     let nt = mesh.triangles.len().max(1);
@@ -942,8 +1104,11 @@ fn auto_alpha(sc: &Scene, k_per_length: f64) -> f64 {
     let w = (2.0 * mean_area).sqrt();
     let m = &sc.material;
     let omega = (3.0 * k_per_length / (m.density * m.thickness * w.powi(3))).sqrt();
-    2.0 * 0.2 * omega
+    2.0 * AUTO_DAMPING_RATIO * omega
 }
+
+/// Damping ratio of the automatic damping on a mean facet's folding mode.
+pub const AUTO_DAMPING_RATIO: f64 = 0.2;
 
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`
 /// outputs.
@@ -1011,24 +1176,31 @@ fn parameter_table(scene: &Scene) -> Vec<VariableSpec> {
             k,
         )),
     }
-    let d = &scene.damping;
+    // Start values: the damping in effect (the automatic choice, unless the
+    // scene sets damping); setting any of them switches automatic damping off.
+    let d = physics(scene);
+    let auto = if scene.auto_damping {
+        " (automatic damping until a damping parameter is set)"
+    } else {
+        ""
+    };
     p.push(spec(
         "damping.alpha".into(),
         "1/s",
-        "Rayleigh mass-proportional damping".into(),
+        format!("Rayleigh mass-proportional damping{auto}"),
         d.alpha,
     ));
     p.push(spec(
         "damping.beta".into(),
         "s",
-        "Rayleigh stiffness-proportional damping".into(),
+        format!("Rayleigh stiffness-proportional damping{auto}"),
         d.beta,
     ));
     p.push(spec(
         "damping.crease".into(),
         "N.s/rad",
-        "crease damping per unit length".into(),
-        d.crease,
+        format!("crease damping per unit length{auto}"),
+        d.crease_c_per_length,
     ));
     if let Some(g) = scene.gravity {
         for (c, gc) in ["x", "y", "z"].iter().zip(g) {
@@ -1058,6 +1230,12 @@ fn parameter_table(scene: &Scene) -> Vec<VariableSpec> {
         "",
         "relative solver tolerance".into(),
         s.tolerance,
+    ));
+    p.push(spec(
+        "solver.max_internal_steps".into(),
+        "",
+        "most internal steps one communication step may take before it fails".into(),
+        s.max_internal_steps as f64,
     ));
     p
 }

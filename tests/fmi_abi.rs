@@ -88,11 +88,20 @@ struct Fmu {
 
 impl Fmu {
     fn new(tag: &str) -> Fmu {
-        let (dir, g) = resources(tag, &scene_bytes(&scene()));
+        Fmu::of(tag, &scene(), false)
+    }
+    /// An instance of `scene`, with `loggingOn` as given.
+    fn of(tag: &str, scene: &Scene, logging_on: bool) -> Fmu {
+        let (dir, g) = resources(tag, &scene_bytes(scene));
         let log: Box<Log> = Box::default();
-        let c = instantiate(&log, 1, &g, &uri(&dir));
+        let c = instantiate_logging(&log, 1, &g, &uri(&dir), logging_on);
         assert!(!c.is_null(), "{:?}", log.lock().unwrap());
         Fmu { c, log }
+    }
+    /// Log lines of a category so far.
+    fn lines(&self, category: &str) -> usize {
+        let log = self.log.lock().unwrap();
+        log.iter().filter(|l| l.1 == category).count()
     }
     fn initialized(tag: &str) -> Fmu {
         let f = Fmu::new(tag);
@@ -127,11 +136,22 @@ impl Drop for Fmu {
 }
 
 fn instantiate(log: &Log, kind: i32, guid: &str, uri: &str) -> fmi2Component {
+    instantiate_logging(log, kind, guid, uri, false)
+}
+
+fn instantiate_logging(
+    log: &Log,
+    kind: i32,
+    guid: &str,
+    uri: &str,
+    logging_on: bool,
+) -> fmi2Component {
     let cb = callbacks(log);
     let name = CString::new("test").unwrap();
     let guid = CString::new(guid).unwrap();
     let uri = CString::new(uri).unwrap();
-    unsafe { fmi2Instantiate(name.as_ptr(), kind, guid.as_ptr(), uri.as_ptr(), &cb, 0, 0) }
+    let on = logging_on as fmi2Boolean;
+    unsafe { fmi2Instantiate(name.as_ptr(), kind, guid.as_ptr(), uri.as_ptr(), &cb, 0, on) }
 }
 
 fn model() -> Model {
@@ -521,9 +541,10 @@ fn status_queries_and_unsupported_functions() {
             fmi2GetDirectionalDerivative(f.c, null(), 0, null(), 0, null(), null_mut()),
             fmi2Error
         );
+        // canInterpolateInputs: an empty call is fine (derivatives: below).
         assert_eq!(
             fmi2SetRealInputDerivatives(f.c, null(), 0, null(), null()),
-            fmi2Error
+            fmi2OK
         );
         assert_eq!(
             fmi2GetRealOutputDerivatives(f.c, null(), 0, null(), null_mut()),
@@ -676,4 +697,154 @@ fn the_library_exports_exactly_the_fmi2_functions() {
     let mut want = expected.to_vec();
     want.sort_unstable();
     assert_eq!(got, want, "nm -D --defined-only {}", lib.display());
+}
+
+/// A scene whose steps fail: at most two internal steps of 1 ms per
+/// communication step, so any step longer than 2 ms is discarded.
+fn capped_scene() -> Scene {
+    let mut s = scene();
+    s.solver.max_internal_steps = 2;
+    s
+}
+
+fn initialize(f: &Fmu, stop: Option<f64>) {
+    unsafe {
+        let (defined, t) = (stop.is_some() as fmi2Boolean, stop.unwrap_or(0.0));
+        assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 0.0, defined, t), fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(f.c), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(f.c), fmi2OK);
+    }
+}
+
+/// FMI 2.0 section 4.2.4: after a discarded step the FMU says it is
+/// terminated (so fmpy, fmusim and OMSimulator stop instead of repeating
+/// the step), its time is the last successful one, SetReal and DoStep are
+/// refused, and a master retries through fmi2SetFMUstate with a smaller step.
+#[test]
+fn a_discarded_step_terminates_until_a_state_is_restored() {
+    let f = Fmu::of("discard", &capped_scene(), false);
+    initialize(&f, None);
+    let (_, i, _) = vr_ranges();
+    let mut b: fmi2Boolean = 7;
+    let mut t: fmi2Real = -1.0;
+    let mut saved: fmi2FMUstate = null_mut();
+    unsafe {
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.002, 0), fmi2OK);
+        assert_eq!(fmi2GetBooleanStatus(f.c, 3, &mut b), fmi2OK);
+        assert_eq!(b, FMI2_FALSE);
+        assert_eq!(fmi2GetFMUstate(f.c, &mut saved), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.002, 0.01, 0), fmi2Discard);
+        assert_eq!(fmi2GetBooleanStatus(f.c, 3, &mut b), fmi2OK);
+        assert_eq!(b, FMI2_TRUE, "terminated after a discard");
+        assert_eq!(fmi2GetRealStatus(f.c, 2, &mut t), fmi2OK);
+        assert_eq!(t, 0.002, "last successful time");
+        assert_eq!(f.set(&i[..1], &[0.5]), fmi2Error);
+        assert!(f.last_error().contains("step failed"), "{}", f.last_error());
+        assert_eq!(fmi2DoStep(f.c, 0.002, 0.001, 0), fmi2Error);
+        // Retry: restore the state of t = 0.002, take a step that fits.
+        assert_eq!(fmi2SetFMUstate(f.c, saved), fmi2OK);
+        assert_eq!(fmi2GetBooleanStatus(f.c, 3, &mut b), fmi2OK);
+        assert_eq!(b, FMI2_FALSE);
+        assert_eq!(fmi2DoStep(f.c, 0.002, 0.002, 0), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.004, 0.01, 0), fmi2Discard);
+        assert_eq!(fmi2Terminate(f.c), fmi2OK);
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut saved), fmi2OK);
+    }
+}
+
+/// FMI 2.0 section 2.1.6: with a stop time defined, a step past it is an
+/// error (and changes nothing).
+#[test]
+fn steps_past_the_stop_time_are_errors() {
+    let f = Fmu::of("stop", &scene(), false);
+    initialize(&f, Some(0.02));
+    unsafe {
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.01, 0.01, 0), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.02, 0.01, 0), fmi2Error);
+        assert!(f.last_error().contains("stopTime"), "{}", f.last_error());
+        let mut t = 0.0;
+        assert_eq!(fmi2GetRealStatus(f.c, 2, &mut t), fmi2OK);
+        assert_eq!(t, 0.02);
+    }
+}
+
+/// FMI 2.0 section 2.1.5: the logger is called only for enabled
+/// categories. Without loggingOn, errors are reported (logStatusError) but
+/// not discards; fmi2SetDebugLogging(false) silences everything, and with a
+/// list only the listed categories are called, once per failure.
+#[test]
+fn the_logger_is_called_only_for_enabled_categories() {
+    let f = Fmu::of("logcat", &capped_scene(), false);
+    initialize(&f, None);
+    let mut saved: fmi2FMUstate = null_mut();
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(f.c, &mut saved), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Discard);
+        assert_eq!(f.lines("logStatusDiscard"), 0, "discard category is off");
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Error);
+        assert_eq!(f.lines("logStatusError"), 1);
+        // Everything off: no call at all.
+        assert_eq!(fmi2SetDebugLogging(f.c, 0, 0, null()), fmi2OK);
+        let n = f.log.lock().unwrap().len();
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Error);
+        assert_eq!(f.log.lock().unwrap().len(), n);
+        // Only discards: one line per discarded step.
+        let cat = CString::new("logStatusDiscard").unwrap();
+        assert_eq!(fmi2SetDebugLogging(f.c, 1, 1, &cat.as_ptr()), fmi2OK);
+        assert_eq!(fmi2SetFMUstate(f.c, saved), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Discard);
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Error);
+        let log = f.log.lock().unwrap();
+        assert_eq!(log.len(), n + 1, "{log:?}");
+        assert_eq!(log[n].1, "logStatusDiscard");
+        drop(log);
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut saved), fmi2OK);
+    }
+    // loggingOn at instantiation: the discard is reported.
+    let g = Fmu::of("logcat_on", &capped_scene(), true);
+    initialize(&g, None);
+    assert_eq!(unsafe { fmi2DoStep(g.c, 0.0, 0.01, 0) }, fmi2Discard);
+    assert_eq!(g.lines("logStatusDiscard"), 1);
+}
+
+/// canInterpolateInputs: a first derivative set with the value makes the
+/// input grow linearly over the step (the input reads u + du h after it);
+/// other orders, non-inputs and non-finite values are refused.
+#[test]
+fn input_derivatives_extrapolate_over_the_step() {
+    let f = Fmu::initialized("derivatives");
+    let (p, i, o) = vr_ranges();
+    let order1 = [1 as fmi2Integer];
+    unsafe {
+        assert_eq!(f.set(&i[..1], &[0.2]), fmi2OK);
+        assert_eq!(
+            fmi2SetRealInputDerivatives(f.c, i.as_ptr(), 1, order1.as_ptr(), [5.0].as_ptr()),
+            fmi2OK
+        );
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.1, 0), fmi2OK);
+        assert!((f.get(&i[..1])[0] - 0.7).abs() < 1e-12);
+        // Setting the value resets the slope: held from here.
+        assert_eq!(f.set(&i[..1], &[0.7]), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.1, 0.1, 0), fmi2OK);
+        assert_eq!(f.get(&i[..1])[0], 0.7);
+        let order2 = [2 as fmi2Integer];
+        assert_eq!(
+            fmi2SetRealInputDerivatives(f.c, i.as_ptr(), 1, order2.as_ptr(), [1.0].as_ptr()),
+            fmi2Error
+        );
+        assert!(f.last_error().contains("order 1"));
+        assert_eq!(
+            fmi2SetRealInputDerivatives(f.c, p.as_ptr(), 1, order1.as_ptr(), [1.0].as_ptr()),
+            fmi2Error
+        );
+        assert_eq!(
+            fmi2SetRealInputDerivatives(f.c, o.as_ptr(), 1, order1.as_ptr(), [1.0].as_ptr()),
+            fmi2Error
+        );
+        assert_eq!(
+            fmi2SetRealInputDerivatives(f.c, i.as_ptr(), 1, order1.as_ptr(), [f64::NAN].as_ptr()),
+            fmi2Error
+        );
+    }
 }

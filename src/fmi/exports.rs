@@ -4,7 +4,7 @@
 //! functions without an instance): a panic becomes `fmi2Fatal` plus a log
 //! line and marks the instance dead; it never unwinds into the host. Null
 //! pointers are rejected with `fmi2Error` before they are dereferenced.
-//! The Model Exchange functions, directional derivatives, input
+//! The Model Exchange functions, directional derivatives, output
 //! derivatives and `fmi2CancelStep` return `fmi2Error` with a log line.
 #![allow(non_snake_case)]
 
@@ -705,24 +705,29 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
 // ---------------------------------------------------------------------------
 // Co-simulation.
 
-/// `fmi2SetRealInputDerivatives`: not provided (canInterpolateInputs is
-/// false; inputs are ramped linearly over each step anyway).
+/// `fmi2SetRealInputDerivatives`: first derivatives of inputs over the
+/// next communication steps (canInterpolateInputs is true).
 ///
 /// # Safety
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *const fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2SetRealInputDerivatives", |i| {
-        i.unsupported(
-            "fmi2SetRealInputDerivatives",
-            "canInterpolateInputs is false",
-        )
+    guard(c, "fmi2SetRealInputDerivatives", |inst| {
+        // SAFETY: host contract: nvr elements each.
+        let (Some(vrs), Some(orders), Some(values)) = (
+            unsafe { slice_arg(vr, nvr) },
+            unsafe { slice_arg(order, nvr) },
+            unsafe { slice_arg(value, nvr) },
+        ) else {
+            return null_arg(inst, "fmi2SetRealInputDerivatives", "vr, order or value");
+        };
+        inst.set_input_derivatives(vrs, orders, values)
     })
 }
 

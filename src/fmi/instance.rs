@@ -9,7 +9,9 @@
 //! outputs `P+I..P+I+O`, each block in the order of the Model's tables.
 //!
 //! A rejected call (bad argument, wrong order) changes nothing and leaves
-//! the instance in the phase it was in, so the master may go on. Only a
+//! the instance in the phase it was in, so the master may go on. A step the
+//! solver cannot complete moves it to [`Phase::StepFailed`] (state rolled
+//! back, `fmi2Terminated` true), from which `fmi2SetFMUstate` retries. Only a
 //! failure inside the model that leaves no consistent state (initialization
 //! failed, non-finite outputs) moves it to [`Phase::Error`], from which
 //! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
@@ -30,9 +32,13 @@ pub enum Phase {
     Instantiated,
     /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
     InitializationMode,
-    /// Ready for `fmi2DoStep` (also after a discarded step: the state was
-    /// rolled back to the start of that step).
+    /// Ready for `fmi2DoStep`.
     StepComplete,
+    /// After `fmi2DoStep` returned `fmi2Discard`: the state is rolled back to
+    /// the start of that step and `fmi2Terminated` is true. Values may be
+    /// read; `fmi2SetFMUstate` (to retry, e.g. with a smaller step),
+    /// `fmi2Terminate`, `fmi2Reset` or free. FMI 2.0 section 4.2.4.
+    StepFailed,
     /// After `fmi2Terminate`: values may be read; reset or free.
     Terminated,
     /// The model failed in a way that left no usable state: read values for
@@ -47,15 +53,18 @@ impl Phase {
             Phase::Instantiated => "instantiated",
             Phase::InitializationMode => "initialization mode",
             Phase::StepComplete => "step complete",
+            Phase::StepFailed => "step failed",
             Phase::Terminated => "terminated",
             Phase::Error => "error",
         }
     }
 }
 
-/// Log categories (declared in modelDescription.xml). Status messages
-/// (warning, discard, error, fatal) are always passed to the logger;
-/// `logEvents` lines only when debug logging is on for that category.
+/// Log categories (declared in modelDescription.xml). The logger is only
+/// called for enabled categories (FMI 2.0 section 2.1.5): with `loggingOn`
+/// at instantiation all of them, without it `logStatusError` and
+/// `logStatusFatal` (so that a failed call says why);
+/// `fmi2SetDebugLogging` changes the selection.
 pub const LOG_CATEGORIES: [(&str, &str); 5] = [
     (
         "logEvents",
@@ -73,11 +82,10 @@ pub const LOG_CATEGORIES: [(&str, &str); 5] = [
     ("logStatusFatal", "Calls that returned fmi2Fatal"),
 ];
 
-/// The host's logger, copied at instantiation, with the debug settings.
+/// The host's logger, copied at instantiation, with the enabled categories.
 pub struct Logger {
     callbacks: fmi2CallbackFunctions,
     instance_name: CString,
-    logging_on: bool,
     /// Enabled `logEvents` etc. (indices into [`LOG_CATEGORIES`]).
     enabled: [bool; LOG_CATEGORIES.len()],
 }
@@ -85,25 +93,31 @@ pub struct Logger {
 impl Logger {
     /// A logger for instance `name` with the host's callbacks.
     pub fn new(callbacks: fmi2CallbackFunctions, name: &str, logging_on: bool) -> Logger {
+        // logEvents, logStatusWarning, logStatusDiscard: debug output;
+        // logStatusError, logStatusFatal: on unless switched off.
+        let enabled = [logging_on, logging_on, logging_on, true, true];
         Logger {
             callbacks,
             instance_name: c_string(name),
-            logging_on,
-            enabled: [true; LOG_CATEGORIES.len()],
+            enabled,
         }
     }
 
-    /// Log `msg` with `status`. Status messages always go out; `fmi2OK`
-    /// messages only with debug logging on and `logEvents` enabled.
-    pub fn log(&self, status: fmi2Status, msg: &str) {
-        let category = match status {
+    fn category(status: fmi2Status) -> usize {
+        match status {
             fmi2OK | fmi2Pending => 0,
             fmi2Warning => 1,
             fmi2Discard => 2,
             fmi2Error => 3,
             fmi2Fatal => 4,
-        };
-        if category == 0 && !(self.logging_on && self.enabled[0]) {
+        }
+    }
+
+    /// Log `msg` with `status` under its category (`logEvents` for
+    /// `fmi2OK`), only when that category is enabled.
+    pub fn log(&self, status: fmi2Status, msg: &str) {
+        let category = Self::category(status);
+        if !self.enabled[category] {
             return;
         }
         let Some(logger) = self.callbacks.logger else {
@@ -128,16 +142,18 @@ impl Logger {
 
     /// True when `fmi2OK` (debug) messages go out: build them only then.
     pub fn debug_enabled(&self) -> bool {
-        self.logging_on && self.enabled[0] && self.callbacks.logger.is_some()
+        self.enabled[0] && self.callbacks.logger.is_some()
     }
 
-    /// `fmi2SetDebugLogging`: switch debug logging and select categories
-    /// (none listed = all). Unknown names are an error and change nothing.
+    /// `fmi2SetDebugLogging` (FMI 2.0 section 2.1.5): with `on` and no
+    /// categories, every category; with `on` and categories, exactly those;
+    /// without `on`, none (no categories) or all but those listed stay as
+    /// they were. Unknown names are an error and change nothing.
     pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> fmi2Status {
-        let mut enabled = [categories.is_empty(); LOG_CATEGORIES.len()];
+        let mut listed = [false; LOG_CATEGORIES.len()];
         for c in categories {
             match LOG_CATEGORIES.iter().position(|(n, _)| n == c) {
-                Some(k) => enabled[k] = true,
+                Some(k) => listed[k] = true,
                 None => {
                     let known: Vec<&str> = LOG_CATEGORIES.iter().map(|c| c.0).collect();
                     self.log(
@@ -151,8 +167,15 @@ impl Logger {
                 }
             }
         }
-        self.logging_on = on;
-        self.enabled = enabled;
+        if categories.is_empty() {
+            self.enabled = [on; LOG_CATEGORIES.len()];
+        } else if on {
+            self.enabled = listed;
+        } else {
+            for (e, l) in self.enabled.iter_mut().zip(listed) {
+                *e &= !l;
+            }
+        }
         fmi2OK
     }
 }
@@ -208,8 +231,9 @@ pub struct Instance {
     /// Set after a panic: every later call but `fmi2FreeInstance` fails.
     pub dead: bool,
     guid: String,
-    scene: Scene,
     model: Model,
+    /// The model's state right after instantiation (what `fmi2Reset` restores).
+    initial: ModelState,
     phase: Phase,
     start_time: f64,
     stop_time: Option<f64>,
@@ -231,6 +255,7 @@ impl Instance {
     ) -> Option<Instance> {
         match Self::try_instantiate(&log, fmu_type, guid, resource_location) {
             Ok((guid, scene, model)) => {
+                let initial = model.save_state();
                 let (n_par, n_in, n_out) = (
                     model.parameters().len(),
                     model.inputs().len(),
@@ -247,8 +272,8 @@ impl Instance {
                     log,
                     dead: false,
                     guid,
-                    scene,
                     model,
+                    initial,
                     phase: Phase::Instantiated,
                     start_time: 0.0,
                     stop_time: None,
@@ -329,6 +354,10 @@ impl Instance {
             Phase::InitializationMode => "; call fmi2ExitInitializationMode first",
             Phase::Terminated => "; the instance is terminated (fmi2Reset to start again)",
             Phase::Error => "; the instance is in the error state (fmi2SetFMUstate or fmi2Reset)",
+            Phase::StepFailed => {
+                "; the last fmi2DoStep was discarded (fmi2SetFMUstate to a saved state to retry, \
+                 fmi2Terminate or fmi2Reset)"
+            }
             Phase::StepComplete => "",
         };
         let allowed: Vec<&str> = allowed.iter().map(|p| p.name()).collect();
@@ -433,18 +462,21 @@ impl Instance {
 
     /// `fmi2Terminate`.
     pub fn terminate(&mut self) -> fmi2Status {
-        if let Err(s) = self.require("fmi2Terminate", &[Phase::StepComplete, Phase::Error]) {
+        if let Err(s) = self.require(
+            "fmi2Terminate",
+            &[Phase::StepComplete, Phase::StepFailed, Phase::Error],
+        ) {
             return s;
         }
         self.phase = Phase::Terminated;
         fmi2OK
     }
 
-    /// `fmi2Reset`: back to the freshly instantiated model of the scene.
+    /// `fmi2Reset`: back to the freshly instantiated model of the scene
+    /// (its saved initial state: the scene is not read or built again).
     pub fn reset(&mut self) -> fmi2Status {
-        match Model::new(self.scene.clone()) {
-            Ok(m) => {
-                self.model = m;
+        match self.model.restore_state(&self.initial) {
+            Ok(()) => {
                 self.phase = Phase::Instantiated;
                 self.start_time = 0.0;
                 self.stop_time = None;
@@ -592,9 +624,70 @@ impl Instance {
         fmi2OK
     }
 
+    /// `fmi2SetRealInputDerivatives`: first derivatives of inputs (all
+    /// checked before any is applied). A derivative applies from the current
+    /// communication point until it or the input's value is set again.
+    pub fn set_input_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        values: &[f64],
+    ) -> fmi2Status {
+        const F: &str = "fmi2SetRealInputDerivatives";
+        if let Err(s) = self.require(
+            F,
+            &[
+                Phase::Instantiated,
+                Phase::InitializationMode,
+                Phase::StepComplete,
+            ],
+        ) {
+            return s;
+        }
+        let mut inputs = Vec::with_capacity(vrs.len());
+        for (&vr, &order) in vrs.iter().zip(orders) {
+            let i = match self.resolve(vr) {
+                Some(VarRef::Input(i)) => i,
+                Some(r) => {
+                    return self.error(format!(
+                        "{F}: {} (value reference {vr}) is not an input",
+                        self.var_name(r)
+                    ));
+                }
+                None => {
+                    return self.error(format!("{F}: no Real variable with value reference {vr}"));
+                }
+            };
+            if order != 1 {
+                return self.error(format!(
+                    "{F}: order {order} for {}: this FMU takes first derivatives (order 1) only; \
+                     nothing was changed",
+                    self.var_name(VarRef::Input(i))
+                ));
+            }
+            inputs.push(i);
+        }
+        if let Some((&i, &v)) = inputs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
+            return self.error(format!(
+                "{F}: the derivative of {} = {v} is not a finite number; nothing was changed",
+                self.var_name(VarRef::Input(i))
+            ));
+        }
+        for (&i, &v) in inputs.iter().zip(values) {
+            // Finite values fail only for a reason shared by every input
+            // (ramped inputs), so nothing has been applied when one fails.
+            if let Err(e) = self.model.set_input_derivative(i, 1, v) {
+                return self.error(format!("{F}: {e}; nothing was changed"));
+            }
+        }
+        fmi2OK
+    }
+
     /// `fmi2DoStep`: advance from `t` (which must be the FMU's time) by
-    /// `h`. On a solver failure the state is rolled back and the result is
-    /// `fmi2Discard`; the master may retry from `t` with a smaller step.
+    /// `h`, not past the stop time. On a solver failure the state is rolled
+    /// back, the result is `fmi2Discard` and the instance is in "step
+    /// failed" (`fmi2Terminated` true): a master retries through
+    /// `fmi2SetFMUstate`, and none can loop on the same failing step.
     pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
         if let Err(s) = self.require("fmi2DoStep", &[Phase::StepComplete]) {
             return s;
@@ -611,10 +704,18 @@ impl Instance {
                  use fmi2SetFMUstate to go back in time"
             ));
         }
+        let target = t + h;
+        if let Some(stop) = self.stop_time
+            && target > stop + TIME_TOLERANCE * stop.abs().max(1.0)
+        {
+            return self.error(format!(
+                "fmi2DoStep: the step from t = {t} by {h} ends at {target}, after the stopTime {stop} \
+                 set by fmi2SetupExperiment (FMI 2.0 section 2.1.6)"
+            ));
+        }
         if let Err(e) = set_model_time(&mut self.model, t) {
             return self.error(format!("fmi2DoStep: {e}"));
         }
-        let target = t + h;
         match self.model.advance(h) {
             Ok(report) => {
                 if let Err(e) = set_model_time(&mut self.model, target) {
@@ -650,11 +751,14 @@ impl Instance {
             }
             Err(ModelError::StepFailed { time, reason }) => {
                 self.outputs = None;
+                self.phase = Phase::StepFailed;
                 self.log.log(
                     fmi2Discard,
                     &format!(
                         "fmi2DoStep: the step from t = {t} by {h} could not be completed (failed at t = {time}: {reason}); \
-                         the state is rolled back to t = {}; retry with a smaller step",
+                         the state is rolled back to t = {} (fmi2LastSuccessfulTime) and fmi2Terminated is true; \
+                         to retry, restore a state saved at t with fmi2SetFMUstate and step again, \
+                         e.g. with a smaller step",
                         self.model.time()
                     ),
                 );
@@ -676,10 +780,11 @@ impl Instance {
         }
     }
 
-    /// `fmi2GetBooleanStatus`: only `fmi2Terminated` (always false).
+    /// `fmi2GetBooleanStatus`: only `fmi2Terminated`, true after a
+    /// discarded step (the FMU cannot go on from there without a restore).
     pub fn status_boolean(&self, kind: StatusKind) -> Result<bool, fmi2Status> {
         match kind {
-            StatusKind::Terminated => Ok(false),
+            StatusKind::Terminated => Ok(self.phase == Phase::StepFailed),
             _ => Err(self.unsupported_status("fmi2GetBooleanStatus", kind)),
         }
     }

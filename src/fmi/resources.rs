@@ -8,7 +8,7 @@
 //! [`SCENE_FILE`] name.
 
 use crate::model::Model;
-use crate::scene::{CreaseStiffness, Scene};
+use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// The `modelIdentifier`: one shared library for every scene.
@@ -108,59 +108,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             })?;
         }
     }
-    let m = &s.material;
-    let pos = |what: &str, v: f64| {
-        check(v.is_finite() && v > 0.0, || {
-            format!("{what}: {v} must be a positive number")
-        })
-    };
-    pos("material.youngs_modulus", m.youngs_modulus)?;
-    pos("material.thickness", m.thickness)?;
-    pos("material.density", m.density)?;
-    check(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5, || {
-        format!(
-            "material.poisson_ratio: {} must lie in (-1, 0.5)",
-            m.poisson_ratio
-        )
-    })?;
-    match s.crease {
-        CreaseStiffness::LengthScale(l) => pos("crease.length_scale", l)?,
-        CreaseStiffness::PerLength(k) => check(k.is_finite() && k >= 0.0, || {
-            format!("crease.stiffness_per_length: {k} must be a non-negative number")
-        })?,
-    }
-    let d = &s.damping;
-    for (what, v) in [
-        ("damping.alpha", d.alpha),
-        ("damping.beta", d.beta),
-        ("damping.crease", d.crease),
-    ] {
-        check(v.is_finite() && v >= 0.0, || {
-            format!("{what}: {v} must be a non-negative number")
-        })?;
-    }
-    if let Some(g) = s.gravity {
-        check(g.iter().all(|x| x.is_finite()), || {
-            format!("gravity: {g:?} must be finite")
-        })?;
-    }
-    let so = &s.solver;
-    pos("solver.max_step", so.max_step)?;
-    pos("solver.min_step", so.min_step)?;
-    pos("solver.tolerance", so.tolerance)?;
-    pos("solver.stop_time", so.stop_time)?;
-    check(so.min_step <= so.max_step, || {
-        format!(
-            "solver.min_step: {} exceeds solver.max_step {}",
-            so.min_step, so.max_step
-        )
-    })?;
-    check((0.0..=1.0).contains(&so.rho_inf), || {
-        format!("solver.rho_inf: {} must lie in [0, 1]", so.rho_inf)
-    })?;
-    check(so.max_newton >= 1, || {
-        "solver.max_newton: must be at least 1".into()
-    })?;
+    crate::scene::limits::check_scene(s)?;
     for (i, a) in s.actuators.iter().enumerate() {
         check(a.start.is_finite(), || {
             format!("actuators[{i}].start: not a finite number")

@@ -11,7 +11,7 @@
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
 //! | `ancf:contact` | `{enabled: false, friction, stiffness, thickness}` |
-//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time}` |
+//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
 //!
@@ -24,8 +24,8 @@ use super::fold::{
     Assignment, expect_array, expect_index, expect_number, expect_string, type_name,
 };
 use super::{
-    ActuatorMode, CreaseStiffness, Fix, Integrator, Material, NewtonMode, Outputs, SolverSettings,
-    VertexInput,
+    ActuatorMode, CreaseStiffness, Fix, InputTiming, Integrator, Material, NewtonMode, Outputs,
+    SolverSettings, VertexInput,
 };
 use serde_json::{Map, Value};
 
@@ -100,8 +100,8 @@ pub struct Physics {
     pub material: Material,
     /// `ancf:crease` stiffness rule.
     pub crease: CreaseStiffness,
-    /// `ancf:crease.damping_per_length`.
-    pub crease_damping: f64,
+    /// `ancf:crease.damping_per_length` (`None`: not given).
+    pub crease_damping: Option<f64>,
     /// `ancf:damping` (alpha, beta); `None`: automatic damping.
     pub damping: Option<(f64, f64)>,
     /// `ancf:actuators`; `None`: the default actuator `fold`.
@@ -176,6 +176,18 @@ impl<'a> Obj<'a> {
             x => Ok(x),
         }
     }
+    /// A number checked by the one validator under its parameter name
+    /// ([`super::limits`]).
+    fn num_limited(&self, f: &str, name: &str) -> Result<Option<f64>, SceneError> {
+        match self.get(f) {
+            None => Ok(None),
+            Some(v) => {
+                let x = expect_number(v, &self.path(f))?;
+                super::limits::check(name, x).map_err(|e| SceneError::invalid(self.path(f), e))?;
+                Ok(Some(x))
+            }
+        }
+    }
     fn string(&self, f: &str) -> Result<Option<&'a str>, SceneError> {
         self.get(f)
             .map(|v| expect_string(v, &self.path(f)))
@@ -189,7 +201,7 @@ impl<'a> Obj<'a> {
 
 /// Largest magnitude of a physical number in the keys: beyond it products
 /// of a few parameters would overflow.
-pub const MAX_MAGNITUDE: f64 = 1e30;
+pub const MAX_MAGNITUDE: f64 = super::limits::MAX_MAGNITUDE;
 
 /// A finite number of sensible magnitude.
 fn number(v: &Value, key: &str) -> Result<f64, SceneError> {
@@ -300,7 +312,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
         name: None,
         material: Material::default(),
         crease: CreaseStiffness::default(),
-        crease_damping: 0.0,
+        crease_damping: None,
         damping: None,
         actuators: None,
         supports: vec![],
@@ -329,20 +341,16 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
             &["youngs_modulus", "poisson_ratio", "thickness", "density"],
         )?;
         let m = &mut p.material;
-        if let Some(x) = o.num_where("youngs_modulus", positive, "positive (Pa)")? {
+        if let Some(x) = o.num_limited("youngs_modulus", "material.youngs_modulus")? {
             m.youngs_modulus = x;
         }
-        if let Some(x) = o.num_where(
-            "poisson_ratio",
-            |x| x > -1.0 && x < 0.5,
-            "in the open interval (-1, 0.5)",
-        )? {
+        if let Some(x) = o.num_limited("poisson_ratio", "material.poisson_ratio")? {
             m.poisson_ratio = x;
         }
-        if let Some(x) = o.num_where("thickness", positive, "positive (m)")? {
+        if let Some(x) = o.num_limited("thickness", "material.thickness")? {
             m.thickness = x;
         }
-        if let Some(x) = o.num_where("density", positive, "positive (kg/m^3)")? {
+        if let Some(x) = o.num_limited("density", "material.density")? {
             m.density = x;
         }
     }
@@ -353,12 +361,8 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
             v,
             &["length_scale", "stiffness_per_length", "damping_per_length"],
         )?;
-        let ls = o.num_where("length_scale", positive, "positive (m)")?;
-        let k = o.num_where(
-            "stiffness_per_length",
-            non_negative,
-            "zero or positive (N m/(rad m))",
-        )?;
+        let ls = o.num_limited("length_scale", "crease.length_scale")?;
+        let k = o.num_limited("stiffness_per_length", "crease.stiffness_per_length")?;
         p.crease = match (ls, k) {
             (Some(_), Some(_)) => {
                 return Err(SceneError::invalid(
@@ -370,12 +374,8 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
             (None, Some(k)) => CreaseStiffness::PerLength(k),
             (None, None) => CreaseStiffness::default(),
         };
-        if let Some(c) = o.num_where(
-            "damping_per_length",
-            non_negative,
-            "zero or positive (N m s/(rad m))",
-        )? {
-            p.crease_damping = c;
+        if let Some(c) = o.num_limited("damping_per_length", "damping.crease")? {
+            p.crease_damping = Some(c);
         }
     }
 
@@ -389,8 +389,8 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
             ));
         } else {
             let o = Obj::new("ancf:damping", v, &["alpha", "beta"])?;
-            let a = o.num_where("alpha", non_negative, "zero or positive (1/s)")?;
-            let b = o.num_where("beta", non_negative, "zero or positive (s)")?;
+            let a = o.num_limited("alpha", "damping.alpha")?;
+            let b = o.num_limited("beta", "damping.beta")?;
             p.damping = Some((a.unwrap_or(0.0), b.unwrap_or(0.0)));
         }
     }
@@ -551,6 +551,8 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                 "max_newton",
                 "newton",
                 "stop_time",
+                "max_internal_steps",
+                "input_timing",
             ],
         )?;
         let s = &mut p.solver;
@@ -564,36 +566,33 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                 ],
             )?;
         }
-        if let Some(x) = o.num_where("rho_inf", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
+        if let Some(x) = o.num_limited("rho_inf", "solver.rho_inf")? {
             s.rho_inf = x;
         }
-        if let Some(x) = o.num_where("max_step", positive, "positive (s)")? {
+        if let Some(x) = o.num_limited("max_step", "solver.max_step")? {
             s.max_step = x;
         }
-        if let Some(x) = o.num_where("min_step", positive, "positive (s)")? {
+        if let Some(x) = o.num_limited("min_step", "solver.min_step")? {
             s.min_step = x;
         }
-        if s.min_step > s.max_step {
-            return Err(SceneError::invalid(
-                o.path("min_step"),
-                format!(
-                    "min_step {} is larger than max_step {}",
-                    s.min_step, s.max_step
-                ),
-            ));
+        if let Err((_, why)) = super::limits::check_solver_relations(s) {
+            return Err(SceneError::invalid(o.path("min_step"), why));
         }
-        if let Some(x) = o.num_where("tolerance", |x| x > 0.0 && x < 1.0, "in (0, 1)")? {
+        if let Some(x) = o.num_limited("tolerance", "solver.tolerance")? {
             s.tolerance = x;
         }
-        if let Some(v) = o.get("max_newton") {
-            let n = expect_index(v, &o.path("max_newton"))?;
-            if n == 0 || n > 1000 {
-                return Err(SceneError::invalid(
-                    o.path("max_newton"),
-                    format!("{n} is out of range; it must be in 1..=1000"),
-                ));
-            }
-            s.max_newton = n;
+        if let Some(n) = o.num_limited("max_newton", "solver.max_newton")? {
+            s.max_newton = n as usize;
+        }
+        if let Some(n) = o.num_limited("max_internal_steps", "solver.max_internal_steps")? {
+            s.max_internal_steps = n as usize;
+        }
+        if let Some(name) = o.string("input_timing")? {
+            s.input_timing = enum_value(
+                &o.path("input_timing"),
+                name,
+                &[("hold", InputTiming::Hold), ("ramp", InputTiming::Ramp)],
+            )?;
         }
         if let Some(name) = o.string("newton")? {
             s.newton = enum_value(
@@ -605,7 +604,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
                 ],
             )?;
         }
-        if let Some(x) = o.num_where("stop_time", positive, "positive (s)")? {
+        if let Some(x) = o.num_limited("stop_time", "solver.stop_time")? {
             s.stop_time = x;
         }
     }
@@ -729,7 +728,7 @@ mod tests {
         assert_eq!(p.name.as_deref(), Some("sheet"));
         assert_eq!(p.material.thickness, 2e-4);
         assert_eq!(p.crease, CreaseStiffness::PerLength(0.02));
-        assert_eq!(p.crease_damping, 1e-5);
+        assert_eq!(p.crease_damping, Some(1e-5));
         assert_eq!(p.damping, Some((0.5, 1e-4)));
         let a = p.actuators.unwrap();
         assert_eq!(a[0].edges, EdgeSelection::Assignment(Assignment::Mountain));

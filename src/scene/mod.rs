@@ -42,6 +42,7 @@ pub mod build;
 mod error;
 pub mod fold;
 pub mod keys;
+pub mod limits;
 pub mod patterns;
 pub mod refine;
 pub mod triangulate;
@@ -253,6 +254,33 @@ pub struct SolverSettings {
     pub newton: NewtonMode,
     /// Default experiment stop time in s.
     pub stop_time: f64,
+    /// Most internal steps one advance (one `fmi2DoStep`) may take before
+    /// it fails cleanly, whatever the integrator: bounds the work of a call.
+    #[serde(default = "default_max_internal_steps")]
+    pub max_internal_steps: usize,
+    /// How an input set before a step acts over it.
+    #[serde(default)]
+    pub input_timing: InputTiming,
+}
+
+/// Default of [`SolverSettings::max_internal_steps`].
+pub const DEFAULT_MAX_INTERNAL_STEPS: usize = 100_000;
+
+fn default_max_internal_steps() -> usize {
+    DEFAULT_MAX_INTERNAL_STEPS
+}
+
+/// How an input value set before a step acts over that step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum InputTiming {
+    /// FMI 2.0 co-simulation: the value set before a step from t is the
+    /// input at t, held over the step (plus the slope the master gives
+    /// with `fmi2SetRealInputDerivatives`).
+    #[default]
+    Hold,
+    /// The value set before a step from t is reached at its end, ramped
+    /// linearly from the value in force at t (a master that sets u(t + h)).
+    Ramp,
 }
 
 impl Default for SolverSettings {
@@ -266,6 +294,8 @@ impl Default for SolverSettings {
             max_newton: 20,
             newton: NewtonMode::Modified,
             stop_time: 1.0,
+            max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
+            input_timing: InputTiming::Hold,
         }
     }
 }
@@ -330,11 +360,11 @@ pub struct Scene {
     pub crease: CreaseStiffness,
     /// Damping.
     pub damping: Damping,
-    /// True when the scene does not set `ancf:damping`: the model then
-    /// chooses a mass-proportional damping from the facet size and crease
-    /// stiffness (damping ratio 0.2 on the folding mode of a mean facet) so
-    /// that a fold settles within a few of its periods, and `damping.alpha`
-    /// and `damping.beta` are not used. False when the scene sets them.
+    /// True when the scene sets no damping (neither `ancf:damping` nor a
+    /// crease `damping_per_length`): the model then chooses a
+    /// mass-proportional damping of the deformation rate from the facet size
+    /// and crease stiffness (damping ratio 0.2 on the folding mode of a mean
+    /// facet; rigid motion undamped) and `damping` is not used.
     pub auto_damping: bool,
     /// Actuators (one input each).
     pub actuators: Vec<Actuator>,

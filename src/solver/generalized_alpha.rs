@@ -112,9 +112,30 @@ pub struct Workspace {
     mqdd: Vec<f64>,
     /// The predictor's second guess (buffers reused across steps).
     guess: Dynamics,
-    /// Step size the factorization in the solver was formed for (None:
-    /// no usable factorization).
-    jacobian_h: Option<f64>,
+    /// Where the factorization in the solver was formed (None: no usable
+    /// factorization).
+    jacobian: Option<JacobianPoint>,
+}
+
+/// Everything the iteration matrix is a function of: the iterate, the
+/// drive and the step size. Saved with the model state, so that a restored
+/// state re-forms the very matrix the original run held and continues bit
+/// for bit while modified Newton keeps the matrix across communication
+/// points.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct JacobianPoint {
+    /// Step size.
+    pub h: f64,
+    /// Positions of the iterate.
+    pub q: Vec<f64>,
+    /// Velocities of the iterate.
+    pub v: Vec<f64>,
+    /// Rest angles of the crease ends.
+    pub theta0: Vec<f64>,
+    /// Applied crease moments.
+    pub moment: Vec<f64>,
+    /// Unwrapped crease angles at the step start.
+    pub theta_prev: Vec<f64>,
 }
 
 impl Workspace {
@@ -123,11 +144,63 @@ impl Workspace {
         &self.eval
     }
 
-    /// Forget the iteration matrix: the next step forms a fresh one (so that
-    /// a run from a restored state repeats bit for bit).
+    /// Forget the iteration matrix: the next step forms a fresh one (after
+    /// the solver was used for something else, e.g. the mass matrix).
     pub fn invalidate_jacobian(&mut self) {
-        self.jacobian_h = None;
+        self.jacobian = None;
     }
+
+    /// Where the iteration matrix the solver holds was formed.
+    pub fn jacobian(&self) -> Option<&JacobianPoint> {
+        self.jacobian.as_ref()
+    }
+}
+
+/// The weights of K, C and M in the iteration matrix for step `h`.
+fn matrix_coeffs(co: Coefficients, h: f64) -> MatrixCoeffs {
+    let bh2 = co.beta * h * h;
+    MatrixCoeffs {
+        k: 1.0,
+        c: co.gamma / (co.beta * h),
+        m: (1.0 - co.am) / ((1.0 - co.af) * bh2),
+    }
+}
+
+/// Make the solver hold the iteration matrix formed at `point` (None: no
+/// matrix, the next step forms one). Nothing to do when it already does;
+/// otherwise the matrix is assembled at `point` and factored, which gives
+/// bit for bit the factorization the saved run held.
+pub fn restore_jacobian(
+    asm: &Assembler,
+    solver: &mut SparseSolver,
+    co: Coefficients,
+    point: Option<&JacobianPoint>,
+    ws: &mut Workspace,
+) -> Result<(), String> {
+    if ws.jacobian.as_ref() == point {
+        return Ok(());
+    }
+    ws.jacobian = None;
+    let Some(p) = point else {
+        return Ok(());
+    };
+    ws.matrix.resize(asm.nnz(), 0.0);
+    let st = State {
+        q: &p.q,
+        v: &p.v,
+        theta0: &p.theta0,
+        moment: &p.moment,
+        theta_prev: &p.theta_prev,
+    };
+    let mut scratch = Evaluation::default();
+    asm.evaluate(
+        &st,
+        &mut scratch,
+        Some((&mut ws.matrix[..], matrix_coeffs(co, p.h))),
+    )?;
+    solver.factor(&ws.matrix)?;
+    ws.jacobian = Some(p.clone());
+    Ok(())
 }
 
 /// Modified Newton forms a new iteration matrix when the contraction rate
@@ -162,12 +235,7 @@ pub fn step(
     ws: &mut Workspace,
 ) -> Result<(Dynamics, Outcome), String> {
     let n = asm.n_dofs();
-    let Coefficients {
-        am,
-        af,
-        beta,
-        gamma,
-    } = co;
+    let Coefficients { am, beta, .. } = co;
     let bh2 = beta * h * h;
     let mut out = Outcome::default();
     // Predictor: of two guesses, the one with the smaller residual. Held
@@ -210,16 +278,12 @@ pub fn step(
         std::mem::swap(&mut next, &mut alt);
     }
     ws.guess = alt;
-    let coeffs = MatrixCoeffs {
-        k: 1.0,
-        c: gamma / (beta * h),
-        m: (1.0 - am) / ((1.0 - af) * bh2),
-    };
+    let coeffs = matrix_coeffs(co, h);
     let modified = settings.newton == NewtonMode::Modified;
     // Full Newton forms the matrix at every iterate (set in the loop);
     // modified Newton keeps one formed for a step size close to h.
-    let mut refresh = match ws.jacobian_h {
-        Some(hj) => !(0.8..=1.25).contains(&(h / hj)),
+    let mut refresh = match &ws.jacobian {
+        Some(jp) => !(0.8..=1.25).contains(&(h / jp.h)),
         None => true,
     };
     let mut last_norm = f64::INFINITY;
@@ -234,9 +298,19 @@ pub fn step(
         // formed at an earlier iterate or step).
         let stale = !refresh;
         if refresh {
-            ws.jacobian_h = None;
+            // Record where the matrix is formed (buffers reused).
+            let mut jp = ws.jacobian.take().unwrap_or_default();
             solver.factor(&ws.matrix)?;
-            ws.jacobian_h = Some(h);
+            jp.h = h;
+            jp.q.clone_from(&next.q);
+            jp.v.clone_from(&next.v);
+            jp.theta0.clear();
+            jp.theta0.extend_from_slice(drive.theta0);
+            jp.moment.clear();
+            jp.moment.extend_from_slice(drive.moment);
+            jp.theta_prev.clear();
+            jp.theta_prev.extend_from_slice(drive.theta_prev);
+            ws.jacobian = Some(jp);
             out.factorizations += 1;
             refresh = false;
         }

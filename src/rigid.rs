@@ -1,0 +1,121 @@
+//! Rigid-body motion of the sheet in nodal coordinates, and the part of a
+//! velocity that is deformation: what the default damping acts on, so that
+//! translations and rotations of the whole sheet (free fall, a spin, a
+//! gripper's move) are never damped.
+//!
+//! A rigid velocity field v(x) = t + w x x moves every position slot by
+//! t + w x q_i and turns every gradient slot at w x q_i (gradients do not
+//! translate). With the constant mass matrix M = M_s (x) I3, the six modes
+//! R and their Gram matrix G = R^T M R follow from M q and the slots' share
+//! of the total mass alone, so the projection costs one mass product.
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+
+/// Per-slot data the projection needs, fixed by the mesh.
+#[derive(Clone, Debug, Default)]
+pub struct RigidModes {
+    /// For each slot, sum_j m_ij over the position slots j (zero-free only
+    /// for slots coupled to positions): (M_s p)_i with p the position mask.
+    pos_mass: Vec<f64>,
+    /// Whether each slot is a position slot.
+    is_position: Vec<bool>,
+}
+
+fn v3(x: &[f64], s: usize) -> Vector3<f64> {
+    Vector3::new(x[3 * s], x[3 * s + 1], x[3 * s + 2])
+}
+
+fn cross_matrix(c: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -c.z, c.y, c.z, 0.0, -c.x, -c.y, c.x, 0.0)
+}
+
+impl RigidModes {
+    /// Modes for `n_slots` slots with the given position slots;
+    /// `mass_mul` multiplies by M (3 scalars a slot).
+    pub fn new(
+        n_slots: usize,
+        position_slots: impl IntoIterator<Item = usize>,
+        mass_mul: impl Fn(&[f64], &mut [f64]),
+    ) -> RigidModes {
+        let mut is_position = vec![false; n_slots];
+        for s in position_slots {
+            is_position[s] = true;
+        }
+        let mut x = vec![0.0; 3 * n_slots];
+        for (s, &p) in is_position.iter().enumerate() {
+            if p {
+                x[3 * s] = 1.0;
+            }
+        }
+        let mut y = vec![0.0; 3 * n_slots];
+        mass_mul(&x, &mut y);
+        RigidModes {
+            pos_mass: (0..n_slots).map(|s| y[3 * s]).collect(),
+            is_position,
+        }
+    }
+
+    /// The rigid part of the velocity `v` at positions `q`, M-orthogonally
+    /// projected, returned as its momentum `M P v` (3 scalars a slot) in
+    /// `out`; `mv` = M v and `mq` = M q. None when the sheet has no
+    /// well-defined rigid modes (degenerate geometry): then nothing is
+    /// projected.
+    pub fn rigid_momentum(&self, q: &[f64], mv: &[f64], mq: &[f64], out: &mut [f64]) -> Option<()> {
+        let n = self.is_position.len();
+        // R^T M v (translation, rotation), the Gram matrix from the total
+        // mass m, the first moment c and Q = sum_i (M q)_i q_i^T.
+        let (mut bt, mut br) = (Vector3::zeros(), Vector3::zeros());
+        let mut m = 0.0;
+        let mut c = Vector3::zeros();
+        let mut qq = Matrix3::zeros();
+        for s in 0..n {
+            let (qs, mvs, mqs) = (v3(q, s), v3(mv, s), v3(mq, s));
+            if self.is_position[s] {
+                bt += mvs;
+                m += self.pos_mass[s];
+            }
+            br += qs.cross(&mvs);
+            c += self.pos_mass[s] * qs;
+            qq += mqs * qs.transpose();
+        }
+        let gtr = -cross_matrix(&c);
+        let grr = Matrix3::identity() * qq.trace() - qq;
+        let mut g = Matrix6::zeros();
+        g.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Matrix3::identity() * m));
+        g.fixed_view_mut::<3, 3>(0, 3).copy_from(&gtr);
+        g.fixed_view_mut::<3, 3>(3, 0).copy_from(&gtr.transpose());
+        g.fixed_view_mut::<3, 3>(3, 3).copy_from(&grr);
+        let mut b = Vector6::zeros();
+        b.fixed_rows_mut::<3>(0).copy_from(&bt);
+        b.fixed_rows_mut::<3>(3).copy_from(&br);
+        let y = g.cholesky()?.solve(&b);
+        let (yt, yr) = (y.fixed_rows::<3>(0), y.fixed_rows::<3>(3));
+        for s in 0..n {
+            let f = self.pos_mass[s] * yt + yr.cross(&v3(mq, s));
+            out[3 * s..3 * s + 3].copy_from_slice(f.as_slice());
+        }
+        Some(())
+    }
+
+    /// The velocity of the rigid field (translation `t`, angular velocity
+    /// `w` about `center`) at positions `q`, written into `v`.
+    pub fn rigid_velocity(
+        &self,
+        q: &[f64],
+        t: Vector3<f64>,
+        w: Vector3<f64>,
+        center: Vector3<f64>,
+        v: &mut [f64],
+    ) {
+        for (s, &pos) in self.is_position.iter().enumerate() {
+            let qs = v3(q, s);
+            let vs = if pos {
+                t + w.cross(&(qs - center))
+            } else {
+                w.cross(&qs)
+            };
+            v[3 * s..3 * s + 3].copy_from_slice(vs.as_slice());
+        }
+    }
+}

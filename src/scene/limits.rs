@@ -1,0 +1,227 @@
+//! The one set of rules for every physical value of a scene and every FMU
+//! parameter: the scene reader, the FMU's scene check and
+//! [`crate::model::Model::set_parameter`] all ask [`check`], so a value is
+//! accepted or refused with the same words wherever it comes from.
+//!
+//! Names are the FMU parameter names (`material.thickness`,
+//! `solver.max_step`, ...); the scene keys map onto them one to one.
+
+use super::{Scene, SolverSettings};
+
+/// Largest magnitude of a physical number: beyond it, products of a few
+/// parameters would overflow.
+pub const MAX_MAGNITUDE: f64 = 1e30;
+
+/// The admissible set of one value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Range {
+    /// Any finite number.
+    Any,
+    /// x > 0.
+    Positive,
+    /// x >= 0.
+    NonNegative,
+    /// lo < x < hi.
+    Open(f64, f64),
+    /// lo <= x <= hi.
+    Closed(f64, f64),
+    /// A whole number in lo..=hi.
+    Whole(u64, u64),
+}
+
+impl Range {
+    fn contains(self, x: f64) -> bool {
+        match self {
+            Range::Any => true,
+            Range::Positive => x > 0.0,
+            Range::NonNegative => x >= 0.0,
+            Range::Open(lo, hi) => x > lo && x < hi,
+            Range::Closed(lo, hi) => (lo..=hi).contains(&x),
+            Range::Whole(lo, hi) => x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64,
+        }
+    }
+
+    fn describe(self) -> String {
+        match self {
+            Range::Any => "a finite number".into(),
+            Range::Positive => "positive".into(),
+            Range::NonNegative => "zero or positive".into(),
+            Range::Open(lo, hi) => format!("in the open interval ({lo}, {hi})"),
+            Range::Closed(lo, hi) => format!("in [{lo}, {hi}]"),
+            Range::Whole(lo, hi) => format!("a whole number in {lo}..={hi}"),
+        }
+    }
+}
+
+/// A named value with its range and unit.
+#[derive(Clone, Copy, Debug)]
+pub struct Limit {
+    /// FMU parameter name.
+    pub name: &'static str,
+    /// Admissible values.
+    pub range: Range,
+    /// Unit for messages ("" when dimensionless).
+    pub unit: &'static str,
+}
+
+const fn lim(name: &'static str, range: Range, unit: &'static str) -> Limit {
+    Limit { name, range, unit }
+}
+
+/// Largest `solver.max_internal_steps`.
+pub const MAX_INTERNAL_STEPS: u64 = 1_000_000_000;
+
+/// Every checked value.
+pub const LIMITS: &[Limit] = &[
+    lim("material.youngs_modulus", Range::Positive, "Pa"),
+    lim("material.poisson_ratio", Range::Open(-1.0, 0.5), ""),
+    lim("material.thickness", Range::Positive, "m"),
+    lim("material.density", Range::Positive, "kg/m^3"),
+    lim("crease.length_scale", Range::Positive, "m"),
+    lim(
+        "crease.stiffness_per_length",
+        Range::NonNegative,
+        "N m/(rad m)",
+    ),
+    lim("damping.alpha", Range::NonNegative, "1/s"),
+    lim("damping.beta", Range::NonNegative, "s"),
+    lim("damping.crease", Range::NonNegative, "N m s/(rad m)"),
+    lim("gravity.x", Range::Any, "m/s^2"),
+    lim("gravity.y", Range::Any, "m/s^2"),
+    lim("gravity.z", Range::Any, "m/s^2"),
+    lim("solver.rho_inf", Range::Closed(0.0, 1.0), ""),
+    lim("solver.max_step", Range::Positive, "s"),
+    lim("solver.min_step", Range::Positive, "s"),
+    lim("solver.tolerance", Range::Open(0.0, 1.0), ""),
+    lim("solver.max_newton", Range::Whole(1, 1000), ""),
+    lim(
+        "solver.max_internal_steps",
+        Range::Whole(1, MAX_INTERNAL_STEPS),
+        "",
+    ),
+    lim("solver.stop_time", Range::Positive, "s"),
+];
+
+/// The limit of `name`, if it has one.
+pub fn limit(name: &str) -> Option<&'static Limit> {
+    LIMITS.iter().find(|l| l.name == name)
+}
+
+/// Check one value: finite, of sensible magnitude, and in the range of
+/// `name` (names without a limit only need to be finite). The error says
+/// what the value must be, e.g. "0 is out of range; it must be positive (m)".
+pub fn check(name: &str, x: f64) -> Result<(), String> {
+    if !x.is_finite() {
+        return Err(format!("{x} is not a finite number"));
+    }
+    if x.abs() > MAX_MAGNITUDE {
+        return Err(format!(
+            "{x} is too large (at most {MAX_MAGNITUDE:e} in magnitude)"
+        ));
+    }
+    if let Some(l) = limit(name)
+        && !l.range.contains(x)
+    {
+        let unit = if l.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", l.unit)
+        };
+        return Err(format!(
+            "{x} is out of range; it must be {}{unit}",
+            l.range.describe()
+        ));
+    }
+    Ok(())
+}
+
+/// Rules between solver settings: `min_step <= max_step`. Returns the name
+/// of the offending value and the reason.
+pub fn check_solver_relations(s: &SolverSettings) -> Result<(), (&'static str, String)> {
+    if s.min_step > s.max_step {
+        return Err((
+            "solver.min_step",
+            format!(
+                "min_step {} is larger than max_step {}; an internal step must fit between them",
+                s.min_step, s.max_step
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Every value of a scene that has a limit, by name (what the FMU's scene
+/// check and a parameter rebuild run).
+pub fn check_scene(s: &Scene) -> Result<(), String> {
+    let m = &s.material;
+    let d = &s.damping;
+    let so = &s.solver;
+    let mut values = vec![
+        ("material.youngs_modulus", m.youngs_modulus),
+        ("material.poisson_ratio", m.poisson_ratio),
+        ("material.thickness", m.thickness),
+        ("material.density", m.density),
+        ("damping.alpha", d.alpha),
+        ("damping.beta", d.beta),
+        ("damping.crease", d.crease),
+        ("solver.rho_inf", so.rho_inf),
+        ("solver.max_step", so.max_step),
+        ("solver.min_step", so.min_step),
+        ("solver.tolerance", so.tolerance),
+        ("solver.max_newton", so.max_newton as f64),
+        ("solver.max_internal_steps", so.max_internal_steps as f64),
+        ("solver.stop_time", so.stop_time),
+    ];
+    match s.crease {
+        super::CreaseStiffness::LengthScale(l) => values.push(("crease.length_scale", l)),
+        super::CreaseStiffness::PerLength(k) => values.push(("crease.stiffness_per_length", k)),
+    }
+    if let Some(g) = s.gravity {
+        values.extend([
+            ("gravity.x", g[0]),
+            ("gravity.y", g[1]),
+            ("gravity.z", g[2]),
+        ]);
+    }
+    for (name, x) in values {
+        check(name, x).map_err(|e| format!("{name}: {e}"))?;
+    }
+    check_solver_relations(so).map_err(|(name, e)| format!("{name}: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_and_messages() {
+        assert!(check("material.thickness", 1e-4).is_ok());
+        let e = check("material.thickness", 0.0).unwrap_err();
+        assert_eq!(e, "0 is out of range; it must be positive (m)");
+        assert!(check("solver.tolerance", 50.0).is_err());
+        assert!(check("solver.tolerance", 1e-6).is_ok());
+        assert!(check("material.poisson_ratio", 0.5).is_err());
+        assert!(check("solver.rho_inf", 1.0).is_ok());
+        assert!(check("solver.max_newton", 2.5).is_err());
+        assert!(check("solver.max_internal_steps", 0.0).is_err());
+        assert!(check("gravity.z", -9.81).is_ok());
+        assert!(check("gravity.z", f64::NAN).unwrap_err().contains("finite"));
+        assert!(check("anything", 1e31).unwrap_err().contains("too large"));
+        assert!(
+            check("damping.alpha", -1.0)
+                .unwrap_err()
+                .contains("zero or positive")
+        );
+    }
+
+    #[test]
+    fn min_step_above_max_step_is_refused() {
+        let s = SolverSettings {
+            max_step: 1e-10,
+            ..SolverSettings::default()
+        };
+        let (name, why) = check_solver_relations(&s).unwrap_err();
+        assert_eq!(name, "solver.min_step");
+        assert!(why.contains("larger than max_step"), "{why}");
+    }
+}
