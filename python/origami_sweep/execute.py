@@ -36,6 +36,9 @@ def _check_fmu(study, run, fmu):
     """Check the study's names against an FMU (KeyError naming a wrong one);
     return its crease targets and the outputs a run records."""
     var = master.Variables.of_fmu(fmu)
+    if study.input_derivatives and not var.md.coSimulation.canInterpolateInputs:
+        raise KeyError(f"run.input_derivatives: the FMU {pathlib.Path(fmu).name} cannot interpolate inputs "
+                       "(canInterpolateInputs is false)")
     var.check(run["start_values"], "parameter", "swept or set parameter")
     var.check(study.inputs, "input", "input")
     for b in (study.whatif or {}).get("branches", {}).values():
@@ -111,6 +114,7 @@ def plan(study, out_dir, time_limit=None, whatif_from_start=False) -> Plan:
             "k1": n,
             "record": record,
             "save_state": False,
+            "input_derivatives": study.input_derivatives,
         }
         task = {**common, "run": run["run"], "branch": run["branch"], "drive": drive}
         if key in build_errors:

@@ -1,6 +1,7 @@
 """One run of an FMU driven step by step through fmpy's FMU2Slave: fixed
 communication steps t_k = k h, inputs set to their signal's value at the
-start of each step, outputs read after each step, and the FMU state saved
+start of each step (and, if asked, its slope over the step), outputs read
+after each step, and the FMU state saved
 at the end or restored at the start (what-if branches).
 
 A failure is a result: any exception of fmpy or of the FMU (an fmi2Discard,
@@ -101,14 +102,13 @@ class FmiLog:
         return [m for s, _, m in self.lines if s >= 1]
 
 
-def _signal_values(segments, k, step):
-    """Input values for the step starting at t_k: the last segment whose
-    first step is <= k, each signal sampled at t_k (piecewise linear)."""
+def _signal_values(segments, k, t):
+    """Input values at time t of the signals in force for the step starting
+    at t_k: the last segment whose first step is <= k (piecewise linear)."""
     chosen = segments[0][1]
     for k_from, sig in segments:
         if k_from <= k:
             chosen = sig
-    t = k * step
     return {n: float(np.interp(t, s["times"], s["values"])) for n, s in chosen.items()}
 
 
@@ -118,7 +118,10 @@ def drive(unzipdir, spec):
     spec: start_values {name: value}, segments [[k_from, {input: {times,
     values}}], ...], step h, k0, k1 (steps k0 .. k1-1 are taken), record
     [output names], state (base64 of a serialized FMU state to restore
-    before step k0, or None), save_state (serialize the state after k1).
+    before step k0, or None), save_state (serialize the state after k1),
+    input_derivatives (also set each input's slope over the step, so the
+    FMU follows the straight line between the step's end values instead of
+    holding the start value).
     The result has status ("ok", "discard", "error", "fatal"), reason,
     times, series (one row of the recorded outputs per time), state, t_end
     (the last time reached) and cpu_s (CPU seconds of this run)."""
@@ -133,7 +136,7 @@ def drive(unzipdir, spec):
     log = FmiLog()
     slave = None
     k = k0
-    phase = "instantiation"
+    phase, doing = "instantiation", ""
     try:
         slave = FMU2Slave(
             guid=md.guid,
@@ -146,7 +149,9 @@ def drive(unzipdir, spec):
         slave.setupExperiment(startTime=0.0)
         slave.enterInitializationMode()
         for name, value in spec["start_values"].items():
+            doing = f" while setting {name} = {float(value):g}"
             slave.setReal([var.vr[name]], [float(value)])
+        doing = ""
         slave.exitInitializationMode()
         if spec.get("state"):
             phase = "state restore"
@@ -158,9 +163,17 @@ def drive(unzipdir, spec):
         times.append(k0 * h)
         series.append(slave.getReal(vrs))
         for k in range(k0, k1):
-            inputs = _signal_values(spec["segments"], k, h)
+            inputs = _signal_values(spec["segments"], k, k * h)
             for name, value in inputs.items():
+                doing = f" while setting input {name} = {value:g}"
                 slave.setReal([var.vr[name]], [value])
+            if spec.get("input_derivatives"):
+                ahead = _signal_values(spec["segments"], k, (k + 1) * h)
+                for name, value in inputs.items():
+                    slope = (ahead[name] - value) / h
+                    doing = f" while setting the derivative of input {name} = {slope:g}"
+                    slave.setRealInputDerivatives([var.vr[name]], [1], [slope])
+            doing = ""
             slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
             times.append((k + 1) * h)
             series.append(slave.getReal(vrs))
@@ -172,10 +185,10 @@ def drive(unzipdir, spec):
             slave.freeFMUstate(state)
     except FMICallException as e:
         result["status"] = STATUS.get(getattr(e, "status", 3), "error")
-        result["reason"] = _reason(f"{e.function} returned {result['status']}", phase, k, h, log)
+        result["reason"] = _reason(f"{e.function} returned {result['status']}{doing}", phase, k, h, log)
     except Exception as e:  # any failure is a row of the study, with its reason
         result["status"] = "error"
-        result["reason"] = _reason(f"{type(e).__name__}: {e}", phase, k, h, log)
+        result["reason"] = _reason(f"{type(e).__name__}: {e}{doing}", phase, k, h, log)
     finally:
         if slave is not None:
             _close(slave, instantiated=phase != "instantiation")

@@ -51,6 +51,7 @@ class Study:
     stop_time: float
     step: float
     time_limit: float
+    input_derivatives: bool
     outputs: list
     inputs: dict
     metrics: dict
@@ -177,14 +178,18 @@ def parse_study(raw: dict, path: pathlib.Path) -> Study:
         parameters[name] = float(v)
 
     run = raw.get("run") or {}
+    run_keys = ("stop_time", "step", "time_limit", "outputs", "input_derivatives")
     for k in run:
-        if k not in ("stop_time", "step", "time_limit", "outputs"):
-            fail(f"run.{k}", "unknown key (known: stop_time, step, time_limit, outputs)")
+        if k not in run_keys:
+            fail(f"run.{k}", f"unknown key (known: {', '.join(run_keys)})")
     stop_time = _positive(run, "run", "stop_time", None, fail)
     step = _positive(run, "run", "step", None, fail)
     if abs(stop_time / step - round(stop_time / step)) > 1e-9 * stop_time / step:
         fail("run.step", f"must divide run.stop_time ({stop_time}) into whole steps")
     time_limit = _positive(run, "run", "time_limit", 600.0, fail)
+    input_derivatives = run.get("input_derivatives", False)
+    if not isinstance(input_derivatives, bool):
+        fail("run.input_derivatives", "must be true or false")
     outputs = run.get("outputs", [])
     if not isinstance(outputs, list) or not all(isinstance(o, str) for o in outputs):
         fail("run.outputs", "must be a list of output names")
@@ -243,6 +248,7 @@ def parse_study(raw: dict, path: pathlib.Path) -> Study:
         stop_time=stop_time,
         step=step,
         time_limit=time_limit,
+        input_derivatives=input_derivatives,
         outputs=outputs,
         inputs=inputs,
         metrics=metrics,
