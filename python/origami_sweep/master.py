@@ -145,6 +145,7 @@ def drive(unzipdir, spec):
             instanceName=spec.get("name", "run"),
         )
         slave.instantiate(callbacks=log.callbacks, loggingOn=False)
+        _log_failures(slave, md)
         phase = "initialization"
         slave.setupExperiment(startTime=0.0)
         slave.enterInitializationMode()
@@ -195,6 +196,17 @@ def drive(unzipdir, spec):
     result["t_end"] = times[-1] if times else None
     result["cpu_s"] = time.process_time() - cpu_start
     return result
+
+
+def _log_failures(slave, md):
+    """Ask the FMU to log its failures (the FMI 2.0 categories logStatus*,
+    where it declares them; an FMU may log nothing with logging off)."""
+    categories = [c.name for c in md.logCategories if c.name.startswith("logStatus")]
+    if categories:
+        try:
+            slave.setDebugLogging(True, categories)
+        except FMICallException:
+            pass  # the reasons then come without the FMU's own words
 
 
 def _reason(what, phase, k, h, log):

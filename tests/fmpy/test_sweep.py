@@ -156,9 +156,16 @@ def test_failing_runs_are_rows_with_their_reason(tmp_path, fmu, client):
     # A scene the generator refuses: its row says why; the other scene runs.
     bad_scene = make_study(tmp_path, {"pattern": "single-crease"}, {"scene.angle": [60.0, 200.0]})
     s = execute.plan(bad_scene, tmp_path / "out")
-    rows = [r["row"] for plan in (p, q, s) for r in execute.run_dask(plan, client)]
-    assert [r["status"] for r in rows] == ["ok", "error", "ok", "error", "ok", "error"]
+    # A step the FMU cannot finish (one internal step allowed, ten needed).
+    cut_short = make_study(tmp_path, {"fmu": str(fmu("square"))}, {"solver.max_internal_steps": [1.0]})
+    d = execute.plan(cut_short, tmp_path / "out")
+    rows = [r["row"] for plan in (p, q, s, d) for r in execute.run_dask(plan, client)]
+    assert [r["status"] for r in rows[:6]] == ["ok", "error", "ok", "error", "ok", "error"]
     assert "building the scene failed" in rows[5]["reason"] and "200 must be in [-180, 180]" in rows[5]["reason"]
+    assert rows[6]["status"] in ("discard", "error") and rows[6]["t_end"] == 0.0
+    # The reason names the call and time, then gives the FMU's logged words.
+    assert rows[6]["reason"].startswith(f"fmi2DoStep returned {rows[6]['status']} at t = 0: ")
+    assert "max_internal_steps" in rows[6]["reason"]
     bad, bad_input = rows[1], rows[3]
     assert "fmi2SetReal returned error while setting damping.alpha = nan during initialization" in bad["reason"]
     assert math.isnan(bad["fold_time"]) and math.isnan(bad["t_end"])
