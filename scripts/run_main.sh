@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The main job: build the default Miura-ori FMU and fold it with fmpy.
-# Writes out/miura.fold, out/miura.fmu, out/miura.csv and out/miura.png.
+# Writes out/miura.fold, out/miura.fmu, out/miura.csv, out/miura.png (angles and
+# energies against time), out/miura.gif (an animation of the fold; also
+# out/miura.mp4 where ffmpeg is installed) and out/miura_snapshots.png (3D views).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mkdir -p out
@@ -11,4 +13,5 @@ BIN=target/release/origami-fmu
 "$BIN" build out/miura.fold -o out/miura.fmu
 PY=$(bash scripts/setup_venv.sh)
 "$PY" scripts/simulate_fmu.py out/miura.fmu --stop-time 1.0 --step 0.005 --ramp 0.6 \
-    --csv out/miura.csv --png out/miura.png
+    --csv out/miura.csv --png out/miura.png \
+    --gif out/miura.gif --mp4 out/miura.mp4 --snapshots out/miura_snapshots.png

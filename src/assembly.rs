@@ -507,6 +507,19 @@ impl Assembler {
         }
     }
 
+    /// Membrane + bending energy of each facet (J) at slot vector `q`, in
+    /// triangle order: the per-facet split of `Evaluation::strain_energy`.
+    pub fn facet_strain_energies(&self, q: &[f64]) -> Vec<f64> {
+        self.elements
+            .iter()
+            .zip(&self.layout.local)
+            .map(|(el, map)| {
+                let e = el.energy(&self.physics.material, &local_vector(map, q));
+                e.membrane + e.bending
+            })
+            .collect()
+    }
+
     /// Position slots and their vertices.
     pub fn position_slot(&self, v: usize) -> usize {
         self.layout.position_slot[v]

@@ -255,12 +255,16 @@ pub fn miura_scene(n: usize) -> crate::scene::Scene {
 
 /// Drive a Miura model's `fold` input by the ramp t / `ramp_time` (held
 /// at 1 after it) through `steps` communication steps of `dt`, summing
-/// the step reports: the fold the throughput and terms benches time.
-pub fn fold_by_ramp(
+/// the step reports: the fold the throughput, terms and co-simulation
+/// benches time. Each step gets the ramp's value at its start and its
+/// slope (`with_slopes`, as a master with input derivatives does: the
+/// continuous ramp), or only the value (sample and hold).
+pub fn fold_by_ramp_with(
     m: &mut crate::model::Model,
     steps: usize,
     dt: f64,
     ramp_time: f64,
+    with_slopes: bool,
 ) -> crate::model::StepReport {
     let fold = m
         .inputs()
@@ -268,11 +272,26 @@ pub fn fold_by_ramp(
         .position(|v| v.name == "fold")
         .expect("a fold input");
     let mut total = crate::model::StepReport::default();
-    for k in 1..=steps {
+    for k in 0..steps {
         let t = k as f64 * dt;
         m.set_input(fold, (t / ramp_time).min(1.0))
             .expect("fold input in range");
+        if with_slopes {
+            let slope = if t < ramp_time { 1.0 / ramp_time } else { 0.0 };
+            m.set_input_derivative(fold, 1, slope)
+                .expect("held inputs take slopes");
+        }
         total.accumulate(&m.advance(dt).expect("advance"));
     }
     total
+}
+
+/// [`fold_by_ramp_with`] the continuous ramp (values and slopes).
+pub fn fold_by_ramp(
+    m: &mut crate::model::Model,
+    steps: usize,
+    dt: f64,
+    ramp_time: f64,
+) -> crate::model::StepReport {
+    fold_by_ramp_with(m, steps, dt, ramp_time, true)
 }

@@ -21,6 +21,7 @@ pub mod element;
 pub mod fmi;
 pub mod mesh;
 pub mod model;
+pub mod paraview;
 pub mod rigid;
 pub mod scene;
 pub mod solver;

@@ -770,6 +770,18 @@ impl Model {
         }
     }
 
+    /// Strain energy (membrane + bending, J) of each mesh triangle now, in
+    /// the order of `scene().mesh.triangles`; zeros before initialization
+    /// (the flat reference state is stress-free).
+    pub fn facet_strain_energies(&self) -> Vec<f64> {
+        match &self.sys {
+            Some(sys) if self.state.phase == Phase::Running => {
+                sys.asm.facet_strain_energies(&self.state.dynamics.q)
+            }
+            _ => vec![0.0; self.scene.mesh.triangles.len()],
+        }
+    }
+
     fn compute_outputs(&self, ev: &Evaluation) -> Vec<f64> {
         let sys = self.sys.as_ref().expect("built");
         let mut out = Vec::with_capacity(self.outputs.len());
@@ -938,7 +950,12 @@ impl Model {
             }
         }
         let physics = physics(sc);
-        let asm = Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
+        let mut asm =
+            Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
+        // Damping leaves alone the rigid motion the supports allow.
+        let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
+        asm.rigid
+            .set_supports(&supported_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
         let solver = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
             .map_err(Error::Scene)?;
         let nends = asm.creases.len();
@@ -1078,7 +1095,7 @@ pub fn physics(sc: &Scene) -> Physics {
         CreaseStiffness::PerLength(k) => k,
     };
     let (alpha, beta, crease) = if sc.auto_damping {
-        (auto_alpha(sc, k_pl), 0.0, 0.0)
+        (auto_alpha(sc, k_pl), 0.0, sc.damping.crease)
     } else {
         (sc.damping.alpha, sc.damping.beta, sc.damping.crease)
     };

@@ -9,7 +9,7 @@
 //! R and their Gram matrix G = R^T M R follow from M q and the slots' share
 //! of the total mass alone, so the projection costs one mass product.
 
-use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 
 /// Per-slot data the projection needs, fixed by the mesh.
 #[derive(Clone, Debug, Default)]
@@ -19,6 +19,11 @@ pub struct RigidModes {
     pos_mass: Vec<f64>,
     /// Whether each slot is a position slot.
     is_position: Vec<bool>,
+    /// The rigid modes the supports allow, as combinations of the six
+    /// (columns; translations, then rotations about the origin). All six
+    /// for a free sheet, none for a clamped one, the rotations about the
+    /// pin for a pinned one.
+    allowed: Option<DMatrix<f64>>,
 }
 
 fn v3(x: &[f64], s: usize) -> Vector3<f64> {
@@ -52,7 +57,53 @@ impl RigidModes {
         RigidModes {
             pos_mass: (0..n_slots).map(|s| y[3 * s]).collect(),
             is_position,
+            allowed: None,
         }
+    }
+
+    /// Declare the supported scalar DOFs (never moving) at positions `q`:
+    /// only rigid modes that leave them at rest remain (the null space of
+    /// the modes restricted to them; rotations scaled by the sheet size
+    /// `length` so that the threshold is unitless).
+    pub fn set_supports(&mut self, supported: &[usize], q: &[f64], length: f64) {
+        if supported.is_empty() {
+            self.allowed = None;
+            return;
+        }
+        let l = length.max(f64::MIN_POSITIVE);
+        let mut sts = Matrix6::<f64>::zeros();
+        for &i in supported {
+            let (s, c) = (i / 3, i % 3);
+            let qs = v3(q, s);
+            let mut row = Vector6::zeros();
+            if self.is_position[s] {
+                row[c] = 1.0;
+            }
+            for k in 0..3 {
+                // Component c of e_k x q_s, per unit of the sheet size.
+                let e = Vector3::ith(k, 1.0);
+                row[3 + k] = e.cross(&qs)[c] / l;
+            }
+            sts += row * row.transpose();
+        }
+        let eig = SymmetricEigen::new(sts);
+        let scale = eig.eigenvalues.max().max(1.0);
+        let cols: Vec<Vector6<f64>> = (0..6)
+            .filter(|&k| eig.eigenvalues[k] <= 1e-10 * scale)
+            .map(|k| {
+                let mut v = eig.eigenvectors.column(k).into_owned();
+                for r in 3..6 {
+                    v[r] /= l;
+                }
+                v
+            })
+            .collect();
+        self.allowed = Some(DMatrix::from_fn(6, cols.len(), |r, c| cols[c][r]));
+    }
+
+    /// Number of rigid modes the supports allow.
+    pub fn n_allowed(&self) -> usize {
+        self.allowed.as_ref().map(|a| a.ncols()).unwrap_or(6)
     }
 
     /// The rigid part of the velocity `v` at positions `q`, M-orthogonally
@@ -89,7 +140,17 @@ impl RigidModes {
         let mut b = Vector6::zeros();
         b.fixed_rows_mut::<3>(0).copy_from(&bt);
         b.fixed_rows_mut::<3>(3).copy_from(&br);
-        let y = g.cholesky()?.solve(&b);
+        let y: Vector6<f64> = match &self.allowed {
+            None => g.cholesky()?.solve(&b),
+            Some(n) if n.ncols() == 0 => Vector6::zeros(),
+            Some(n) => {
+                // Restricted to the allowed modes: y = N (N^T G N)^-1 N^T b.
+                let gs = n.transpose() * DMatrix::from_column_slice(6, 6, g.as_slice()) * n;
+                let bs = n.transpose() * DMatrix::from_column_slice(6, 1, b.as_slice());
+                let z = gs.cholesky()?.solve(&bs);
+                Vector6::from_column_slice((n * z).as_slice())
+            }
+        };
         let (yt, yr) = (y.fixed_rows::<3>(0), y.fixed_rows::<3>(3));
         for s in 0..n {
             let f = self.pos_mass[s] * yt + yr.cross(&v3(mq, s));

@@ -34,7 +34,8 @@ struct Run {
 }
 
 /// Drive the `fold` input of `m` piecewise linearly from its value now
-/// through the `(time, value)` points, sampling every `dt` (at most), and
+/// through the `(time, value)` points (value and slope set before each
+/// step, as a master with input derivatives does), sampling every `dt` (at most), and
 /// check every sample for NaN; the work is added to `run`. A segment with
 /// equal end values is a hold: its energy rises are recorded in
 /// [`Run::held_rise`] for the caller to assert.
@@ -46,8 +47,12 @@ fn drive(m: &mut Model, run: &mut Run, points: &[(f64, f64)], dt: f64) {
         let mut e_prev = e_hold;
         while m.time() < t1 - 1e-12 * t1 {
             let h = dt.min(t1 - m.time());
-            let u = u0 + (u1 - u0) * ((m.time() + h - t0) / (t1 - t0)).min(1.0);
+            // The piecewise linear signal: its value at the step start and
+            // its slope over the step.
+            let u = u0 + (u1 - u0) * ((m.time() - t0) / (t1 - t0)).min(1.0);
             m.set_input(fold, u).unwrap();
+            m.set_input_derivative(fold, 1, (u1 - u0) / (t1 - t0))
+                .unwrap();
             run.work.advance(m, h);
             assert!(
                 m.output_values().iter().all(|x| x.is_finite()),

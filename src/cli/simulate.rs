@@ -25,6 +25,11 @@ pub struct SimulateArgs {
     /// Output CSV.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Also write a ParaView time series into this folder: STEM.pvd and one
+    /// STEM_NNNNN.vtu per output time (STEM = the scene file's name), with
+    /// the model's mesh, per-facet strain energy and per-crease fold angle.
+    #[arg(long, value_name = "DIR")]
+    pub pvd: Option<PathBuf>,
 }
 
 /// Input signals: times and, per model input index, values.
@@ -158,6 +163,19 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     let io = |e: std::io::Error| format!("cannot write {}: {e}", args.output.display());
     writeln!(out, "time,{}", names.join(",")).map_err(io)?;
     write_row(&mut out, 0.0, &model.output_values()).map_err(io)?;
+    let mut series = match &args.pvd {
+        Some(dir) => {
+            let stem = args
+                .scene
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into());
+            let mut s = crate::paraview::Series::new(dir, &stem, &model)?;
+            s.write(&model)?;
+            Some(s)
+        }
+        None => None,
+    };
     let n = (stop / args.step).round().max(1.0) as usize;
     let started = std::time::Instant::now();
     let mut last_report = started;
@@ -172,6 +190,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         total.accumulate(&r);
         let steps = total.steps;
         write_row(&mut out, t, &model.output_values()).map_err(io)?;
+        if let Some(s) = series.as_mut() {
+            s.write(&model)?;
+        }
         if last_report.elapsed().as_secs_f64() > 2.0 {
             eprintln!(
                 "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps",
@@ -181,6 +202,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         }
     }
     out.flush().map_err(io)?;
+    if let Some(s) = &series {
+        eprintln!("ParaView series -> {}", s.finish()?.display());
+    }
     eprintln!(
         "simulated {stop} s in {:.2} s of CPU wall time -> {}",
         started.elapsed().as_secs_f64(),

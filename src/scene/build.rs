@@ -686,7 +686,7 @@ fn apply_physics(
         beta,
         crease: p.crease_damping.unwrap_or(0.0),
     };
-    scene.auto_damping = p.damping.is_none() && p.crease_damping.is_none();
+    scene.auto_damping = p.damping.is_none();
     scene.gravity = p.gravity;
     scene.solver = p.solver;
     scene.outputs = p.outputs;
@@ -1401,8 +1401,7 @@ mod tests {
             json!({"length_scale": 0.02, "damping_per_length": 1e-4}),
         );
         let (s, _) = load(&v).unwrap();
-        // A crease damping given switches the automatic damping off.
-        assert!(!s.auto_damping);
+        assert!(s.auto_damping);
         assert_eq!(s.damping.crease, 1e-4);
         let e = err(
             &with(base(), "ancf:material", json!({"thickness": -1})),

@@ -360,11 +360,11 @@ pub struct Scene {
     pub crease: CreaseStiffness,
     /// Damping.
     pub damping: Damping,
-    /// True when the scene sets no damping (neither `ancf:damping` nor a
-    /// crease `damping_per_length`): the model then chooses a
-    /// mass-proportional damping of the deformation rate from the facet size
-    /// and crease stiffness (damping ratio 0.2 on the folding mode of a mean
-    /// facet; rigid motion undamped) and `damping` is not used.
+    /// True when the scene does not set `ancf:damping`: the model then
+    /// chooses a mass-proportional damping of the deformation rate from the
+    /// facet size and crease stiffness (damping ratio 0.2 on the folding
+    /// mode of a mean facet; rigid motion undamped), and `damping.alpha` and
+    /// `damping.beta` are not used (crease dashpots still are).
     pub auto_damping: bool,
     /// Actuators (one input each).
     pub actuators: Vec<Actuator>,

@@ -85,10 +85,14 @@ class Instance:
         self.time = start_time
         return self
 
-    def step(self, h, inputs=None):
-        """Set `inputs` (name -> value at the end of the step) and step."""
+    def step(self, h, inputs=None, slopes=None):
+        """Set `inputs` (name -> value, in force from now and held over the
+        step, FMI 2.0) and `slopes` (name -> first derivative over the
+        step, fmi2SetRealInputDerivatives), then step."""
         for name, value in (inputs or {}).items():
             self.slave.setReal([self.vr[name]], [value])
+        for name, slope in (slopes or {}).items():
+            self.slave.setRealInputDerivatives([self.vr[name]], [1], [slope])
         self.slave.doStep(currentCommunicationPoint=self.time, communicationStepSize=h)
         self.time += h
 
@@ -110,11 +114,15 @@ def unzip(fmu, where) -> str:
 
 def run_ramp(inst, steps, ramp_time=1.0, input_name=None):
     """Drive the first input from 0 to 1 linearly over `ramp_time` through the
-    given communication steps; return the output rows after each step."""
+    given communication steps: each step gets the ramp's value at its start
+    and the slope that reaches the ramp's value at its end (so the input is
+    the ramp itself wherever the steps do not straddle its end); return the
+    output rows after each step."""
     name = input_name or inst.md.modelVariables[inst.inputs[0]].name
     rows = []
     for h in steps:
-        t_end = inst.time + h
-        inst.step(h, {name: min(t_end / ramp_time, 1.0)})
+        u0 = min(inst.time / ramp_time, 1.0)
+        u1 = min((inst.time + h) / ramp_time, 1.0)
+        inst.step(h, {name: u0}, {name: (u1 - u0) / h})
         rows.append(inst.get())
     return np.array(rows)

@@ -86,19 +86,26 @@ def test_forced_solver_failure_is_discarded_and_a_smaller_step_succeeds(unzipped
     below 1 ms. A torque of 1e3 N per metre (a million times the one that
     folds 1 rad) over a 10 ms step turns the panel by far more than a turn
     per internal step: Newton diverges, fmi2DoStep returns fmi2Discard, the
-    outputs and fmi2LastSuccessfulTime are exactly those before the call.
-    The same input over a 1 us step (the torque ramps from 0, the panel turns
-    by about 1e-5 rad) then succeeds with finite outputs."""
-    inst = Instance(unzipped("case_c_nocut"), "discard").initialize()
+    outputs and fmi2LastSuccessfulTime are exactly those before the call,
+    fmi2Terminated is true and the discard is logged once (loggingOn).
+    FMI 2.0's retry: restore the state saved before the step and take a
+    1 us step with the same input (held, the panel turns by about 2e-5
+    rad): it succeeds with finite outputs."""
+    from fmpy.fmi2 import fmi2Terminated
+
+    inst = Instance(unzipped("case_c_nocut"), "discard", logging_on=True).initialize()
     try:
         inst.step(0.01, {"torque": 1e-4})
         before = inst.get()
+        saved = inst.slave.getFMUstate()
         with pytest.raises(FMICallException) as e:
             inst.step(0.01, {"torque": 1e3})
         assert e.value.status == FMI2_DISCARD
         assert inst.get().tobytes() == before.tobytes()
         assert inst.slave.getRealStatus(2) == inst.time  # fmi2LastSuccessfulTime
-        assert any("rolled back" in m for m in inst.log.messages())
+        assert inst.slave.getBooleanStatus(fmi2Terminated)
+        assert sum("rolled back" in m for m in inst.log.messages()) == 1
+        inst.slave.setFMUstate(saved)
         inst.step(1e-6, {"torque": 1e3})
         assert np.all(np.isfinite(inst.get()))
     finally:

@@ -1,0 +1,62 @@
+//! Cost per simulated second against the master's communication step: the
+//! 4x4 Miura-ori folding under the rest-angle ramp (0 -> 1 over 0.6 s, 1 s
+//! simulated), default settings, communication steps 1e-2, 1e-3 and 1e-4 s.
+//! "slopes": the master gives each step the ramp's value and slope
+//! (fmi2SetRealInputDerivatives), the continuous ramp; "hold": only the
+//! value at the step start (sample and hold, a staircase).
+//!
+//! `cargo bench --bench cosim -- [--size 4] [--time 1.0]`
+//!
+//! CPU seconds are the process's CPU time (the machine is shared: compare
+//! the ratios within one run).
+
+use origami_fmu::benchmarks::{fold_by_ramp_with, miura_scene};
+use origami_fmu::model::Model;
+
+fn cpu_seconds() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid out pointer for clock_gettime.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let arg = |name: &str, default: f64| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .map(|v| v.parse().expect("a number"))
+            .unwrap_or(default)
+    };
+    let n = arg("--size", 4.0) as usize;
+    let time = arg("--time", 1.0);
+    println!(
+        "| sheet | inputs | communication step (s) | CPU s per simulated s | vs 1e-2 | internal steps | rejected | Newton its | factorizations |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for with_slopes in [true, false] {
+        let mut base = None;
+        for dt in [1e-2, 1e-3, 1e-4] {
+            let mut m = Model::new(miura_scene(n)).expect("Miura model");
+            m.initialize().expect("initialize");
+            let steps = (time / dt).round() as usize;
+            let c0 = cpu_seconds();
+            let r = fold_by_ramp_with(&mut m, steps, dt, 0.6 * time, with_slopes);
+            let cpu = (cpu_seconds() - c0) / time;
+            let b = *base.get_or_insert(cpu);
+            println!(
+                "| {n}x{n} | {} | {dt:.0e} | {cpu:.3} | {:.2} | {} | {} | {} | {} |",
+                if with_slopes { "slopes" } else { "hold" },
+                cpu / b,
+                r.steps,
+                r.rejected,
+                r.newton_iterations,
+                r.factorizations
+            );
+        }
+    }
+}

@@ -1,0 +1,336 @@
+//! ParaView time series of a model run: one VTK XML UnstructuredGrid file
+//! (`.vtu`, ASCII) per output time and a `.pvd` collection that lists them
+//! with their times, so ParaView opens the whole run as one animated dataset.
+//!
+//! Each `.vtu` holds the model's mesh: every mesh vertex (FOLD vertices
+//! first, then vertices added by refinement) at its current position, every
+//! mesh triangle as a VTK triangle, and every crease edge of the mesh as a
+//! VTK line. Cell data: `cell_kind` (0 facet, 1 crease line), `fold_edge`
+//! (the FOLD edge of a crease line, -1 on facets), `strain_energy` (J) and
+//! `strain_energy_density` (J/m^2 of reference area) on facets and
+//! `fold_angle_deg` (valley positive; the `crease[e].angle` outputs, 0 when
+//! the scene outputs no fold angles) on crease lines, 0 on the other kind.
+//! Point data: `fold_vertex` (FOLD index, -1 for refined vertices) and
+//! `displacement` from the flat reference state (m).
+//!
+//! The format is small enough to write directly; the writer is tested by
+//! reading files back (tests/paraview.rs and the fmpy suite with meshio).
+
+use crate::mesh::EdgeKind;
+use crate::model::Model;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// VTK cell type of a triangle.
+const VTK_TRIANGLE: u8 = 5;
+/// VTK cell type of a line.
+const VTK_LINE: u8 = 3;
+
+/// One frame of the series: the mesh at one time and its fields.
+pub struct Frame<'a> {
+    /// Current vertex positions (m).
+    pub points: &'a [[f64; 3]],
+    /// Reference (flat) vertex positions (m), for `displacement`.
+    pub reference: &'a [[f64; 3]],
+    /// FOLD vertex count: points `0..n` are FOLD vertices.
+    pub fold_vertex_count: usize,
+    /// Triangles (vertex indices).
+    pub triangles: &'a [[usize; 3]],
+    /// Strain energy of each triangle (J).
+    pub facet_energy: &'a [f64],
+    /// Reference area of each triangle (m^2).
+    pub facet_area: &'a [f64],
+    /// Crease lines: end vertices and FOLD edge index.
+    pub lines: &'a [([usize; 2], usize)],
+    /// Fold angle of each line (rad, valley positive).
+    pub line_angle: &'a [f64],
+}
+
+/// Append a `<DataArray>` of `values` (`ncomp` components) to `s`.
+fn data_array<T: std::fmt::Display>(
+    s: &mut String,
+    ty: &str,
+    name: &str,
+    ncomp: usize,
+    values: impl Iterator<Item = T>,
+) {
+    let name_attr = if name.is_empty() {
+        String::new()
+    } else {
+        format!(" Name=\"{name}\"")
+    };
+    let _ = writeln!(
+        s,
+        "        <DataArray type=\"{ty}\"{name_attr} NumberOfComponents=\"{ncomp}\" format=\"ascii\">"
+    );
+    s.push_str("         ");
+    for v in values {
+        let _ = write!(s, " {v}");
+    }
+    s.push_str("\n        </DataArray>\n");
+}
+
+/// Shortest round-trip text of a float in exponent form (`1.5e-3`): plain
+/// `{}` would spell 1e-300 with 300 digits.
+#[derive(Clone, Copy)]
+struct Exp(f64);
+impl std::fmt::Display for Exp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:e}", self.0)
+    }
+}
+
+/// The text of one `.vtu` file. Fails when the frame's arrays disagree in
+/// length or hold a non-finite value (VTK's ASCII reader cannot read NaN).
+pub fn vtu_text(fr: &Frame) -> Result<String, String> {
+    let np = fr.points.len();
+    let nt = fr.triangles.len();
+    let nl = fr.lines.len();
+    if fr.reference.len() != np
+        || fr.facet_energy.len() != nt
+        || fr.facet_area.len() != nt
+        || fr.line_angle.len() != nl
+        || fr.fold_vertex_count > np
+    {
+        return Err("ParaView frame: array lengths do not match the mesh".into());
+    }
+    let finite = fr.points.iter().flatten().all(|x| x.is_finite())
+        && fr.facet_energy.iter().all(|x| x.is_finite())
+        && fr.line_angle.iter().all(|x| x.is_finite());
+    if !finite {
+        return Err("ParaView frame: non-finite position, energy or angle".into());
+    }
+    if let Some(v) = fr
+        .triangles
+        .iter()
+        .flatten()
+        .chain(fr.lines.iter().flat_map(|(l, _)| l))
+        .find(|&&v| v >= np)
+    {
+        return Err(format!(
+            "ParaView frame: vertex {v} out of range ({np} points)"
+        ));
+    }
+    let mut s = String::with_capacity(64 * (np + nt + nl) + 1024);
+    s.push_str("<?xml version=\"1.0\"?>\n");
+    s.push_str(
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+    );
+    s.push_str("  <UnstructuredGrid>\n");
+    let _ = writeln!(
+        s,
+        "    <Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{}\">",
+        nt + nl
+    );
+    s.push_str("      <PointData>\n");
+    data_array(
+        &mut s,
+        "Int64",
+        "fold_vertex",
+        1,
+        (0..np).map(|v| {
+            if v < fr.fold_vertex_count {
+                v as i64
+            } else {
+                -1
+            }
+        }),
+    );
+    data_array(
+        &mut s,
+        "Float64",
+        "displacement",
+        3,
+        fr.points
+            .iter()
+            .zip(fr.reference)
+            .flat_map(|(p, r)| (0..3).map(move |c| Exp(p[c] - r[c]))),
+    );
+    s.push_str("      </PointData>\n      <CellData>\n");
+    let kinds = || std::iter::repeat_n(0u8, nt).chain(std::iter::repeat_n(1u8, nl));
+    data_array(&mut s, "UInt8", "cell_kind", 1, kinds());
+    data_array(
+        &mut s,
+        "Int64",
+        "fold_edge",
+        1,
+        std::iter::repeat_n(-1i64, nt).chain(fr.lines.iter().map(|&(_, e)| e as i64)),
+    );
+    data_array(
+        &mut s,
+        "Float64",
+        "strain_energy",
+        1,
+        fr.facet_energy
+            .iter()
+            .map(|&x| Exp(x))
+            .chain(std::iter::repeat_n(Exp(0.0), nl)),
+    );
+    data_array(
+        &mut s,
+        "Float64",
+        "strain_energy_density",
+        1,
+        fr.facet_energy
+            .iter()
+            .zip(fr.facet_area)
+            .map(|(&e, &a)| Exp(if a > 0.0 { e / a } else { 0.0 }))
+            .chain(std::iter::repeat_n(Exp(0.0), nl)),
+    );
+    data_array(
+        &mut s,
+        "Float64",
+        "fold_angle_deg",
+        1,
+        std::iter::repeat_n(Exp(0.0), nt).chain(fr.line_angle.iter().map(|a| Exp(a.to_degrees()))),
+    );
+    s.push_str("      </CellData>\n      <Points>\n");
+    data_array(
+        &mut s,
+        "Float64",
+        "",
+        3,
+        fr.points.iter().flatten().map(|&x| Exp(x)),
+    );
+    s.push_str("      </Points>\n      <Cells>\n");
+    data_array(
+        &mut s,
+        "Int64",
+        "connectivity",
+        1,
+        fr.triangles
+            .iter()
+            .flatten()
+            .chain(fr.lines.iter().flat_map(|(l, _)| l)),
+    );
+    data_array(
+        &mut s,
+        "Int64",
+        "offsets",
+        1,
+        (1..=nt)
+            .map(|k| 3 * k)
+            .chain((1..=nl).map(|k| 3 * nt + 2 * k)),
+    );
+    data_array(
+        &mut s,
+        "UInt8",
+        "types",
+        1,
+        std::iter::repeat_n(VTK_TRIANGLE, nt).chain(std::iter::repeat_n(VTK_LINE, nl)),
+    );
+    s.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+    Ok(s)
+}
+
+/// Escape the characters XML does not allow in an attribute value.
+fn xml_attr(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('"', "&quot;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// The text of a `.pvd` collection: one `DataSet` per (time, file name
+/// relative to the `.pvd`).
+pub fn pvd_text(entries: &[(f64, String)]) -> String {
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
+    );
+    for (t, file) in entries {
+        let _ = writeln!(
+            s,
+            "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>",
+            Exp(*t),
+            xml_attr(file)
+        );
+    }
+    s.push_str("  </Collection>\n</VTKFile>\n");
+    s
+}
+
+/// A series being written: `DIR/STEM.pvd` and `DIR/STEM_00000.vtu`, ... .
+pub struct Series {
+    dir: PathBuf,
+    stem: String,
+    entries: Vec<(f64, String)>,
+    reference: Vec<[f64; 3]>,
+    areas: Vec<f64>,
+    /// Crease lines of the mesh with their FOLD edge.
+    lines: Vec<([usize; 2], usize)>,
+    /// For each line, the index of its `crease[e].angle` output (None when
+    /// the scene does not output fold angles).
+    line_output: Vec<Option<usize>>,
+}
+
+impl Series {
+    /// Start a series of `model`'s mesh in `dir` (created if missing).
+    pub fn new(dir: &Path, stem: &str, model: &Model) -> Result<Series, String> {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        let mesh = &model.scene().mesh;
+        let reference = mesh.coords.iter().map(|x| [x.x, x.y, 0.0]).collect();
+        let areas = (0..mesh.triangles.len()).map(|t| mesh.area(t)).collect();
+        let outputs: std::collections::HashMap<&str, usize> = model
+            .outputs()
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v.name.as_str(), i))
+            .collect();
+        let mut lines = Vec::new();
+        let mut line_output = Vec::new();
+        for edge in &mesh.edges {
+            if let (EdgeKind::Crease, Some(f)) = (edge.kind, edge.fold_edge) {
+                lines.push((edge.v, f));
+                line_output.push(outputs.get(format!("crease[{f}].angle").as_str()).copied());
+            }
+        }
+        Ok(Series {
+            dir: dir.to_path_buf(),
+            stem: stem.to_string(),
+            entries: Vec::new(),
+            reference,
+            areas,
+            lines,
+            line_output,
+        })
+    }
+
+    /// Write the model's current state as the next frame at its time.
+    pub fn write(&mut self, model: &Model) -> Result<(), String> {
+        let mesh = &model.scene().mesh;
+        let points: Vec<[f64; 3]> = (0..mesh.n_vertices())
+            .map(|v| model.vertex_position(v))
+            .collect();
+        let energy = model.facet_strain_energies();
+        let values = model.output_values();
+        let angles: Vec<f64> = self
+            .line_output
+            .iter()
+            .map(|o| o.map(|i| values[i]).unwrap_or(0.0))
+            .collect();
+        let text = vtu_text(&Frame {
+            points: &points,
+            reference: &self.reference,
+            fold_vertex_count: model.scene().fold_vertex_count,
+            triangles: &mesh.triangles,
+            facet_energy: &energy,
+            facet_area: &self.areas,
+            lines: &self.lines,
+            line_angle: &angles,
+        })?;
+        let name = format!("{}_{:05}.vtu", self.stem, self.entries.len());
+        let path = self.dir.join(&name);
+        std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        self.entries.push((model.time(), name));
+        Ok(())
+    }
+
+    /// Write the `.pvd` collection of the frames so far; returns its path.
+    pub fn finish(&self) -> Result<PathBuf, String> {
+        let path = self.dir.join(format!("{}.pvd", self.stem));
+        std::fs::write(&path, pvd_text(&self.entries))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        Ok(path)
+    }
+}
