@@ -5,7 +5,7 @@
 //! (fmi2SetRealInputDerivatives), the continuous ramp; "hold": only the
 //! value at the step start (sample and hold, a staircase).
 //!
-//! `cargo bench --bench cosim -- [--size 4] [--time 1.0]`
+//! `cargo bench --bench cosim -- [--size 4] [--time 1.0] [--slopes-only]`
 //!
 //! CPU seconds are the process's CPU time (the machine is shared: compare
 //! the ratios within one run).
@@ -38,7 +38,12 @@ fn main() {
         "| sheet | inputs | communication step (s) | CPU s per simulated s | vs 1e-2 | internal steps | rejected | Newton its | factorizations |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    for with_slopes in [true, false] {
+    let modes: &[bool] = if args.iter().any(|a| a == "--slopes-only") {
+        &[true]
+    } else {
+        &[true, false]
+    };
+    for &with_slopes in modes {
         let mut base = None;
         for dt in [1e-2, 1e-3, 1e-4] {
             let mut m = Model::new(miura_scene(n)).expect("Miura model");

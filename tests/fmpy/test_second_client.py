@@ -75,3 +75,27 @@ def test_fmi_sim_agrees_with_fmpy(fmu, tmp_path, scene):
     np.testing.assert_allclose(data[:, header.index("time")], ref["time"], atol=1e-12)
     for name in outputs:
         np.testing.assert_allclose(data[:, header.index(name)], ref[name], rtol=1e-9, atol=1e-9, err_msg=name)
+
+
+@pytest.mark.skipif(fmi_sim() is None, reason="fmi-sim is not installed: run scripts/setup_fmi_sim.sh")
+def test_fmi_sim_stops_on_the_scene_built_to_discard(fmu, tmp_path):
+    """A step that fails (here: solver.max_internal_steps = 2 against the ten
+    1 ms internal steps a 10 ms communication step needs) answers
+    fmi2Discard with fmi2Terminated true; fmi-sim then ends its run at the
+    last successful time (t = 0) and exits normally, within seconds,
+    instead of repeating the step."""
+    path = fmu("case_c_nocut")
+    table = tmp_path / "input.csv"
+    table.write_text("time,torque\n0.0,0.0\n1.0,1e-4\n")
+    out = tmp_path / "out.csv"
+    p = subprocess.run(
+        [fmi_sim(), "--model", str(path), "-i", str(table), "-o", str(out),
+         "co-simulation", "-s", "0", "-f", "1.0", "--output-interval", "0.01", "--step", "0.01",
+         "--init-values", "solver.max_internal_steps=2"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    with open(out, newline="") as f:
+        rows = list(csv.reader(f))
+    times = [float(r[0]) for r in rows[1:]]
+    assert times and max(times) < 1.0, times[-3:]
