@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv >&2
 fi
-if ! .venv/bin/python -c "import fmpy, pytest, matplotlib, numpy, meshio, PIL" 2>/dev/null; then
+if ! .venv/bin/python -c "import fmpy, pytest, matplotlib, numpy, meshio, PIL, dask.distributed, pandas" 2>/dev/null; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt >&2
 fi
 echo "$PWD/.venv/bin/python"

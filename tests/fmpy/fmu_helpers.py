@@ -1,24 +1,21 @@
 """Helpers shared by the fmpy suite: find the CLI, build FMUs, open
 instances with a capturing logger, and drive them step by step."""
 
-import ctypes
 import os
 import pathlib
 import subprocess
+import sys
 
 import numpy as np
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import (
-    FMU2Slave,
-    calloc,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-    free,
-)
+from fmpy.fmi2 import FMU2Slave
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "python"))
+
+# An FMI logger that records (status, category, message) tuples.
+from origami_sweep.master import FmiLog as LogCapture  # noqa: E402
+
 SCENES = ROOT / "tests" / "fmpy" / "scenes"
 SHIPPED = ROOT / "scenes"
 # Test scenes (scene JSON) and the shipped example scenes (FOLD).
@@ -50,28 +47,6 @@ def build(scene: pathlib.Path, out: pathlib.Path) -> subprocess.CompletedProcess
         capture_output=True,
         text=True,
     )
-
-
-class LogCapture:
-    """An FMI logger that records (status, category, message) tuples."""
-
-    def __init__(self):
-        self.lines = []
-
-        def log(env, instance, status, category, message):
-            self.lines.append((status, category.decode(), message.decode()))
-
-        self.callbacks = fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2CallbackLoggerTYPE(log)
-        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        # fmpy's proxy formats the C-variadic message before calling `log`.
-        from fmpy.logging import addLoggerProxy
-
-        addLoggerProxy(ctypes.byref(self.callbacks))
-
-    def messages(self):
-        return [m for _, _, m in self.lines]
 
 
 class Instance:
