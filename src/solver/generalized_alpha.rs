@@ -112,6 +112,9 @@ pub struct Workspace {
     mqdd: Vec<f64>,
     /// The predictor's second guess (buffers reused across steps).
     guess: Dynamics,
+    /// The residual of the predictor's first guess (kept for Newton's
+    /// first iteration when that guess wins).
+    first_rhs: Vec<f64>,
     /// Where the factorization in the solver was formed (None: no usable
     /// factorization).
     jacobian: Option<JacobianPoint>,
@@ -272,11 +275,23 @@ pub fn step(
                 .filter(|&i| asm.free[i] != FIXED)
                 .map(|i| (ws.rhs[asm.free[i]] * scales[i]).powi(2))
                 .sum();
+            if k == 0 {
+                ws.first_rhs.clone_from(&ws.rhs);
+            }
         }
     }
-    if size[1] < size[0] {
+    // The winner's residual is Newton's first one (the same evaluation, so
+    // the same numbers) unless the first iteration forms a matrix.
+    let winner = if size[1] < size[0] {
         std::mem::swap(&mut next, &mut alt);
-    }
+        1
+    } else {
+        if size[0].is_finite() {
+            std::mem::swap(&mut ws.rhs, &mut ws.first_rhs);
+        }
+        0
+    };
+    let have_rhs = size[winner].is_finite();
     ws.guess = alt;
     let coeffs = matrix_coeffs(co, h);
     let modified = settings.newton == NewtonMode::Modified;
@@ -291,9 +306,11 @@ pub fn step(
     for it in 0..settings.max_newton {
         refresh |= !modified;
         update_rates(&mut next, cur, co, h);
-        let t0 = Instant::now();
-        residual(asm, drive, &next, ws, refresh.then_some(coeffs))?;
-        out.assembly_time += t0.elapsed();
+        if !(it == 0 && have_rhs && !refresh) {
+            let t0 = Instant::now();
+            residual(asm, drive, &next, ws, refresh.then_some(coeffs))?;
+            out.assembly_time += t0.elapsed();
+        }
         // Whether the matrix was formed at this iterate (else it is stale:
         // formed at an earlier iterate or step).
         let stale = !refresh;
