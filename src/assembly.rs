@@ -513,11 +513,14 @@ impl Assembler {
             // out: modified Newton converges with it at a rate ~ alpha h).
             let mut mv = vec![0.0; n];
             self.mass_mul(st.v, &mut mv);
-            let mut mq = vec![0.0; n];
-            self.mass_mul(st.q, &mut mq);
             let mut pv = vec![0.0; n];
-            if self.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
-                pv.fill(0.0);
+            // A clamped sheet has no rigid motion: nothing to project.
+            if self.rigid.n_allowed() > 0 {
+                let mut mq = vec![0.0; n];
+                self.mass_mul(st.q, &mut mq);
+                if self.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
+                    pv.fill(0.0);
+                }
             }
             for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {
                 *f += p.alpha * (x - r);
