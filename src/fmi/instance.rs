@@ -211,6 +211,14 @@ pub struct SavedState {
     pub model: ModelState,
 }
 
+/// The phases in which inputs (and, before initialization ends,
+/// parameters) may be set: FMI 2.0 allows neither after a failed step.
+const SETTABLE: &[Phase] = &[
+    Phase::Instantiated,
+    Phase::InitializationMode,
+    Phase::StepComplete,
+];
+
 /// Relative tolerance with which `currentCommunicationPoint` must match
 /// the FMU's time in `fmi2DoStep`.
 pub const TIME_TOLERANCE: f64 = 1e-9;
@@ -547,14 +555,7 @@ impl Instance {
     /// problem nothing changes. Parameters (variability fixed) only before
     /// `fmi2ExitInitializationMode`; outputs never.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> fmi2Status {
-        if let Err(s) = self.require(
-            "fmi2SetReal",
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-            ],
-        ) {
+        if let Err(s) = self.require("fmi2SetReal", SETTABLE) {
             return s;
         }
         let mut refs = Vec::with_capacity(vrs.len());
@@ -634,14 +635,7 @@ impl Instance {
         values: &[f64],
     ) -> fmi2Status {
         const F: &str = "fmi2SetRealInputDerivatives";
-        if let Err(s) = self.require(
-            F,
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-            ],
-        ) {
+        if let Err(s) = self.require(F, SETTABLE) {
             return s;
         }
         let mut inputs = Vec::with_capacity(vrs.len());

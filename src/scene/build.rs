@@ -844,18 +844,25 @@ fn read_edges(
             ));
         }
     }
-    let assignment = match &fold.edges_assignment {
-        Some(a) if a.len() != ne => {
-            return Err(invalid(
-                "edges_assignment",
+    // Per-edge arrays have one entry per edge.
+    let per_edge = |key: &str, len: usize| {
+        if len == ne {
+            Ok(())
+        } else {
+            Err(invalid(
+                key,
                 format!(
-                    "has {} entries but edges_vertices has {ne}; the arrays must have the same \
-                     length",
-                    a.len()
+                    "has {len} entries but edges_vertices has {ne}; the arrays must have the same \
+                     length"
                 ),
-            ));
+            ))
         }
-        Some(a) => a.clone(),
+    };
+    let assignment = match &fold.edges_assignment {
+        Some(a) => {
+            per_edge("edges_assignment", a.len())?;
+            a.clone()
+        }
         None => {
             warnings.push(
                 "edges_assignment is missing: interior edges are read as U (creases with the \
@@ -866,17 +873,10 @@ fn read_edges(
         }
     };
     let angles = match &fold.edges_fold_angle {
-        Some(a) if a.len() != ne => {
-            return Err(invalid(
-                "edges_foldAngle",
-                format!(
-                    "has {} entries but edges_vertices has {ne}; the arrays must have the same \
-                     length",
-                    a.len()
-                ),
-            ));
+        Some(a) => {
+            per_edge("edges_foldAngle", a.len())?;
+            a.clone()
         }
-        Some(a) => a.clone(),
         None => vec![None; ne],
     };
     Ok(Some(Listed {

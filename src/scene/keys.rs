@@ -197,14 +197,11 @@ impl<'a> Obj<'a> {
     /// A number checked by the one validator under its parameter name
     /// ([`super::limits`]).
     fn num_limited(&self, f: &str, name: &str) -> Result<Option<f64>, SceneError> {
-        match self.get(f) {
-            None => Ok(None),
-            Some(v) => {
-                let x = expect_number(v, &self.path(f))?;
-                super::limits::check(name, x).map_err(|e| SceneError::invalid(self.path(f), e))?;
-                Ok(Some(x))
-            }
+        let x = self.num(f)?;
+        if let Some(x) = x {
+            super::limits::check(name, x).map_err(|e| SceneError::invalid(self.path(f), e))?;
         }
+        Ok(x)
     }
     fn string(&self, f: &str) -> Result<Option<&'a str>, SceneError> {
         self.get(f)
