@@ -9,7 +9,7 @@
 
 use origami_fmu::assembly::{Assembler, Evaluation, MatrixCoeffs, Physics, State};
 use origami_fmu::benchmarks::{fold_by_ramp, miura_scene};
-use origami_fmu::element::quadrature::Rule;
+use origami_fmu::element::ElementOptions;
 use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::VertexInput;
 use std::time::Instant;
@@ -95,7 +95,8 @@ fn main() {
     let mut cases: Vec<Case> = variants
         .into_iter()
         .map(|(name, physics, torque)| {
-            let asm = Assembler::new(mesh, physics, Rule::default(), &[]).expect("assembler");
+            let asm =
+                Assembler::new(mesh, physics, ElementOptions::default(), &[]).expect("assembler");
             let n = asm.n_dofs();
             let q_ref = asm.layout.reference_state(mesh);
             // A slightly deformed, moving state: every term has work to do.

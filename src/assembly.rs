@@ -9,7 +9,7 @@
 
 use crate::crease;
 use crate::dofs::{Combo, DofLayout, SlotKind};
-use crate::element::{ElemVec, MASS_HAT, Rule, ShellElement};
+use crate::element::{ElemVec, ElementOptions, ShellElement};
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
 use crate::scene::Material;
@@ -134,7 +134,7 @@ impl Assembler {
     pub fn new(
         mesh: &Mesh,
         physics: Physics,
-        rule: Rule,
+        element: ElementOptions,
         fixed_slots: &[usize],
     ) -> Result<Assembler, String> {
         let layout = DofLayout::new(mesh);
@@ -143,8 +143,12 @@ impl Assembler {
             .iter()
             .enumerate()
             .map(|(f, &[a, b, c])| {
-                ShellElement::new([mesh.coords[a], mesh.coords[b], mesh.coords[c]], rule)
-                    .map_err(|e| format!("face {f}: {e}"))
+                ShellElement::with_interpolation(
+                    [mesh.coords[a], mesh.coords[b], mesh.coords[c]],
+                    element.rule,
+                    element.interpolation,
+                )
+                .map_err(|e| format!("face {f}: {e}"))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let creases = crease_ends(mesh, &layout);
@@ -303,6 +307,7 @@ impl Assembler {
         let mut pos: Vec<usize> = Vec::new();
         for (f, el) in self.elements.iter().enumerate() {
             let scale = rho_h * el.area();
+            let mass_hat = el.mass_hat();
             let bm = &self.face_maps[f];
             let ns = bm.slots.len();
             pos.clear();
@@ -315,7 +320,7 @@ impl Assembler {
             }
             for i in 0..9 {
                 for j in 0..9 {
-                    let mij = scale * MASS_HAT[i][j];
+                    let mij = scale * mass_hat[i][j];
                     for ti in 0..bm.nterms[i] as usize {
                         for tj in 0..bm.nterms[j] as usize {
                             let (a, ca) = bm.terms[i][ti];

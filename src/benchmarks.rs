@@ -7,12 +7,59 @@
 
 use crate::assembly::{Assembler, Physics};
 use crate::dofs::DofLayout;
-use crate::element::Rule;
-use crate::mesh::builders::grid_with;
+use crate::element::{ElementOptions, Interpolation};
+use crate::mesh::Mesh;
+use crate::mesh::builders::{Diagonals, grid_family};
 use crate::scene::Material;
 use crate::solver::statics::{self, Load, StaticReport, StaticSettings};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
+
+/// Triangulations of a structured grid for element convergence studies: a
+/// shell element should converge on all of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFamily {
+    /// Every cell split along the same diagonal (three-direction mesh).
+    SameDiagonal,
+    /// Alternating diagonals ("union-jack").
+    UnionJack,
+    /// Each cell's diagonal at random (fixed seed).
+    RandomDiagonals,
+    /// Random diagonals and every vertex moved by up to 0.2 cells (along
+    /// the boundary for boundary vertices).
+    Perturbed,
+}
+
+impl MeshFamily {
+    /// All families, in table order.
+    pub const ALL: [MeshFamily; 4] = [
+        MeshFamily::SameDiagonal,
+        MeshFamily::UnionJack,
+        MeshFamily::RandomDiagonals,
+        MeshFamily::Perturbed,
+    ];
+
+    /// Short name for tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshFamily::SameDiagonal => "same diagonal",
+            MeshFamily::UnionJack => "union-jack",
+            MeshFamily::RandomDiagonals => "random diagonals",
+            MeshFamily::Perturbed => "perturbed",
+        }
+    }
+
+    /// The `nx` x `ny` cell mesh of `[0, lx] x [0, ly]`, no creases.
+    pub fn grid(self, lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
+        let (diagonals, jitter) = match self {
+            MeshFamily::SameDiagonal => (Diagonals::Same, 0.0),
+            MeshFamily::UnionJack => (Diagonals::Alternating, 0.0),
+            MeshFamily::RandomDiagonals => (Diagonals::Random(7), 0.0),
+            MeshFamily::Perturbed => (Diagonals::Random(11), 0.2),
+        };
+        grid_family(lx, ly, nx, ny, &[], diagonals, jitter)
+    }
+}
 
 /// Case A strip length.
 pub const ROLL_UP_L: f64 = 12.0;
@@ -94,15 +141,16 @@ pub struct RollUp {
     pub nx: usize,
     /// Cells across the strip.
     pub ny: usize,
-    /// Alternate the cell diagonals (union-jack mesh) instead of one
-    /// direction (three-direction mesh).
-    pub alternate: bool,
+    /// How the cells are triangulated.
+    pub family: MeshFamily,
     /// Hold the width-direction gradient `dr/dY = e_y` at every vertex, so
     /// the strip stays a cylinder about y as the exact solution does (the
     /// free 3D strip turns sideways under this moment, see the tests).
     pub planar: bool,
     /// Static solver settings for the load path up to the largest ratio.
     pub settings: StaticSettings,
+    /// Shape functions of the facets.
+    pub interpolation: Interpolation,
 }
 
 /// Tip of the strip at one moment level.
@@ -139,7 +187,7 @@ impl RollUp {
         RollUp {
             nx,
             ny: 1,
-            alternate: false,
+            family: MeshFamily::SameDiagonal,
             planar: true,
             settings: StaticSettings {
                 load_steps: 16,
@@ -147,6 +195,7 @@ impl RollUp {
                 tolerance: 1e-8,
                 min_increment: 1e-6,
             },
+            interpolation: Interpolation::default(),
         }
     }
 
@@ -160,7 +209,7 @@ impl RollUp {
         if !(top > 0.0 && top.is_finite()) || ratios.windows(2).any(|w| w[1] <= w[0]) {
             return Err("roll-up: ratios must be positive and increasing".into());
         }
-        let mesh = grid_with(ROLL_UP_L, 1.0, self.nx, self.ny, &[], self.alternate);
+        let mesh = self.family.grid(ROLL_UP_L, 1.0, self.nx, self.ny);
         let physics = roll_up_physics();
         let layout = DofLayout::new(&mesh);
         let nv = mesh.n_vertices();
@@ -187,7 +236,11 @@ impl RollUp {
                 fixed.push(gradient_slot(v, 1)?);
             }
         }
-        let asm = Assembler::new(&mesh, physics, Rule::default(), &fixed)?;
+        let element = ElementOptions {
+            interpolation: self.interpolation,
+            ..ElementOptions::default()
+        };
+        let asm = Assembler::new(&mesh, physics, element, &fixed)?;
         // Trapezoidal shares of the end moment along the tip edge.
         let m_top = top * 2.0 * PI * ROLL_UP_EI / ROLL_UP_L;
         let slots = tip
@@ -234,6 +287,334 @@ impl RollUp {
             points,
             report,
         })
+    }
+}
+
+/// A constant external force vector (all DOFs), scaled by the load factor.
+struct ConstantLoad(Vec<f64>);
+impl Load for ConstantLoad {
+    fn apply(&self, _: &Assembler, _: &[f64], lambda: f64, f: &mut [f64], _: Option<&mut [f64]>) {
+        for (fi, x) in f.iter_mut().zip(&self.0) {
+            *fi += lambda * x;
+        }
+    }
+}
+
+/// Linear-elastic physics with no creases, density 1 and no damping.
+pub fn plate_physics(e: f64, nu: f64, h: f64) -> Physics {
+    Physics {
+        material: Material {
+            youngs_modulus: e,
+            poisson_ratio: nu,
+            thickness: h,
+            density: 1.0,
+        },
+        crease_k_per_length: 0.0,
+        crease_c_per_length: 0.0,
+        alpha: 0.0,
+        beta: 0.0,
+    }
+}
+
+/// Supported vertices of a static case.
+#[derive(Clone, Copy, Debug)]
+pub struct Supports<'a> {
+    /// The vertices.
+    pub vertices: &'a [usize],
+    /// Clamped (every slot held) or pinned (position only).
+    pub clamped: bool,
+}
+
+/// Static solve of `mesh` on `supports` under the load `load(asm)`; the mean
+/// z displacement of the `probes` and the static solver's report.
+pub fn static_deflection(
+    mesh: &Mesh,
+    physics: Physics,
+    element: ElementOptions,
+    supports: Supports,
+    load: impl Fn(&Assembler) -> Vec<f64>,
+    probes: &[usize],
+    settings: StaticSettings,
+) -> Result<(f64, StaticReport), String> {
+    let layout = DofLayout::new(mesh);
+    let fixed: Vec<usize> = supports
+        .vertices
+        .iter()
+        .flat_map(|&v| {
+            if supports.clamped {
+                layout.vertex_slots(v)
+            } else {
+                vec![layout.position_slot[v]]
+            }
+        })
+        .collect();
+    let asm = Assembler::new(mesh, physics, element, &fixed)?;
+    let mut q = asm.layout.reference_state(mesh);
+    let f = load(&asm);
+    let report = statics::solve(&asm, &mut q, &[], &ConstantLoad(f), settings)?;
+    let z = |v: usize| q[3 * asm.layout.position_slot[v] + 2];
+    let w = probes.iter().map(|&v| z(v)).sum::<f64>() / probes.len() as f64;
+    Ok((w, report))
+}
+
+/// Consistent uniform pressure `p` along +z: the mass matrix (rho = 1,
+/// scaled by 1/h) applied to a unit translation.
+pub fn pressure_load(asm: &Assembler, p: f64, h: f64) -> Vec<f64> {
+    let mut t = vec![0.0; asm.n_dofs()];
+    for &s in &asm.layout.position_slot {
+        t[3 * s + 2] = p / h;
+    }
+    let mut f = vec![0.0; asm.n_dofs()];
+    asm.mass_mul(&t, &mut f);
+    f
+}
+
+/// Case B: a square plate, side 1, E = 1e7, nu = 0.3, thickness `1 / slenderness`,
+/// its boundary clamped or simply supported, under a uniform load or a
+/// central point load small enough for linear theory (w ~ 1e-4 of the plate
+/// scale `q a^4 / D`); centre deflection against the series solutions
+/// (Timoshenko & Woinowsky-Krieger, to five digits: alpha = 0.0040624 /
+/// 0.0012653 uniform, beta = 0.011601 / 0.0056120 point load, simply
+/// supported / clamped; BENCHMARKS.md prints them to three).
+#[derive(Clone, Copy, Debug)]
+pub struct PlateCase {
+    /// Cells per side (even, so a vertex sits at the centre).
+    pub n: usize,
+    /// Clamped (true) or simply supported edges.
+    pub clamped: bool,
+    /// Uniform pressure (true) or central point load.
+    pub uniform: bool,
+    /// Side over thickness.
+    pub slenderness: f64,
+    /// Triangulation.
+    pub family: MeshFamily,
+    /// Shape functions.
+    pub interpolation: Interpolation,
+    /// Static solver settings (one load step, relative residual 1e-8).
+    pub settings: StaticSettings,
+}
+
+impl PlateCase {
+    /// A clamped plate under uniform load on `n x n` same-diagonal cells, a/h = 100.
+    pub fn new(n: usize) -> PlateCase {
+        PlateCase {
+            n,
+            clamped: true,
+            uniform: true,
+            slenderness: 100.0,
+            family: MeshFamily::SameDiagonal,
+            interpolation: Interpolation::default(),
+            settings: StaticSettings {
+                load_steps: 1,
+                max_iterations: 20,
+                tolerance: 1e-8,
+                ..StaticSettings::default()
+            },
+        }
+    }
+
+    /// Centre deflection, exact value and the solver's report.
+    pub fn solve(&self) -> Result<(f64, f64, StaticReport), String> {
+        let (a, e, nu) = (1.0, 1.0e7, 0.3);
+        let h = a / self.slenderness;
+        let n = self.n;
+        if n < 2 || n % 2 != 0 || n > 1000 {
+            return Err(format!("plate: cells per side must be even, got {n}"));
+        }
+        let d = e * h * h * h / (12.0 * (1.0 - nu * nu));
+        let mesh = self.family.grid(a, a, n, n);
+        let on_edge = |x: f64| x.abs() < 1e-12 || (x - a).abs() < 1e-12;
+        let boundary: Vec<usize> = (0..mesh.n_vertices())
+            .filter(|&v| on_edge(mesh.coords[v].x) || on_edge(mesh.coords[v].y))
+            .collect();
+        let centre = (n / 2) * (n + 1) + n / 2;
+        let q = 1e-2 * d / a.powi(4);
+        let element = ElementOptions {
+            interpolation: self.interpolation,
+            ..ElementOptions::default()
+        };
+        let uniform = self.uniform;
+        let (w, report) = static_deflection(
+            &mesh,
+            plate_physics(e, nu, h),
+            element,
+            Supports {
+                vertices: &boundary,
+                clamped: self.clamped,
+            },
+            |asm| {
+                if uniform {
+                    pressure_load(asm, q, h)
+                } else {
+                    let mut f = vec![0.0; asm.n_dofs()];
+                    f[3 * asm.layout.position_slot[centre] + 2] = q * a * a;
+                    f
+                }
+            },
+            &[centre],
+            self.settings,
+        )?;
+        let coeff = match (self.clamped, uniform) {
+            (false, true) => 0.0040624,
+            (true, true) => 0.0012653,
+            (false, false) => 0.011601,
+            (true, false) => 0.0056120,
+        };
+        Ok((w, coeff * q * a.powi(4) / d, report))
+    }
+}
+
+/// Case B: a cantilever strip L = 1, b = 0.1, h = 0.01, E = 1e7, nu = 0,
+/// clamped at x = 0, a small tip force P (w / L = 3e-4) shared by the tip
+/// vertices; tip deflection against P L^3 / (3 EI).
+#[derive(Clone, Copy, Debug)]
+pub struct TipForce {
+    /// Cells along the strip.
+    pub nx: usize,
+    /// Cells across.
+    pub ny: usize,
+    /// Triangulation.
+    pub family: MeshFamily,
+    /// Shape functions.
+    pub interpolation: Interpolation,
+}
+
+impl TipForce {
+    /// `nx` x 1 same-diagonal cells, default shape functions.
+    pub fn new(nx: usize) -> TipForce {
+        TipForce {
+            nx,
+            ny: 1,
+            family: MeshFamily::SameDiagonal,
+            interpolation: Interpolation::default(),
+        }
+    }
+
+    /// Tip deflection (mean of the tip vertices) and the exact value.
+    pub fn solve(&self) -> Result<(f64, f64), String> {
+        let (l, b, h, e) = (1.0, 0.1, 0.01, 1.0e7);
+        let ei = e * b * h * h * h / 12.0;
+        let mesh = self.family.grid(l, b, self.nx, self.ny);
+        let at = |x: f64| -> Vec<usize> {
+            (0..mesh.n_vertices())
+                .filter(|&v| (mesh.coords[v].x - x).abs() < 1e-12)
+                .collect()
+        };
+        let (root, tips) = (at(0.0), at(l));
+        let p = 1e-3 * ei / (l * l);
+        let element = ElementOptions {
+            interpolation: self.interpolation,
+            ..ElementOptions::default()
+        };
+        let settings = StaticSettings {
+            load_steps: 1,
+            max_iterations: 20,
+            tolerance: 1e-8,
+            ..StaticSettings::default()
+        };
+        let n_tips = tips.len() as f64;
+        let (w, _) = static_deflection(
+            &mesh,
+            plate_physics(e, 0.0, h),
+            element,
+            Supports {
+                vertices: &root,
+                clamped: true,
+            },
+            |asm| {
+                let mut f = vec![0.0; asm.n_dofs()];
+                for &v in &tips {
+                    f[3 * asm.layout.position_slot[v] + 2] = p / n_tips;
+                }
+                f
+            },
+            &tips,
+            settings,
+        )?;
+        Ok((w, p * l * l * l / (3.0 * ei)))
+    }
+}
+
+/// The element convergence studies over [`MeshFamily`] (shared by
+/// `tests/element_families.rs` and `benches/element_families.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FamilyStudy {
+    /// Case A, M/M_max = 0.002, free strip of n x 2 cells: w.
+    SmallMoment,
+    /// Case A, half a turn, planar strip of n x 2 cells: the larger tip error.
+    HalfTurn,
+    /// Case B, tip force on a strip of n x 2 cells.
+    TipForce,
+    /// Case B, clamped plate under uniform load, n x n cells.
+    ClampedPlate,
+}
+
+impl FamilyStudy {
+    /// All studies, in table order.
+    pub const ALL: [FamilyStudy; 4] = [
+        FamilyStudy::SmallMoment,
+        FamilyStudy::HalfTurn,
+        FamilyStudy::TipForce,
+        FamilyStudy::ClampedPlate,
+    ];
+
+    /// What it measures, for tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            FamilyStudy::SmallMoment => "A: end moment, M/M_max = 0.002 (w), n x 2 cells",
+            FamilyStudy::HalfTurn => "A: end moment, M/M_max = 0.5 (larger of -u, w), n x 2 cells",
+            FamilyStudy::TipForce => "B: strip, tip force, n x 2 cells",
+            FamilyStudy::ClampedPlate => "B: clamped plate, uniform load, n x n cells",
+        }
+    }
+
+    /// Signed relative error on `n` cells.
+    pub fn error(
+        self,
+        family: MeshFamily,
+        interpolation: Interpolation,
+        n: usize,
+    ) -> Result<f64, String> {
+        let roll_up = |ratio: f64| -> Result<f64, String> {
+            let case = RollUp {
+                ny: 2,
+                family,
+                interpolation,
+                planar: ratio > 0.01,
+                ..RollUp::new(n)
+            };
+            let p = case.solve(&[ratio])?.points[0];
+            let (ue, we) = roll_up_exact(ratio);
+            let (eu, ew) = ((p.u - ue) / ue, (p.w - we) / we);
+            Ok(if ratio < 0.01 || ew.abs() > eu.abs() {
+                ew
+            } else {
+                eu
+            })
+        };
+        match self {
+            FamilyStudy::SmallMoment => roll_up(0.002),
+            FamilyStudy::HalfTurn => roll_up(0.5),
+            FamilyStudy::TipForce => {
+                let case = TipForce {
+                    ny: 2,
+                    family,
+                    interpolation,
+                    ..TipForce::new(n)
+                };
+                let (w, exact) = case.solve()?;
+                Ok((w - exact) / exact)
+            }
+            FamilyStudy::ClampedPlate => {
+                let case = PlateCase {
+                    family,
+                    interpolation,
+                    ..PlateCase::new(n)
+                };
+                let (w, exact, _) = case.solve()?;
+                Ok((w - exact) / exact)
+            }
+        }
     }
 }
 

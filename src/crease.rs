@@ -290,18 +290,14 @@ pub fn spring(
 mod tests {
     use super::*;
 
-    /// Deterministic xorshift64* generator, uniform in [0, 1).
-    struct Rng(u64);
+    /// Deterministic random numbers for the tests.
+    struct Rng(crate::rng::XorShift);
     impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            let v = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D);
-            (v >> 11) as f64 / (1u64 << 53) as f64
+        fn new(seed: u64) -> Self {
+            Rng(crate::rng::XorShift(seed))
         }
         fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next()
+            self.0.range(lo, hi)
         }
         fn unit(&mut self) -> Vector3<f64> {
             loop {
@@ -376,7 +372,7 @@ mod tests {
             0.08,
             TAU - 0.07,
         ];
-        let mut rng = Rng(0x1234_5678_9ABC_DEF1);
+        let mut rng = Rng::new(0x1234_5678_9ABC_DEF1);
         for _ in 0..30 {
             ts.push(rng.range(0.05, TAU - 0.05));
         }
@@ -463,7 +459,7 @@ mod tests {
             assert!((th - PI - phi).abs() < 1e-12, "phi={phi}: theta={th}");
         }
         // +-179 degrees in general position, also via the derivatives routine.
-        let mut rng = Rng(77);
+        let mut rng = Rng::new(77);
         for &deg in &[179.0f64, -179.0, 179.9, -179.9, 120.0, -135.0] {
             let phi = deg.to_radians();
             for _ in 0..5 {
@@ -479,7 +475,7 @@ mod tests {
     /// b's normal part: `config` builds exactly that, so theta must match.
     #[test]
     fn crease_angle_is_ccw_angle_about_t() {
-        let mut rng = Rng(5);
+        let mut rng = Rng::new(5);
         for target in targets() {
             for _ in 0..5 {
                 let x = config(&mut rng, target);
@@ -493,7 +489,7 @@ mod tests {
     /// rotation of all three, and under adding multiples of t to a or b.
     #[test]
     fn crease_invariances() {
-        let mut rng = Rng(99);
+        let mut rng = Rng::new(99);
         for target in targets() {
             let [a, b, t] = config(&mut rng, target);
             let th = theta(&a, &b, &t);
@@ -534,7 +530,7 @@ mod tests {
     /// with non-orthogonal a, b, t and |t| != 1.
     #[test]
     fn crease_gradient_matches_finite_differences() {
-        let mut rng = Rng(2024);
+        let mut rng = Rng::new(2024);
         for target in targets() {
             for _ in 0..3 {
                 let x = config(&mut rng, target);
@@ -561,7 +557,7 @@ mod tests {
     /// and exactly symmetric.
     #[test]
     fn crease_hessian_matches_finite_differences() {
-        let mut rng = Rng(31337);
+        let mut rng = Rng::new(31337);
         for target in targets() {
             for _ in 0..3 {
                 let x = config(&mut rng, target);
@@ -591,7 +587,7 @@ mod tests {
     #[test]
     fn crease_hessian_equals_math_md_forms() {
         let sym = |u: &Vector3<f64>, w: &Vector3<f64>| u * w.transpose() + w * u.transpose();
-        let mut rng = Rng(17);
+        let mut rng = Rng::new(17);
         for target in targets() {
             let [a, b, t] = config(&mut rng, target);
             let d = theta_derivatives(&a, &b, &t, true);
@@ -624,7 +620,7 @@ mod tests {
     /// block, and sum of x_i cross g_i = 0 (rotation invariance).
     #[test]
     fn crease_gradient_invariance_identities() {
-        let mut rng = Rng(8);
+        let mut rng = Rng::new(8);
         for target in targets() {
             let x = config(&mut rng, target);
             let d = theta_derivatives(&x[0], &x[1], &x[2], false);
@@ -722,7 +718,7 @@ mod tests {
     /// raw theta against the previous tracked value.
     #[test]
     fn crease_unwrap_tracks_through_zero() {
-        let mut rng = Rng(4242);
+        let mut rng = Rng::new(4242);
         let that = rng.unit();
         let t = that * 1.3;
         let r = rng.unit();
@@ -762,7 +758,7 @@ mod tests {
     /// against central differences of the force.
     #[test]
     fn crease_spring_matches_finite_differences() {
-        let mut rng = Rng(555);
+        let mut rng = Rng::new(555);
         let k = 3.7;
         for target in targets() {
             let x = config(&mut rng, target);

@@ -20,7 +20,7 @@
 //! 27 local DOFs are a constant linear map of the slots: [`LocalMap`].
 
 use crate::mesh::{EdgeKind, Mesh};
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
 
 /// A linear combination of at most two slots: `sum coeff * q[slot]`.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -308,30 +308,37 @@ impl DofLayout {
     }
 
     /// The flat reference configuration: positions `(X, Y, 0)` and every
-    /// sector gradient the identity, i.e. each slot set so that
-    /// `G_s = [e_x e_y]`.
+    /// sector gradient the identity `G_s = [e_x e_y]`.
     pub fn reference_state(&self, mesh: &Mesh) -> Vec<f64> {
+        self.state_of_field(mesh, |x| {
+            (
+                Vector3::new(x.x, x.y, 0.0),
+                Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.0),
+            )
+        })
+    }
+
+    /// The slots of a smooth map `X -> (r(X), dr/dX(X))` of the crease
+    /// pattern: every position `r(X_v)` and every sector gradient
+    /// `G_s = dr/dX(X_v)` (the same in all sectors at a vertex).
+    pub fn state_of_field<F>(&self, mesh: &Mesh, field: F) -> Vec<f64>
+    where
+        F: Fn(Vector2<f64>) -> (Vector3<f64>, Matrix3x2<f64>),
+    {
         let mut q = vec![0.0; self.n_dofs()];
         for (v, x) in mesh.coords.iter().enumerate() {
+            let (r, g) = field(*x);
             let s = self.position_slot[v];
-            q[3 * s] = x.x;
-            q[3 * s + 1] = x.y;
-        }
-        // Each gradient slot is G applied to some reference direction; with
-        // G = [e_x e_y] that is the direction itself. Recover it from any
-        // sector using the slot: G = sum q_k c_k^T must equal I (2 rows used).
-        for v in 0..self.sectors.len() {
+            q[3 * s..3 * s + 3].copy_from_slice(r.as_slice());
+            // G = sum_k q_k c_k^T over the sector's two independent slots, so
+            // [q0 q1] = G C^-1 with C = [c0 c1]^T (rows c0, c1).
             for sec in &self.sectors[v] {
-                // Solve [q0 q1] [c0 c1]^T = I2 (in the xy block) for q0, q1.
                 let (s0, c0) = sec.terms[0];
                 let (s1, c1) = sec.terms[1];
                 let cm = Matrix2::from_rows(&[c0.transpose(), c1.transpose()]);
-                let qm = cm.try_inverse().expect("sector map invertible");
-                // [q0 q1] = C^-1 with columns q0, q1 (xy components)
+                let slots = g * cm.try_inverse().expect("sector map invertible");
                 for (k, s) in [s0, s1].into_iter().enumerate() {
-                    q[3 * s] = qm[(0, k)];
-                    q[3 * s + 1] = qm[(1, k)];
-                    q[3 * s + 2] = 0.0;
+                    q[3 * s..3 * s + 3].copy_from_slice(slots.column(k).as_slice());
                 }
             }
         }

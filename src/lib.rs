@@ -23,5 +23,6 @@ pub mod mesh;
 pub mod model;
 pub mod paraview;
 pub mod rigid;
+pub mod rng;
 pub mod scene;
 pub mod solver;

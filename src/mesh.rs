@@ -527,21 +527,76 @@ pub mod builders {
         crease_cols: &[(usize, f64)],
         alternate: bool,
     ) -> Mesh {
+        let diagonals = if alternate {
+            Diagonals::Alternating
+        } else {
+            Diagonals::Same
+        };
+        grid_family(lx, ly, nx, ny, crease_cols, diagonals, 0.0)
+    }
+
+    /// How the cells of a structured grid are split into two triangles.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Diagonals {
+        /// Every cell along the same diagonal (a three-direction mesh).
+        Same,
+        /// Alternating like a chessboard ("union-jack").
+        Alternating,
+        /// Each cell's diagonal drawn at random (the seed).
+        Random(u64),
+    }
+
+    /// The general structured grid: `nx` x `ny` cells on `[0, lx] x [0, ly]`
+    /// split by `diagonals`, the vertical lines at `crease_cols` creases.
+    /// With `jitter > 0` every vertex moves by up to `jitter` cell sizes
+    /// (seeded like the diagonals): interior vertices in both directions,
+    /// vertices on the boundary, a crease line or the middle grid lines only
+    /// along their line (so the centre vertex stays put), corners not.
+    pub fn grid_family(
+        lx: f64,
+        ly: f64,
+        nx: usize,
+        ny: usize,
+        crease_cols: &[(usize, f64)],
+        diagonals: Diagonals,
+        jitter: f64,
+    ) -> Mesh {
         let id = |i: usize, j: usize| j * (nx + 1) + i;
+        let seed = match diagonals {
+            Diagonals::Random(s) => s,
+            _ => 0x9E37_79B9_7F4A_7C15,
+        };
+        let mut rng = crate::rng::XorShift(seed | 1);
+        let (dx, dy) = (lx / nx as f64, ly / ny as f64);
         let mut coords = Vec::new();
         for j in 0..=ny {
             for i in 0..=nx {
-                coords.push(Vector2::new(
-                    lx * i as f64 / nx as f64,
-                    ly * j as f64 / ny as f64,
-                ));
+                let mut p = Vector2::new(lx * i as f64 / nx as f64, ly * j as f64 / ny as f64);
+                if jitter > 0.0 {
+                    let (sx, sy) = (rng.uniform() - 0.5, rng.uniform() - 0.5);
+                    let on_x_line =
+                        i == 0 || i == nx || 2 * i == nx || crease_cols.iter().any(|c| c.0 == i);
+                    let on_y_line = j == 0 || j == ny || 2 * j == ny;
+                    if !on_x_line {
+                        p.x += 2.0 * jitter * dx * sx;
+                    }
+                    if !on_y_line {
+                        p.y += 2.0 * jitter * dy * sy;
+                    }
+                }
+                coords.push(p);
             }
         }
         let mut tris = Vec::new();
         for j in 0..ny {
             for i in 0..nx {
                 let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                if !alternate || (i + j) % 2 == 0 {
+                let along_ac = match diagonals {
+                    Diagonals::Same => true,
+                    Diagonals::Alternating => (i + j) % 2 == 0,
+                    Diagonals::Random(_) => rng.uniform() < 0.5,
+                };
+                if along_ac {
                     tris.push([a, b, c]);
                     tris.push([a, c, d]);
                 } else {

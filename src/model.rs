@@ -117,7 +117,7 @@ impl StepReport {
 }
 
 use crate::assembly::{Assembler, Evaluation, Physics, State};
-use crate::element::Rule;
+use crate::element::ElementOptions;
 use crate::scene::{ActuatorMode, CreaseStiffness, Fix, InputTiming, Integrator, Scene};
 use crate::solver::SparseSolver;
 use crate::solver::central_difference::CentralDifference;
@@ -961,8 +961,8 @@ impl Model {
             }
         }
         let physics = physics(sc);
-        let mut asm =
-            Assembler::new(mesh, physics, Rule::default(), &fixed).map_err(Error::Scene)?;
+        let mut asm = Assembler::new(mesh, physics, ElementOptions::default(), &fixed)
+            .map_err(Error::Scene)?;
         // Damping leaves alone the rigid motion the supports allow.
         let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
         asm.rigid

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix2, Matrix3, Matrix3x2, Rotation3, Unit, Vector3};
 use origami_fmu::assembly::{Assembler, Evaluation, MatrixCoeffs, Physics, State};
 use origami_fmu::dofs::SlotKind;
-use origami_fmu::element::Rule;
+use origami_fmu::element::ElementOptions;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::scene::Material;
 use origami_fmu::scene::build::from_fold;
@@ -38,7 +38,7 @@ fn setup() -> (Assembler, Vec<f64>) {
         alpha: 0.0,
         beta: 0.0,
     };
-    let asm = Assembler::new(&mesh, physics, Rule::default(), &[]).unwrap();
+    let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
     let mut q = asm.layout.reference_state(&mesh);
     // Fold rigidly-ish: rotate the right third about the crease line x = 0.02 by ~120 deg,
     // then add random perturbations.
@@ -117,7 +117,7 @@ fn global_tangent_at_flat_reference() {
     // The case A strip (BENCHMARKS.md) on 4 cells.
     let mesh = origami_fmu::mesh::builders::strip(12.0, 1.0, 4, 1);
     let physics = origami_fmu::benchmarks::roll_up_physics();
-    let asm = Assembler::new(&mesh, physics, Rule::default(), &[]).unwrap();
+    let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
     let q = asm.layout.reference_state(&mesh);
     check(&asm, &q);
 }
@@ -192,7 +192,7 @@ fn folded_miura() -> (Assembler, Vec<f64>) {
         alpha: 0.0,
         beta: 0.0,
     };
-    let asm = Assembler::new(mesh, physics, Rule::default(), &[]).unwrap();
+    let asm = Assembler::new(mesh, physics, ElementOptions::default(), &[]).unwrap();
     let layout = &asm.layout;
     let mut q = vec![0.0; asm.n_dofs()];
     for (v, x) in folded.iter().enumerate() {

@@ -3,7 +3,7 @@
 //! like generalized-alpha does.
 
 use origami_fmu::assembly::{Assembler, Physics};
-use origami_fmu::element::Rule;
+use origami_fmu::element::ElementOptions;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{Fix, Integrator, Material, NewtonMode, Scene, Support};
@@ -27,7 +27,7 @@ fn free_vibration(h_factor: f64, steps: usize) -> f64 {
         alpha: 0.0,
         beta: 0.0,
     };
-    let asm = Assembler::new(&mesh, physics, Rule::default(), &[]).unwrap();
+    let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
     let q_ref = asm.layout.reference_state(&mesh);
     let theta0 = vec![PI; asm.creases.len()];
     let mut cd = CentralDifference::new(&asm, &q_ref, &theta0).unwrap();

@@ -9,7 +9,7 @@ mod common;
 use common::{crease_angle, input, two_panels};
 use nalgebra::Vector3;
 use origami_fmu::assembly::Assembler;
-use origami_fmu::element::Rule;
+use origami_fmu::element::ElementOptions;
 use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::{Error, Model, physics};
 use origami_fmu::scene::{InputTiming, Integrator, Scene};
@@ -171,7 +171,7 @@ fn angular_momentum(asm: &Assembler, q: &[f64], v: &[f64]) -> Vector3<f64> {
 #[test]
 fn a_free_spin_keeps_its_angular_momentum() {
     let scene = free_sheet();
-    let asm = Assembler::new(&scene.mesh, physics(&scene), Rule::default(), &[]).unwrap();
+    let asm = Assembler::new(&scene.mesh, physics(&scene), ElementOptions::default(), &[]).unwrap();
     let mut m = Model::new(scene).unwrap();
     m.initialize().unwrap();
     let omega = 2.0 * std::f64::consts::PI;

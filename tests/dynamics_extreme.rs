@@ -371,10 +371,15 @@ fn one_second_step_on_a_1_ms_scene() {
 /// its centrifugal load (stress ~ rho omega^2 R^2, R the half diagonal), so
 /// strain energy / kinetic energy is bounded by 10 rho omega^2 R^2 / E
 /// (= 2e-5) rather than round-off; the crease, which that in-plane load does
-/// not bend, stays below 1e-12 of the kinetic energy. The total energy never
-/// exceeds I omega^2 / 2 (by 1e-9) and loses less than 1e-3 to numerical
-/// dissipation (rho_inf = 0.8); after one revolution every vertex is back
-/// within 1e-3 R.
+/// not bend, stays below 1e-12 of the kinetic energy. Generalized-alpha
+/// (rho_inf = 0.8) loses energy over the revolution (the end is below
+/// I omega^2 / 2, the loss under 1e-3); on the way the total may exceed it by
+/// up to ten times the error tolerance: the physical energy of a dissipative
+/// scheme is not monotone, and under error control at tolerance 1e-6 it was
+/// measured up to 1.8e-7 above on this mesh and up to 4.3e-6 above on other
+/// small meshes, with either shape functions (the former 1e-9 bound held for
+/// BCIZ on this mesh only). After one revolution every vertex is back within
+/// 1e-3 R.
 #[test]
 fn rigid_spin_100_rad_per_s() {
     let (a, rate) = (0.04, 100.0);
@@ -402,8 +407,8 @@ fn rigid_spin_100_rad_per_s() {
                 .map(|v| Vector3::from(m.vertex_position(v)))
                 .collect();
             let mut work = Work::default();
-            let (mut strain, mut crease, mut gain, mut loss) =
-                (0.0f64, 0.0f64, f64::NEG_INFINITY, 0.0f64);
+            let (mut strain, mut crease, mut gain, mut loss, mut last) =
+                (0.0f64, 0.0f64, f64::NEG_INFINITY, 0.0f64, 0.0f64);
             for _ in 0..100 {
                 work.advance(&mut m, 2.0 * PI / rate / 100.0);
                 let [ke, se, ce] = m.energies();
@@ -413,6 +418,7 @@ fn rigid_spin_100_rad_per_s() {
                 let rel = (ke + se + ce) / e0 - 1.0;
                 gain = gain.max(rel);
                 loss = loss.max(-rel);
+                last = rel;
             }
             let back = (0..n)
                 .map(|v| (Vector3::from(m.vertex_position(v)) - start[v]).norm() / r)
@@ -430,7 +436,9 @@ fn rigid_spin_100_rad_per_s() {
             );
             assert!(strain < bound, "strain / kinetic {strain} (bound {bound})");
             assert!(crease < 1e-12, "crease / kinetic {crease}");
-            assert!(gain < 1e-9, "energy rose by {gain}");
+            let tol = m.scene().solver.tolerance;
+            assert!(gain < 10.0 * tol, "energy rose by {gain} (tolerance {tol})");
+            assert!(last < 0.0, "energy after one revolution E/E0 - 1 = {last}");
             assert!(loss < 1e-3, "energy lost {loss}");
             assert!(back < 1e-3, "return error {back}");
         }

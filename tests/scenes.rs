@@ -265,20 +265,7 @@ fn cli_pattern_then_check() {
 
 // ---------------------------------------------------------------- fuzzing
 
-/// xorshift64* : a small deterministic generator for the fuzzer.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
+use origami_fmu::rng::XorShift as Rng;
 
 /// JSON pointers of every node.
 fn pointers(v: &Value, here: String, out: &mut Vec<String>) {

@@ -4,7 +4,7 @@
 
 use origami_fmu::assembly::{Assembler, Physics};
 use origami_fmu::benchmarks::RollUp;
-use origami_fmu::element::Rule;
+use origami_fmu::element::ElementOptions;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::scene::Material;
 use origami_fmu::solver::statics::{self, Load, StaticSettings};
@@ -72,7 +72,7 @@ fn plate() -> (Assembler, Vec<f64>, Vec<f64>) {
         .filter(|&v| mesh.coords[v].x == 0.0)
         .flat_map(|v| layout.vertex_slots(v))
         .collect();
-    let asm = Assembler::new(&mesh, physics, Rule::default(), &fixed).unwrap();
+    let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &fixed).unwrap();
     let q = asm.layout.reference_state(&mesh);
     let mut f = vec![0.0; q.len()];
     for v in 0..mesh.n_vertices() {

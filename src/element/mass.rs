@@ -7,6 +7,7 @@
 //! MATH.md prints row 8 with its last two entries swapped (19, 31), which makes
 //! the matrix unsymmetric; exact integration gives (31, 19), used here.
 
+use super::shape::Shape;
 use crate::scene::Material;
 use nalgebra::SMatrix;
 
@@ -41,14 +42,16 @@ const fn divide(m: [[f64; 9]; 9], d: f64) -> [[f64; 9]; 9] {
 /// the element mass is `rho * h * area * Mhat (x) I3`.
 pub const MASS_HAT: [[f64; 9]; 9] = divide(MASS_HAT_10080, 10080.0);
 
-/// The 27x27 element mass matrix `rho h area Mhat (x) I3` (index `3 k + c`).
-pub fn element_mass(mat: &Material, area: f64) -> SMatrix<f64, 27, 27> {
+/// The 27x27 element mass matrix `rho h area Mhat (x) I3` (index `3 k + c`)
+/// of a triangle with shape functions `shape`.
+pub fn element_mass(mat: &Material, area: f64, shape: &Shape) -> SMatrix<f64, 27, 27> {
     let s = mat.density * mat.thickness * area;
+    let mass_hat = shape.mass_hat();
     let mut m = SMatrix::<f64, 27, 27>::zeros();
     for k in 0..9 {
         for l in 0..9 {
             for c in 0..3 {
-                m[(3 * k + c, 3 * l + c)] = s * MASS_HAT[k][l];
+                m[(3 * k + c, 3 * l + c)] = s * mass_hat[k][l];
             }
         }
     }
@@ -58,7 +61,7 @@ pub fn element_mass(mat: &Material, area: f64) -> SMatrix<f64, 27, 27> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::element::{quadrature::Rule, shape};
+    use crate::element::quadrature::Rule;
     use nalgebra::{SMatrix, SVector};
 
     fn mhat() -> SMatrix<f64, 9, 9> {
@@ -77,7 +80,7 @@ mod tests {
             thickness: 0.5,
             density: 3.0,
         };
-        let m27 = element_mass(&mat, 2.0);
+        let m27 = element_mass(&mat, 2.0, &Shape::BCIZ);
         assert_eq!(m27, m27.transpose());
         assert!(m27.cholesky().is_some());
     }
@@ -90,7 +93,7 @@ mod tests {
             thickness: 0.25,
             density: 4.0,
         };
-        let m = element_mass(&mat, 0.5);
+        let m = element_mass(&mat, 0.5, &Shape::BCIZ);
         for k in 0..9 {
             let want = if k % 3 == 0 { 0.0960317 } else { 0.0015377 };
             for c in 0..3 {
@@ -108,7 +111,7 @@ mod tests {
             density: 7.0,
         };
         let area = 1.7;
-        let m = element_mass(&mat, area);
+        let m = element_mass(&mat, area, &Shape::BCIZ);
         // Unit velocity along a direction d: positions move with d, gradients are fixed.
         for d in [[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]] {
             let mut v = SVector::<f64, 27>::zeros();
@@ -126,7 +129,7 @@ mod tests {
     fn integrated(rule: Rule) -> SMatrix<f64, 9, 9> {
         let mut m = SMatrix::<f64, 9, 9>::zeros();
         for (l, w) in rule.points() {
-            let s = shape::values(*l);
+            let s = Shape::BCIZ.values(*l);
             for i in 0..9 {
                 for j in 0..9 {
                     m[(i, j)] += w * s[i] * s[j];

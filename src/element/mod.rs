@@ -27,6 +27,16 @@ pub type ElemVec = [Vector3<f64>; 9];
 
 pub use mass::{MASS_HAT, element_mass};
 pub use quadrature::Rule;
+pub use shape::{Interpolation, Shape};
+
+/// How every facet is discretized: quadrature rule and shape functions.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct ElementOptions {
+    /// Quadrature of the strain energy.
+    pub rule: Rule,
+    /// Shape functions (Specht by default).
+    pub interpolation: Interpolation,
+}
 pub use shell::{ShellElement, ShellEnergy};
 
 /// The element vector `e0` of a flat straight-edged reference triangle in the

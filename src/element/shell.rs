@@ -28,7 +28,11 @@
 //! every 3x3 block is a scalar times `n_hat n_hat^T`; the kernel uses this. Only the upper 3x3 blocks are computed, then mirrored:
 //! the tangent is exactly symmetric.
 
-use super::{ElemVec, quadrature::Rule, shape};
+use super::{
+    ElemVec,
+    quadrature::Rule,
+    shape::{Interpolation, Shape},
+};
 use crate::scene::Material;
 #[cfg(test)]
 use nalgebra::Matrix3;
@@ -63,6 +67,7 @@ pub struct ShellElement {
     frame: [Vector2<f64>; 2],
     j2_inv: Matrix2<f64>,
     rule: Rule,
+    shape: Shape,
     nq: usize,
     qp: [QuadPoint; MAX_QP],
 }
@@ -162,10 +167,20 @@ fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 impl ShellElement {
     /// Precomputes the element for the flat reference triangle `x` (crease
-    /// pattern coordinates, counter-clockwise).
+    /// pattern coordinates, counter-clockwise) with the default
+    /// ([`Interpolation::Specht`]) shape functions.
     ///
     /// Fails (Err(String) naming the reason) for a degenerate or clockwise triangle.
     pub fn new(x: [Vector2<f64>; 3], rule: Rule) -> Result<Self, String> {
+        Self::with_interpolation(x, rule, Interpolation::default())
+    }
+
+    /// Like [`ShellElement::new`] with the given shape functions.
+    pub fn with_interpolation(
+        x: [Vector2<f64>; 3],
+        rule: Rule,
+        interpolation: Interpolation,
+    ) -> Result<Self, String> {
         if x.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
             return Err(format!("triangle has non-finite coordinates {x:?}"));
         }
@@ -194,11 +209,12 @@ impl ShellElement {
             .try_inverse()
             .ok_or_else(|| "degenerate triangle (singular Jacobian)".to_string())?;
         let area = 0.5 * det;
+        let shape = interpolation.shape(&x);
         let pts = rule.points();
         let mut qp = [QuadPoint::default(); MAX_QP];
         for (q, (l, w)) in qp.iter_mut().zip(pts) {
-            let d1 = shape::d1(l[1], l[2]);
-            let d2 = shape::d2(l[1], l[2]);
+            let d1 = shape.d1(l[1], l[2]);
+            let d2 = shape.d2(l[1], l[2]);
             for k in 0..9 {
                 // du_a/dx_i = (J2^-1)[a][i].
                 let g = |i: usize| d1[k][0] * j2_inv[(0, i)] + d1[k][1] * j2_inv[(1, i)];
@@ -217,9 +233,20 @@ impl ShellElement {
             frame: [e1, e2],
             j2_inv,
             rule,
+            shape,
             nq: pts.len(),
             qp,
         })
+    }
+
+    /// The element's shape functions.
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// `Mhat` of this triangle: its mass is `rho h area Mhat (x) I3`.
+    pub fn mass_hat(&self) -> [[f64; 9]; 9] {
+        self.shape.mass_hat()
     }
 
     /// Reference area.
@@ -837,11 +864,13 @@ mod tests {
         k
     }
 
+    /// The kernel is the same for both interpolations; the shares were
+    /// measured on this state with BCIZ functions (Specht's: 5.6e-2 and 4.5e-2).
     #[test]
     fn geometric_terms_are_significant() {
         let (m1, m2) = (material(1.0), material(2.0));
         let x = triangles()[2];
-        let el = ShellElement::new(x, Rule::default()).unwrap();
+        let el = ShellElement::with_interpolation(x, Rule::default(), Interpolation::Bciz).unwrap();
         let mut rng = Rng(99);
         let e = random_deformation(&x, &mut rng);
         let mut f = SVector::zeros();
