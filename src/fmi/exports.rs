@@ -843,6 +843,8 @@ mod tests {
         )
         .expect("instantiates");
         let c = Box::into_raw(Box::new(inst)) as fmi2Component;
+        // SAFETY: c is a live instance until fmi2FreeInstance; the last
+        // call passes NULL, which guard refuses.
         unsafe {
             let s = guard(c, "test", |_| panic!("boom"));
             assert_eq!(s, fmi2Fatal);
