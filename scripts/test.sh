@@ -1,15 +1,25 @@
 #!/usr/bin/env bash
-# The test command: builds everything (release: the numerics are slow
-# unoptimized), runs the cargo tests, sets up the Python venv with fmpy,
-# installs fmi-sim (a second FMI client; once per machine, about 9 min) and
-# runs the fmpy suite. Works on a fresh Debian machine with rustup, python3
-# and apt-get (as root, for libclang-dev).
+# The test command: checks formatting, builds everything (release: the
+# numerics are slow unoptimized), runs clippy (warnings are errors) and the
+# cargo tests, runs a C host of the FMU under valgrind, sets up the Python
+# venv with fmpy, installs fmi-sim (a second FMI client; once per machine,
+# about 9 min) and runs the fmpy suite. Works on a fresh Debian machine with
+# rustup, cc, python3 and apt-get (as root, for libclang-dev and valgrind).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+  rustup component add rustfmt clippy
+fi
+echo "== cargo fmt --check"
+cargo fmt --check
 echo "== cargo build --release"
 cargo build --release --locked 2>&1 | tail -n 3
+echo "== cargo clippy (all targets, -D warnings)"
+cargo clippy --all-targets --release --locked --quiet -- -D warnings
 echo "== cargo test --release"
 cargo test --release --locked
+echo "== C host under valgrind"
+bash scripts/c_host_test.sh
 echo "== python venv"
 PY=$(bash scripts/setup_venv.sh)
 echo "== fmi-sim (second FMI client)"

@@ -318,6 +318,8 @@ impl Assembler {
                     pos.push(self.slot_ptr[sa] + k);
                 }
             }
+            // i and j index the mass block and both term lists alike.
+            #[allow(clippy::needless_range_loop)]
             for i in 0..9 {
                 for j in 0..9 {
                     let mij = scale * mass_hat[i][j];
@@ -434,8 +436,8 @@ impl Assembler {
             if p.beta != 0.0 {
                 let ve = local_vector(&self.layout.local[f], st.v);
                 let mut vv = SVector::<f64, 27>::zeros();
-                for k in 0..9 {
-                    vv.fixed_rows_mut::<3>(3 * k).copy_from(&ve[k]);
+                for (k, vk) in ve.iter().enumerate() {
+                    vv.fixed_rows_mut::<3>(3 * k).copy_from(vk);
                 }
                 fe += p.beta * (ke * vv);
             }

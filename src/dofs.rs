@@ -418,12 +418,11 @@ mod tests {
                 x(a) - x(c),
                 x(b) - x(c),
             ];
-            for k in 0..9 {
+            for (k, want) in expect.iter().enumerate() {
                 let got = layout.local[f][k].eval(q);
                 assert!(
-                    (got - expect[k]).norm() < 1e-12,
-                    "face {f} vector {k}: {got} vs {}",
-                    expect[k]
+                    (got - want).norm() < 1e-12,
+                    "face {f} vector {k}: {got} vs {want}"
                 );
             }
         }
@@ -470,13 +469,13 @@ mod tests {
                     pos(f, a) - pos(f, c),
                     pos(f, b) - pos(f, c),
                 ];
-                for k in 0..9 {
-                    for comp in 0..3 {
+                for (k, tk) in t.iter().enumerate() {
+                    for (comp, &tc) in tk.iter().enumerate() {
                         let r: Vec<(usize, f64)> = layout.local[f][k]
                             .terms()
                             .map(|(s, cf)| (3 * s + comp, cf))
                             .collect();
-                        rows.push((r, t[k][comp]));
+                        rows.push((r, tc));
                     }
                 }
             }

@@ -9,8 +9,10 @@
 //! Layers, bottom up: [`mesh`] (crease pattern as data), [`scene`] (FOLD
 //! scenes with physics keys), and [`model`] (the plain Rust API that the FMU
 //! and the CLI drive), with [`fmi`] on top: the FMI 2.0 co-simulation
-//! functions exported from the cdylib.
+//! functions exported from the cdylib. `unsafe` code is denied everywhere
+//! but in two files of [`fmi`] (the pointer helpers and the exports).
 #![warn(missing_docs)]
+#![deny(unsafe_code)]
 
 pub mod assembly;
 pub mod benchmarks;

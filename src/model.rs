@@ -524,10 +524,9 @@ impl Model {
             .solve_in_place(&mut rhs)
             .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
         let mut qdd = vec![0.0; n];
-        for i in 0..n {
-            let fi = sys.asm.free[i];
+        for (a, &fi) in qdd.iter_mut().zip(&sys.asm.free) {
             if fi != crate::assembly::FIXED {
-                qdd[i] = rhs[fi];
+                *a = rhs[fi];
             }
         }
         self.state.dynamics.abar = qdd.clone();

@@ -123,12 +123,11 @@ fn global_tangent_at_flat_reference() {
 }
 
 fn check(asm: &Assembler, q: &[f64]) {
-    let asm = asm;
     let q = q.to_vec();
     let theta_prev = vec![std::f64::consts::PI; asm.creases.len()];
     let mut base = Evaluation::default();
     let mut k = vec![0.0; asm.nnz()];
-    eval(&asm, &q, &theta_prev, &mut base, Some(&mut k));
+    eval(asm, &q, &theta_prev, &mut base, Some(&mut k));
     let n = q.len();
     let h = 1e-6;
     let mut maxk: f64 = 0.0;
@@ -142,8 +141,8 @@ fn check(asm: &Assembler, q: &[f64]) {
         qp[j] += h;
         qm[j] -= h;
         let (mut ep, mut em) = (Evaluation::default(), Evaluation::default());
-        eval(&asm, &qp, &base.theta, &mut ep, None);
-        eval(&asm, &qm, &base.theta, &mut em, None);
+        eval(asm, &qp, &base.theta, &mut ep, None);
+        eval(asm, &qm, &base.theta, &mut em, None);
         // column j of K
         let col = asm.free[j];
         let mut dense = vec![0.0; n];

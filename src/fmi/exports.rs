@@ -2,27 +2,21 @@
 //!
 //! Each body runs under [`guard`] (or `catch_unwind` directly for the
 //! functions without an instance): a panic becomes `fmi2Fatal` plus a log
-//! line and marks the instance dead; it never unwinds into the host. Null
-//! pointers are rejected with `fmi2Error` before they are dereferenced.
+//! line and marks the instance dead; it never unwinds into the host. Every
+//! pointer goes through the checked helpers of `ptr.rs`: a null,
+//! misaligned or foreign argument (an instance or state handle without its
+//! magic number) is rejected with `fmi2Error` before it is dereferenced.
 //! The Model Exchange functions, directional derivatives, output
 //! derivatives and `fmi2CancelStep` return `fmi2Error` with a log line.
 #![allow(non_snake_case)]
 
-use super::instance::{Instance, Logger, SavedState};
+use super::instance::{FmuState, Instance, Logger, SavedState};
+use super::ptr::{self, Refused};
 use super::types::*;
-use std::ffi::{CStr, c_int};
+use std::ffi::c_int;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use fmi2Status::*;
-
-/// What an `fmi2FMUstate` points to: a saved state tagged with a magic
-/// number, so that a foreign or freed pointer is (usually) detected.
-struct FmuState {
-    magic: u64,
-    state: SavedState,
-}
-
-const STATE_MAGIC: u64 = 0x6f72_6967_616d_6931; // "origami1"
 
 fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = p.downcast_ref::<&str>() {
@@ -34,40 +28,57 @@ fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// Run `body` on the instance behind `c`: null check, dead check, and
-/// `catch_unwind` (a panic returns `fmi2Fatal`, logs, and kills the
-/// instance).
-pub fn guard(
+/// Run `body` on the instance behind the host's handle `c`: handle check
+/// (null, foreign or freed: `fmi2Error`), dead check, and `catch_unwind`
+/// (a panic returns `fmi2Fatal`, logs, and kills the instance).
+///
+/// # Safety
+/// `c` is null or an instance from `fmi2Instantiate`, not yet freed (the
+/// magic number catches most violations) and not used by another thread
+/// meanwhile.
+pub unsafe fn guard(
     c: fmi2Component,
     function: &str,
     body: impl FnOnce(&mut Instance) -> fmi2Status,
 ) -> fmi2Status {
-    if c.is_null() {
+    // SAFETY: by the caller's contract.
+    run(unsafe { ptr::handle::<Instance>(c) }, function, body)
+}
+
+/// [`guard`] in an exported function, whose `c` comes from the host. Only
+/// the handle check is in the `unsafe` block, not `$body`.
+macro_rules! guarded {
+    ($c:ident, $function:expr, $body:expr) => {
+        // SAFETY: by the FMI contract, a non-null fmi2Component is a
+        // pointer returned by our fmi2Instantiate and not yet freed, and the
+        // host never calls into one instance from two threads at once.
+        run(unsafe { ptr::handle::<Instance>($c) }, $function, $body)
+    };
+}
+
+/// The body of [`guard`] once the handle is checked.
+fn run(
+    inst: Result<&mut Instance, Refused>,
+    function: &str,
+    body: impl FnOnce(&mut Instance) -> fmi2Status,
+) -> fmi2Status {
+    let Ok(inst) = inst else {
         return fmi2Error;
-    }
-    let inst = c as *mut Instance;
-    // SAFETY: a non-null fmi2Component is, by the FMI contract, a pointer
-    // returned by our fmi2Instantiate and not yet freed; the host never
-    // calls into one instance from two threads at once.
-    if unsafe { (*inst).dead } {
-        let i = unsafe { &*inst };
-        i.log.log(
+    };
+    if inst.dead {
+        inst.log.log(
             fmi2Fatal,
             &format!("{function}: the instance is dead after an internal error; only fmi2FreeInstance is allowed"),
         );
         return fmi2Fatal;
     }
-    // SAFETY: as above; the reference does not outlive the closure.
-    let result = catch_unwind(AssertUnwindSafe(|| body(unsafe { &mut *inst })));
-    match result {
+    match catch_unwind(AssertUnwindSafe(|| body(&mut *inst))) {
         Ok(s) => s,
         Err(p) => {
             let msg = panic_message(&*p);
-            // SAFETY: as above; the closure's borrow has ended.
-            let i = unsafe { &mut *inst };
-            i.dead = true;
+            inst.dead = true;
             let _ = catch_unwind(AssertUnwindSafe(|| {
-                i.log.log(
+                inst.log.log(
                     fmi2Fatal,
                     &format!("{function}: internal error ({msg}); the instance is dead, free it"),
                 )
@@ -77,54 +88,30 @@ pub fn guard(
     }
 }
 
-/// A C string argument as `&str`; `None` for null or invalid UTF-8.
-///
-/// # Safety
-/// `p` is null or points to a NUL-terminated string that outlives `'a`.
-unsafe fn str_arg<'a>(p: fmi2String) -> Option<&'a str> {
-    if p.is_null() {
-        None
-    } else {
-        // SAFETY: by the caller's contract.
-        unsafe { CStr::from_ptr(p) }.to_str().ok()
-    }
-}
-
-/// A C array argument as a slice (empty for n = 0 even if `p` is null);
-/// `None` for a null pointer with n > 0 or an impossible length.
-///
-/// # Safety
-/// `p` is null or points to `n` valid elements that outlive `'a`.
-unsafe fn slice_arg<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    if n == 0 {
-        Some(&[])
-    } else if p.is_null() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
-        None
-    } else {
-        // SAFETY: by the caller's contract.
-        Some(unsafe { std::slice::from_raw_parts(p, n) })
-    }
-}
-
-/// Like [`slice_arg`], mutable.
-///
-/// # Safety
-/// `p` is null or points to `n` writable elements that outlive `'a`.
-unsafe fn slice_arg_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    if n == 0 {
-        Some(&mut [])
-    } else if p.is_null() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
-        None
-    } else {
-        // SAFETY: by the caller's contract.
-        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
-    }
-}
-
-fn null_arg(inst: &Instance, function: &str, what: &str) -> fmi2Status {
-    inst.log
-        .log(fmi2Error, &format!("{function}: {what} is NULL"));
+/// Log why the pointer argument `what` of `function` was refused.
+fn refused(inst: &Instance, function: &str, what: &str, why: Refused) -> fmi2Status {
+    let msg = match why {
+        Refused::Null => format!("{function}: {what} is NULL"),
+        Refused::Invalid => {
+            format!("{function}: {what} is not a valid pointer (misaligned, too long or not UTF-8)")
+        }
+    };
+    inst.log.log(fmi2Error, &msg);
     fmi2Error
+}
+
+/// Log why an `fmi2FMUstate` was refused.
+fn state_refused(inst: &Instance, function: &str, why: Refused) -> fmi2Status {
+    match why {
+        Refused::Null => refused(inst, function, "FMUstate", why),
+        Refused::Invalid => {
+            inst.log.log(
+                fmi2Error,
+                &format!("{function}: FMUstate was not created by this FMU or was freed"),
+            );
+            fmi2Error
+        }
+    }
 }
 
 /// An `fmi2FMUstate` as our state; `None` (and logged) when null or not ours.
@@ -137,20 +124,35 @@ unsafe fn state_arg<'a>(
     function: &str,
     s: fmi2FMUstate,
 ) -> Option<&'a mut FmuState> {
-    if s.is_null() {
-        null_arg(inst, function, "FMUstate");
-        return None;
-    }
-    let st = s as *mut FmuState;
     // SAFETY: by the caller's contract.
-    if unsafe { (*st).magic } != STATE_MAGIC {
-        inst.log.log(
-            fmi2Error,
-            &format!("{function}: FMUstate was not created by this FMU or was freed"),
-        );
-        return None;
+    unsafe { ptr::handle::<FmuState>(s) }
+        .map_err(|e| state_refused(inst, function, e))
+        .ok()
+}
+
+/// Store `state` in the host's `*FMUstate`: a new state when it is NULL,
+/// else in place of the state of ours it holds.
+///
+/// # Safety
+/// `*slot` is null or a state from us, not freed.
+unsafe fn store_state(
+    inst: &Instance,
+    function: &str,
+    slot: &mut fmi2FMUstate,
+    state: SavedState,
+) -> fmi2Status {
+    if slot.is_null() {
+        *slot = ptr::into_handle(FmuState::new(state));
+        return fmi2OK;
     }
-    Some(unsafe { &mut *st })
+    // SAFETY: by the caller's contract.
+    match unsafe { state_arg(inst, function, *slot) } {
+        Some(old) => {
+            old.state = state;
+            fmi2OK
+        }
+        None => fmi2Error,
+    }
 }
 
 // ---------------------------------------------------------------------------
@@ -180,17 +182,18 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     nCategories: usize,
     categories: *const fmi2String,
 ) -> fmi2Status {
-    guard(c, "fmi2SetDebugLogging", |inst| {
+    guarded!(c, "fmi2SetDebugLogging", |inst| {
         // SAFETY: host contract: nCategories strings.
-        let Some(cats) = (unsafe { slice_arg(categories, nCategories) }) else {
-            return null_arg(inst, "fmi2SetDebugLogging", "categories");
+        let cats = match unsafe { ptr::slice_arg(categories, nCategories) } {
+            Ok(cats) => cats,
+            Err(e) => return refused(inst, "fmi2SetDebugLogging", "categories", e),
         };
         let mut names = Vec::with_capacity(cats.len());
         for &p in cats {
             // SAFETY: host contract: each is a C string.
-            match unsafe { str_arg(p) } {
-                Some(s) => names.push(s.to_string()),
-                None => return null_arg(inst, "fmi2SetDebugLogging", "a category"),
+            match unsafe { ptr::str_arg(p) } {
+                Ok(s) => names.push(s.to_string()),
+                Err(e) => return refused(inst, "fmi2SetDebugLogging", "a category", e),
             }
         }
         inst.log.set_debug_logging(loggingOn != FMI2_FALSE, &names)
@@ -217,14 +220,14 @@ pub unsafe extern "C" fn fmi2Instantiate(
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
     let _ = visible;
-    if functions.is_null() {
+    // SAFETY: host contract: NULL or a valid struct; copied by value, the
+    // host may free its struct.
+    let Ok(callbacks) = (unsafe { ptr::in_arg(functions) }) else {
         return std::ptr::null_mut();
-    }
-    // SAFETY: non-null; copied by value, the host may free its struct.
-    let callbacks = unsafe { *functions };
+    };
     let r = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: host contract: NUL-terminated strings or NULL.
-        let name = unsafe { str_arg(instanceName) }.unwrap_or("");
+        let name = unsafe { ptr::str_arg(instanceName) }.unwrap_or("");
         let log = Logger::new(callbacks, name, loggingOn != FMI2_FALSE);
         if instanceName.is_null() || name.is_empty() {
             log.log(
@@ -234,10 +237,14 @@ pub unsafe extern "C" fn fmi2Instantiate(
             return std::ptr::null_mut();
         }
         // SAFETY: as above.
-        let guid = unsafe { str_arg(fmuGUID) };
-        let resources = unsafe { str_arg(fmuResourceLocation) };
+        let (guid, resources) = unsafe {
+            (
+                ptr::str_arg(fmuGUID).ok(),
+                ptr::str_arg(fmuResourceLocation).ok(),
+            )
+        };
         match Instance::instantiate(log, fmuType, guid, resources) {
-            Some(inst) => Box::into_raw(Box::new(inst)) as fmi2Component,
+            Some(inst) => ptr::into_handle(inst),
             None => std::ptr::null_mut(),
         }
     }));
@@ -256,18 +263,18 @@ pub unsafe extern "C" fn fmi2Instantiate(
     }
 }
 
-/// `fmi2FreeInstance`: release the instance (NULL is ignored).
+/// `fmi2FreeInstance`: release the instance (NULL, and a pointer that is
+/// detectably not a live instance of ours, are ignored).
 ///
 /// # Safety
 /// `c` is NULL or an instance from `fmi2Instantiate`, not freed before.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-    if c.is_null() {
-        return;
+    // SAFETY: host contract as above (the magic number, cleared here,
+    // catches most second frees).
+    if let Ok(b) = unsafe { ptr::free_handle::<Instance>(c) } {
+        let _ = catch_unwind(AssertUnwindSafe(move || drop(b)));
     }
-    // SAFETY: created by Box::into_raw in fmi2Instantiate.
-    let b = unsafe { Box::from_raw(c as *mut Instance) };
-    let _ = catch_unwind(AssertUnwindSafe(move || drop(b)));
 }
 
 // ---------------------------------------------------------------------------
@@ -287,7 +294,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stopTimeDefined: fmi2Boolean,
     stopTime: fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2SetupExperiment", |inst| {
+    guarded!(c, "fmi2SetupExperiment", |inst| {
         inst.setup_experiment(
             (toleranceDefined != FMI2_FALSE).then_some(tolerance),
             startTime,
@@ -302,7 +309,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    guard(c, "fmi2EnterInitializationMode", |i| {
+    guarded!(c, "fmi2EnterInitializationMode", |i| {
         i.enter_initialization_mode()
     })
 }
@@ -313,7 +320,7 @@ pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2St
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    guard(c, "fmi2ExitInitializationMode", |i| {
+    guarded!(c, "fmi2ExitInitializationMode", |i| {
         i.exit_initialization_mode()
     })
 }
@@ -324,7 +331,7 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    guard(c, "fmi2Terminate", |i| i.terminate())
+    guarded!(c, "fmi2Terminate", |i| i.terminate())
 }
 
 /// `fmi2Reset`: back to the state right after `fmi2Instantiate`.
@@ -333,7 +340,7 @@ pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    guard(c, "fmi2Reset", |i| i.reset())
+    guarded!(c, "fmi2Reset", |i| i.reset())
 }
 
 // ---------------------------------------------------------------------------
@@ -350,13 +357,13 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetReal", |inst| {
+    guarded!(c, "fmi2GetReal", |inst| {
         // SAFETY: host contract: nvr elements each.
-        let (Some(vrs), Some(values)) = (unsafe { slice_arg(vr, nvr) }, unsafe {
-            slice_arg_mut(value, nvr)
-        }) else {
-            return null_arg(inst, "fmi2GetReal", "vr or value");
-        };
+        let (vrs, values) =
+            match unsafe { (ptr::slice_arg(vr, nvr), ptr::slice_arg_mut(value, nvr)) } {
+                (Ok(vrs), Ok(values)) => (vrs, values),
+                (Err(e), _) | (_, Err(e)) => return refused(inst, "fmi2GetReal", "vr or value", e),
+            };
         inst.get_real(vrs, values)
     })
 }
@@ -374,12 +381,11 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2SetReal", |inst| {
+    guarded!(c, "fmi2SetReal", |inst| {
         // SAFETY: host contract: nvr elements each.
-        let (Some(vrs), Some(values)) = (unsafe { slice_arg(vr, nvr) }, unsafe {
-            slice_arg(value, nvr)
-        }) else {
-            return null_arg(inst, "fmi2SetReal", "vr or value");
+        let (vrs, values) = match unsafe { (ptr::slice_arg(vr, nvr), ptr::slice_arg(value, nvr)) } {
+            (Ok(vrs), Ok(values)) => (vrs, values),
+            (Err(e), _) | (_, Err(e)) => return refused(inst, "fmi2SetReal", "vr or value", e),
         };
         inst.set_real(vrs, values)
     })
@@ -397,101 +403,34 @@ fn no_variables_of_type(inst: &Instance, function: &str, nvr: usize, ty: &str) -
     }
 }
 
-/// `fmi2GetInteger`: there are no Integer variables.
-///
-/// # Safety
-/// Arguments as the FMI 2.0 standard requires.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetInteger(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *mut fmi2Integer,
-) -> fmi2Status {
-    guard(c, "fmi2GetInteger", |i| {
-        no_variables_of_type(i, "fmi2GetInteger", nvr, "Integer")
-    })
+/// One of the six Get/Set functions of a type this FMU has no variables
+/// of: fmi2OK for no value references, else fmi2Error with a log line.
+macro_rules! no_variables_fn {
+    ($name:ident, $value:ty, $ty:literal) => {
+        #[doc = concat!("`", stringify!($name), "`: there are no ", $ty, " variables.")]
+        ///
+        /// # Safety
+        /// Arguments as the FMI 2.0 standard requires.
+        #[unsafe(no_mangle)]
+        pub unsafe extern "C" fn $name(
+            c: fmi2Component,
+            _vr: *const fmi2ValueReference,
+            nvr: usize,
+            _value: $value,
+        ) -> fmi2Status {
+            guarded!(c, stringify!($name), |i| {
+                no_variables_of_type(i, stringify!($name), nvr, $ty)
+            })
+        }
+    };
 }
 
-/// `fmi2GetBoolean`: there are no Boolean variables.
-///
-/// # Safety
-/// Arguments as the FMI 2.0 standard requires.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetBoolean(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *mut fmi2Boolean,
-) -> fmi2Status {
-    guard(c, "fmi2GetBoolean", |i| {
-        no_variables_of_type(i, "fmi2GetBoolean", nvr, "Boolean")
-    })
-}
-
-/// `fmi2GetString`: there are no String variables.
-///
-/// # Safety
-/// Arguments as the FMI 2.0 standard requires.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetString(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *mut fmi2String,
-) -> fmi2Status {
-    guard(c, "fmi2GetString", |i| {
-        no_variables_of_type(i, "fmi2GetString", nvr, "String")
-    })
-}
-
-/// `fmi2SetInteger`: there are no Integer variables.
-///
-/// # Safety
-/// Arguments as the FMI 2.0 standard requires.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetInteger(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *const fmi2Integer,
-) -> fmi2Status {
-    guard(c, "fmi2SetInteger", |i| {
-        no_variables_of_type(i, "fmi2SetInteger", nvr, "Integer")
-    })
-}
-
-/// `fmi2SetBoolean`: there are no Boolean variables.
-///
-/// # Safety
-/// Arguments as the FMI 2.0 standard requires.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetBoolean(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *const fmi2Boolean,
-) -> fmi2Status {
-    guard(c, "fmi2SetBoolean", |i| {
-        no_variables_of_type(i, "fmi2SetBoolean", nvr, "Boolean")
-    })
-}
-
-/// `fmi2SetString`: there are no String variables.
-///
-/// # Safety
-/// Arguments as the FMI 2.0 standard requires.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetString(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *const fmi2String,
-) -> fmi2Status {
-    guard(c, "fmi2SetString", |i| {
-        no_variables_of_type(i, "fmi2SetString", nvr, "String")
-    })
-}
+no_variables_fn!(fmi2GetInteger, *mut fmi2Integer, "Integer");
+no_variables_fn!(fmi2GetBoolean, *mut fmi2Boolean, "Boolean");
+no_variables_fn!(fmi2GetString, *mut fmi2String, "String");
+no_variables_fn!(fmi2SetInteger, *const fmi2Integer, "Integer");
+no_variables_fn!(fmi2SetBoolean, *const fmi2Boolean, "Boolean");
+no_variables_fn!(fmi2SetString, *const fmi2String, "String");
 
 // ---------------------------------------------------------------------------
 // FMU state.
@@ -506,26 +445,15 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    guard(c, "fmi2GetFMUstate", |inst| {
-        if FMUstate.is_null() {
-            return null_arg(inst, "fmi2GetFMUstate", "FMUstate");
-        }
+    guarded!(c, "fmi2GetFMUstate", |inst| {
+        // SAFETY: host contract: NULL or a writable fmi2FMUstate.
+        let slot = match unsafe { ptr::out_arg(FMUstate) } {
+            Ok(slot) => slot,
+            Err(e) => return refused(inst, "fmi2GetFMUstate", "FMUstate", e),
+        };
         let state = inst.save();
-        // SAFETY: non-null out pointer (host contract).
-        let slot = unsafe { &mut *FMUstate };
-        if slot.is_null() {
-            *slot = Box::into_raw(Box::new(FmuState {
-                magic: STATE_MAGIC,
-                state,
-            })) as fmi2FMUstate;
-        } else {
-            // SAFETY: host contract: a state from an earlier call.
-            match unsafe { state_arg(inst, "fmi2GetFMUstate", *slot) } {
-                Some(old) => old.state = state,
-                None => return fmi2Error,
-            }
-        }
-        fmi2OK
+        // SAFETY: host contract: *slot is NULL or a state from us.
+        unsafe { store_state(inst, "fmi2GetFMUstate", slot, state) }
     })
 }
 
@@ -535,8 +463,8 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-    guard(c, "fmi2SetFMUstate", |inst| {
-        // SAFETY: host contract.
+    guarded!(c, "fmi2SetFMUstate", |inst| {
+        // SAFETY: host contract: a state from us, not yet freed.
         match unsafe { state_arg(inst, "fmi2SetFMUstate", FMUstate) } {
             Some(s) => {
                 let saved = s.state.clone();
@@ -556,23 +484,21 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    guard(c, "fmi2FreeFMUstate", |inst| {
-        if FMUstate.is_null() {
-            return null_arg(inst, "fmi2FreeFMUstate", "FMUstate");
-        }
-        // SAFETY: non-null out pointer (host contract).
-        let slot = unsafe { &mut *FMUstate };
+    guarded!(c, "fmi2FreeFMUstate", |inst| {
+        // SAFETY: host contract: NULL or a writable fmi2FMUstate.
+        let slot = match unsafe { ptr::out_arg(FMUstate) } {
+            Ok(slot) => slot,
+            Err(e) => return refused(inst, "fmi2FreeFMUstate", "FMUstate", e),
+        };
         if slot.is_null() {
             return fmi2OK;
         }
-        // SAFETY: host contract: a state from us, not yet freed.
-        if unsafe { state_arg(inst, "fmi2FreeFMUstate", *slot) }.is_none() {
-            return fmi2Error;
+        // SAFETY: host contract: a state from us, not yet freed (the magic
+        // number, cleared here, catches most second frees).
+        match unsafe { ptr::free_handle::<FmuState>(*slot) } {
+            Ok(b) => drop(b),
+            Err(e) => return state_refused(inst, "fmi2FreeFMUstate", e),
         }
-        // SAFETY: created by Box::into_raw; clear the magic against reuse.
-        let mut b = unsafe { Box::from_raw(*slot as *mut FmuState) };
-        b.magic = 0;
-        drop(b);
         *slot = std::ptr::null_mut();
         fmi2OK
     })
@@ -588,16 +514,18 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     FMUstate: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    guard(c, "fmi2SerializedFMUstateSize", |inst| {
-        if size.is_null() {
-            return null_arg(inst, "fmi2SerializedFMUstateSize", "size");
-        }
-        // SAFETY: host contract.
-        let Some(s) = (unsafe { state_arg(inst, "fmi2SerializedFMUstateSize", FMUstate) }) else {
+    const F: &str = "fmi2SerializedFMUstateSize";
+    guarded!(c, F, |inst| {
+        // SAFETY: host contract: NULL or a writable size_t.
+        let size = match unsafe { ptr::out_arg(size) } {
+            Ok(size) => size,
+            Err(e) => return refused(inst, F, "size", e),
+        };
+        // SAFETY: host contract: a state from us, not yet freed.
+        let Some(s) = (unsafe { state_arg(inst, F, FMUstate) }) else {
             return fmi2Error;
         };
-        // SAFETY: non-null out pointer.
-        unsafe { *size = Instance::serialize(&s.state).len() };
+        *size = Instance::serialize(&s.state).len();
         fmi2OK
     })
 }
@@ -613,8 +541,8 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serializedState: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    guard(c, "fmi2SerializeFMUstate", |inst| {
-        // SAFETY: host contract.
+    guarded!(c, "fmi2SerializeFMUstate", |inst| {
+        // SAFETY: host contract: a state from us, not yet freed.
         let Some(s) = (unsafe { state_arg(inst, "fmi2SerializeFMUstate", FMUstate) }) else {
             return fmi2Error;
         };
@@ -629,11 +557,11 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
             );
             return fmi2Error;
         }
-        // SAFETY: host contract: `size` writable bytes.
-        let Some(buf) = (unsafe { slice_arg_mut(serializedState as *mut u8, bytes.len()) }) else {
-            return null_arg(inst, "fmi2SerializeFMUstate", "serializedState");
-        };
-        buf.copy_from_slice(&bytes);
+        // SAFETY: host contract: `size` (>= bytes.len()) writable bytes.
+        match unsafe { ptr::bytes_arg_mut(serializedState, bytes.len()) } {
+            Ok(buf) => buf.copy_from_slice(&bytes),
+            Err(e) => return refused(inst, "fmi2SerializeFMUstate", "serializedState", e),
+        }
         fmi2OK
     })
 }
@@ -650,33 +578,24 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    guard(c, "fmi2DeSerializeFMUstate", |inst| {
-        if FMUstate.is_null() {
-            return null_arg(inst, "fmi2DeSerializeFMUstate", "FMUstate");
-        }
+    const F: &str = "fmi2DeSerializeFMUstate";
+    guarded!(c, F, |inst| {
+        // SAFETY: host contract: NULL or a writable fmi2FMUstate.
+        let slot = match unsafe { ptr::out_arg(FMUstate) } {
+            Ok(slot) => slot,
+            Err(e) => return refused(inst, F, "FMUstate", e),
+        };
         // SAFETY: host contract: `size` readable bytes.
-        let Some(bytes) = (unsafe { slice_arg(serializedState as *const u8, size) }) else {
-            return null_arg(inst, "fmi2DeSerializeFMUstate", "serializedState");
+        let bytes = match unsafe { ptr::bytes_arg(serializedState, size) } {
+            Ok(bytes) => bytes,
+            Err(e) => return refused(inst, F, "serializedState", e),
         };
         let state = match inst.deserialize(bytes) {
             Ok(s) => s,
             Err(status) => return status,
         };
-        // SAFETY: non-null out pointer.
-        let slot = unsafe { &mut *FMUstate };
-        if slot.is_null() {
-            *slot = Box::into_raw(Box::new(FmuState {
-                magic: STATE_MAGIC,
-                state,
-            })) as fmi2FMUstate;
-        } else {
-            // SAFETY: host contract: a state from an earlier call.
-            match unsafe { state_arg(inst, "fmi2DeSerializeFMUstate", *slot) } {
-                Some(old) => old.state = state,
-                None => return fmi2Error,
-            }
-        }
-        fmi2OK
+        // SAFETY: host contract: *slot is NULL or a state from us.
+        unsafe { store_state(inst, F, slot, state) }
     })
 }
 
@@ -694,7 +613,7 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     _dvKnown: *const fmi2Real,
     _dvUnknown: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetDirectionalDerivative", |i| {
+    guarded!(c, "fmi2GetDirectionalDerivative", |i| {
         i.unsupported(
             "fmi2GetDirectionalDerivative",
             "providesDirectionalDerivative is false",
@@ -718,14 +637,21 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     order: *const fmi2Integer,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2SetRealInputDerivatives", |inst| {
+    guarded!(c, "fmi2SetRealInputDerivatives", |inst| {
+        const F: &str = "fmi2SetRealInputDerivatives";
         // SAFETY: host contract: nvr elements each.
-        let (Some(vrs), Some(orders), Some(values)) = (
-            unsafe { slice_arg(vr, nvr) },
-            unsafe { slice_arg(order, nvr) },
-            unsafe { slice_arg(value, nvr) },
-        ) else {
-            return null_arg(inst, "fmi2SetRealInputDerivatives", "vr, order or value");
+        let slices = unsafe {
+            (
+                ptr::slice_arg(vr, nvr),
+                ptr::slice_arg(order, nvr),
+                ptr::slice_arg(value, nvr),
+            )
+        };
+        let (vrs, orders, values) = match slices {
+            (Ok(vrs), Ok(orders), Ok(values)) => (vrs, orders, values),
+            (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
+                return refused(inst, F, "vr, order or value", e);
+            }
         };
         inst.set_input_derivatives(vrs, orders, values)
     })
@@ -743,7 +669,7 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     _order: *const fmi2Integer,
     _value: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetRealOutputDerivatives", |i| {
+    guarded!(c, "fmi2GetRealOutputDerivatives", |i| {
         i.unsupported(
             "fmi2GetRealOutputDerivatives",
             "maxOutputDerivativeOrder is 0",
@@ -764,7 +690,7 @@ pub unsafe extern "C" fn fmi2DoStep(
     communicationStepSize: fmi2Real,
     _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2DoStep", |i| {
+    guarded!(c, "fmi2DoStep", |i| {
         i.do_step(currentCommunicationPoint, communicationStepSize)
     })
 }
@@ -775,7 +701,7 @@ pub unsafe extern "C" fn fmi2DoStep(
 /// Arguments as the FMI 2.0 standard requires.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    guard(c, "fmi2CancelStep", |i| {
+    guarded!(c, "fmi2CancelStep", |i| {
         i.unsupported(
             "fmi2CancelStep",
             "steps are synchronous (canRunAsynchronuously is false)",
@@ -791,7 +717,7 @@ macro_rules! status_fn {
         /// Arguments as the FMI 2.0 standard requires.
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $name(c: fmi2Component, s: c_int, value: *mut $ty) -> fmi2Status {
-            guard(c, stringify!($name), |$inst| {
+            guarded!(c, stringify!($name), |$inst| {
                 let Some($kind) = StatusKind::from_c(s) else {
                     $inst.log.log(
                         fmi2Error,
@@ -799,11 +725,11 @@ macro_rules! status_fn {
                     );
                     return fmi2Error;
                 };
-                if value.is_null() {
-                    return null_arg($inst, stringify!($name), "value");
-                }
-                // SAFETY: non-null out pointer (host contract).
-                let $value = unsafe { &mut *value };
+                // SAFETY: host contract: NULL or a writable value.
+                let $value = match unsafe { ptr::out_arg(value) } {
+                    Ok(v) => v,
+                    Err(e) => return refused($inst, stringify!($name), "value", e),
+                };
                 $body
             })
         }
@@ -866,7 +792,7 @@ macro_rules! me_fn {
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $name(c: fmi2Component $(, $arg: $ty)*) -> fmi2Status {
             $(let _ = $arg;)*
-            guard(c, stringify!($name), |i| {
+            guarded!(c, stringify!($name), |i| {
                 i.unsupported(stringify!($name), "this FMU supports co-simulation only")
             })
         }
@@ -917,10 +843,14 @@ mod tests {
         )
         .expect("instantiates");
         let c = Box::into_raw(Box::new(inst)) as fmi2Component;
-        let s = guard(c, "test", |_| panic!("boom"));
-        assert_eq!(s, fmi2Fatal);
-        assert_eq!(guard(c, "test", |_| fmi2OK), fmi2Fatal);
-        unsafe { fmi2FreeInstance(c) };
-        assert_eq!(guard(std::ptr::null_mut(), "test", |_| fmi2OK), fmi2Error);
+        // SAFETY: c is a live instance until fmi2FreeInstance; the last
+        // call passes NULL, which guard refuses.
+        unsafe {
+            let s = guard(c, "test", |_| panic!("boom"));
+            assert_eq!(s, fmi2Fatal);
+            assert_eq!(guard(c, "test", |_| fmi2OK), fmi2Fatal);
+            fmi2FreeInstance(c);
+            assert_eq!(guard(std::ptr::null_mut(), "test", |_| fmi2OK), fmi2Error);
+        }
     }
 }

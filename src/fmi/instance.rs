@@ -2,8 +2,8 @@
 //! [`Model`], the value-reference map, the logger, and saved FMU states.
 //!
 //! Everything here is safe Rust on Rust slices; `exports.rs` turns the C
-//! pointers into those slices. Each method returns the FMI status and logs
-//! the reason of anything that is not `fmi2OK`.
+//! pointers into those slices through `ptr.rs`. Each method returns the
+//! FMI status and logs the reason of anything that is not `fmi2OK`.
 //!
 //! Value references are contiguous: parameters `0..P`, inputs `P..P+I`,
 //! outputs `P+I..P+I+O`, each block in the order of the Model's tables.
@@ -16,6 +16,7 @@
 //! failed, non-finite outputs) moves it to [`Phase::Error`], from which
 //! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
 
+use super::ptr;
 use super::resources::{self, SCENE_FILE};
 use super::types::{Fmi2Type, StatusKind, fmi2CallbackFunctions, fmi2Status};
 use crate::model::{Error as ModelError, Model, ModelState};
@@ -120,24 +121,16 @@ impl Logger {
         if !self.enabled[category] {
             return;
         }
-        let Some(logger) = self.callbacks.logger else {
+        if self.callbacks.logger.is_none() {
             return;
-        };
-        let cat = c_string(LOG_CATEGORIES[category].0);
-        let msg = c_string(msg);
-        // SAFETY: the host gave us this logger; every pointer is a valid
-        // NUL-terminated string that outlives the call, and the format
-        // "%s" consumes exactly the one string argument passed.
-        unsafe {
-            logger(
-                self.callbacks.componentEnvironment,
-                self.instance_name.as_ptr(),
-                status,
-                cat.as_ptr(),
-                c"%s".as_ptr(),
-                msg.as_ptr(),
-            );
         }
+        ptr::call_logger(
+            &self.callbacks,
+            &self.instance_name,
+            status,
+            &c_string(LOG_CATEGORIES[category].0),
+            &c_string(msg),
+        );
     }
 
     /// True when `fmi2OK` (debug) messages go out: build them only then.
@@ -232,8 +225,38 @@ const _: () = {
     assert_send::<Scene>();
 };
 
-/// One FMU instance.
+/// The magic number of a live [`Instance`] ("origami0"), checked on every
+/// call and cleared by `fmi2FreeInstance` (see `ptr.rs`).
+pub const INSTANCE_MAGIC: u64 = 0x6f72_6967_616d_6930;
+
+/// The magic number of a live [`FmuState`] ("origami1").
+pub const STATE_MAGIC: u64 = 0x6f72_6967_616d_6931;
+
+/// What an `fmi2FMUstate` points to: a saved state behind a magic number,
+/// so that a foreign or freed pointer is (usually) detected.
+#[repr(C)]
+pub struct FmuState {
+    /// [`STATE_MAGIC`] while alive; first, where `ptr.rs` reads it.
+    pub(super) magic: u64,
+    /// The state.
+    pub state: SavedState,
+}
+
+impl FmuState {
+    /// A live saved state.
+    pub fn new(state: SavedState) -> FmuState {
+        FmuState {
+            magic: STATE_MAGIC,
+            state,
+        }
+    }
+}
+
+/// One FMU instance (`#[repr(C)]`: the magic number comes first).
+#[repr(C)]
 pub struct Instance {
+    /// [`INSTANCE_MAGIC`] while alive; first, where `ptr.rs` reads it.
+    pub(super) magic: u64,
     /// Logger and debug settings.
     pub log: Logger,
     /// Set after a panic: every later call but `fmi2FreeInstance` fails.
@@ -277,6 +300,7 @@ impl Instance {
                     ),
                 );
                 Some(Instance {
+                    magic: INSTANCE_MAGIC,
                     log,
                     dead: false,
                     guid,

@@ -1,9 +1,14 @@
-//! The FMI 2.0 co-simulation layer: the only module with `unsafe` code.
+//! The FMI 2.0 co-simulation layer. The crate denies `unsafe` code; only
+//! [`ptr`] (every pointer dereference, handle and logger call) and
+//! [`exports`] (the `#[unsafe(no_mangle)]` C functions that call it) are
+//! allowed it.
 //!
 //! - [`types`]: the C types of the standard (`#[repr(C)]`).
 //! - [`exports`]: every `fmi2*` function, exported with its C name; each
-//!   body under `catch_unwind`, null pointers rejected, enum arguments
-//!   validated from integers.
+//!   body under `catch_unwind`, pointers checked through [`ptr`], enum
+//!   arguments validated from integers.
+//! - [`ptr`]: the audited pointer helpers: null, alignment, length and
+//!   magic-number checks of what the host passes.
 //! - [`instance`]: the state machine around a [`crate::model::Model`]
 //!   and the value-reference map (parameters, inputs, outputs; contiguous).
 //! - [`xml`]: the modelDescription.xml writer.
@@ -15,8 +20,11 @@
 //! (a hash of the scene file and the crate version) ties the XML, the scene
 //! and the library together.
 
+#[allow(unsafe_code)]
 pub mod exports;
 pub mod instance;
+#[allow(unsafe_code)]
+pub mod ptr;
 pub mod resources;
 pub mod types;
 pub mod xml;

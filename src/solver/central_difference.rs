@@ -185,9 +185,9 @@ fn power_iteration(asm: &Assembler, k: &[f64], mass: &mut SparseSolver) -> Resul
     let mut lambda = 0.0;
     for _ in 0..300 {
         y.fill(0.0);
-        for j in 0..nf {
+        for (j, &xj) in x.iter().enumerate() {
             for p in asm.col_ptr[j]..asm.col_ptr[j + 1] {
-                y[asm.row_idx[p]] += k[p] * x[j];
+                y[asm.row_idx[p]] += k[p] * xj;
             }
         }
         mass.solve_in_place(&mut y)?;

@@ -334,10 +334,9 @@ pub fn step(
         solver.solve_in_place(&mut ws.rhs)?;
         out.iterations = it + 1;
         let mut norm: f64 = 0.0;
-        for i in 0..n {
-            let fi = asm.free[i];
+        for (&fi, &scale) in asm.free.iter().zip(scales) {
             if fi != FIXED {
-                norm = norm.max(ws.rhs[fi].abs() / scales[i]);
+                norm = norm.max(ws.rhs[fi].abs() / scale);
             }
         }
         if !norm.is_finite() {
@@ -442,8 +441,8 @@ fn local_error(
     let c = h * h * (beta - 1.0 / 6.0).abs().max(1.0 / 24.0);
     let mut sum = 0.0;
     let mut cnt = 0usize;
-    for i in 0..next.q.len() {
-        if asm.free[i] != FIXED {
+    for (i, &fi) in asm.free.iter().enumerate() {
+        if fi != FIXED {
             let e = c * (next.qdd[i] - cur.qdd[i]) / (tolerance * scales[i]);
             sum += e * e;
             cnt += 1;
