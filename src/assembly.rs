@@ -143,8 +143,9 @@ impl Assembler {
             .iter()
             .enumerate()
             .map(|(f, &[a, b, c])| {
-                ShellElement::with_interpolation(
+                ShellElement::with_sides(
                     [mesh.coords[a], mesh.coords[b], mesh.coords[c]],
+                    layout.side_vectors(mesh, f),
                     element.rule,
                     element.interpolation,
                 )
@@ -640,7 +641,8 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
         }
         let len = mesh.edge_length(e);
         for (v, w) in [(edge.v[0], edge.v[1]), (edge.v[1], edge.v[0])] {
-            let d: Vector2<f64> = (mesh.coords[w] - mesh.coords[v]) / len;
+            // The crease tangent at v: the chord, or the curve's tangent.
+            let d: Vector2<f64> = layout.curves.direction(mesh, e, v, w);
             let mut right = None;
             let mut left = None;
             for &f in &mesh.edge_faces[e] {
@@ -649,7 +651,9 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
                     .find(|&&x| x != v && x != w)
                     .expect("triangle");
                 let x = mesh.coords[third] - mesh.coords[v];
-                let side = d.x * x.y - d.y * x.x;
+                // Which side of the edge: by its chord (robust on curved sides).
+                let chord = mesh.coords[w] - mesh.coords[v];
+                let side = chord.x * x.y - chord.y * x.x;
                 let g = layout.gradient_along(v, f, x);
                 if side < 0.0 {
                     right = Some(g);

@@ -19,6 +19,7 @@
 //! A facet's gradient DOF at v towards w is `G_s (X_w - X_v)`, so each facet's
 //! 27 local DOFs are a constant linear map of the slots: [`LocalMap`].
 
+use crate::curves::CreaseCurves;
 use crate::mesh::{EdgeKind, Mesh};
 use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
 
@@ -98,6 +99,20 @@ pub struct DofLayout {
     pub sectors: Vec<Vec<Sector>>,
     /// For each facet, its local map.
     pub local: Vec<LocalMap>,
+    /// Crease curve tangents (curved crease sides).
+    pub curves: CreaseCurves,
+}
+
+/// The edge of facet `f` between its corners `v` and `w`.
+fn side_edge(mesh: &Mesh, f: usize, v: usize, w: usize) -> usize {
+    let t = mesh.triangles[f];
+    (0..3)
+        .find(|&k| {
+            let (p, q) = (t[k], t[(k + 1) % 3]);
+            (p == v && q == w) || (p == w && q == v)
+        })
+        .map(|k| mesh.face_edges[f][k])
+        .expect("v and w are corners of f")
 }
 
 /// Two unit directions closer than this (1 - |cos|) count as parallel.
@@ -106,6 +121,7 @@ const PARALLEL_TOL: f64 = 1e-9;
 impl DofLayout {
     /// Build the layout of a validated mesh.
     pub fn new(mesh: &Mesh) -> DofLayout {
+        let curves = CreaseCurves::new(mesh);
         let nv = mesh.n_vertices();
         let mut slot_vertex = Vec::new();
         let mut slot_kind = Vec::new();
@@ -123,10 +139,12 @@ impl DofLayout {
             if fan.faces.is_empty() {
                 continue;
             }
+            // Unit tangent at v along edge e: the chord, or the crease
+            // curve's tangent where two non-collinear creases meet.
             let dir = |e: usize| {
                 let [a, b] = mesh.edges[e].v;
                 let w = if a == v { b } else { a };
-                (mesh.coords[w] - mesh.coords[v]).normalize()
+                curves.direction(mesh, e, v, w)
             };
             let is_crease = |e: usize| mesh.edges[e].kind == EdgeKind::Crease;
             // Split the fan into sectors at creases: list of (first edge, faces, last edge).
@@ -246,7 +264,7 @@ impl DofLayout {
         };
         let grad = |v: usize, w: usize, f: usize| {
             let s = sector_of(v, f);
-            let x = mesh.coords[w] - mesh.coords[v];
+            let x = curves.side(mesh, side_edge(mesh, f, v, w), v, w);
             let (s0, c0) = s.terms[0];
             let (s1, c1) = s.terms[1];
             Combo::two(s0, c0.dot(&x), s1, c1.dot(&x))
@@ -275,7 +293,24 @@ impl DofLayout {
             position_slot,
             sectors,
             local,
+            curves,
         }
+    }
+
+    /// The reference side vectors of facet `f` in element order `[1->2,
+    /// 1->3, 2->3, 2->1, 3->1, 3->2]`: chords, or Hermite tangents on curved
+    /// crease sides (what the facet's gradient DOFs mean).
+    pub fn side_vectors(&self, mesh: &Mesh, f: usize) -> [Vector2<f64>; 6] {
+        let [a, b, c] = mesh.triangles[f];
+        let side = |v: usize, w: usize| self.curves.side(mesh, side_edge(mesh, f, v, w), v, w);
+        [
+            side(a, b),
+            side(a, c),
+            side(b, c),
+            side(b, a),
+            side(c, a),
+            side(c, b),
+        ]
     }
 
     /// Number of vector slots.

@@ -18,6 +18,7 @@ pub mod assembly;
 pub mod benchmarks;
 pub mod cli;
 pub mod crease;
+pub mod curves;
 pub mod dofs;
 pub mod element;
 pub mod fmi;

@@ -296,13 +296,13 @@ impl Shape {
 }
 
 /// Exact means over the triangle of `B_k q_i` and `q_i q_j` (BCIZ functions
-/// `B`, bubbles `q`), by a collapsed 5x5 Gauss-Legendre rule (exact to degree 9).
+/// `B`, bubbles `q`), by the collapsed 5x5 Gauss rule (exact to degree 8).
 fn bubble_means() -> &'static ([[f64; 3]; 9], Matrix3<f64>) {
     static MEANS: OnceLock<([[f64; 3]; 9], Matrix3<f64>)> = OnceLock::new();
     MEANS.get_or_init(|| {
         let mut p = [[0.0; 3]; 9];
         let mut q = Matrix3::zeros();
-        for (l, w) in collapsed_gauss() {
+        for (l, w) in collapsed_gauss(5) {
             let (b, _, _) = area_partials(l);
             let (qv, _, _) = bubble_partials(l);
             for i in 0..3 {
@@ -318,27 +318,44 @@ fn bubble_means() -> &'static ([[f64; 3]; 9], Matrix3<f64>) {
     })
 }
 
-/// A 25-point rule on the triangle exact to degree 9 (Duffy map of 5-point
-/// Gauss-Legendre): area coordinates and weights summing to 1.
-pub(crate) fn collapsed_gauss() -> Vec<([f64; 3], f64)> {
-    const X: [f64; 5] = [
-        0.046_910_077_030_668_004,
-        0.230_765_344_947_158_45,
-        0.5,
-        0.769_234_655_052_841_6,
-        0.953_089_922_969_332,
-    ];
-    const W: [f64; 5] = [
-        0.118_463_442_528_094_54,
-        0.239_314_335_249_683_23,
-        0.284_444_444_444_444_45,
-        0.239_314_335_249_683_23,
-        0.118_463_442_528_094_54,
-    ];
-    let mut out = Vec::with_capacity(25);
-    for (u, wu) in X.iter().zip(W) {
-        for (v, wv) in X.iter().zip(W) {
-            let (eta, zeta) = (*u, (1.0 - u) * v);
+/// `n`-point Gauss-Legendre nodes and weights on [0, 1] (Newton on the
+/// Legendre polynomial from Chebyshev guesses), exact to degree `2n - 1`.
+pub(crate) fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            // P_n(x) and P_n'(x) by the three-term recurrence.
+            let (mut p0, mut p1) = (1.0, x);
+            for k in 2..=n {
+                let k = k as f64;
+                (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+            }
+            let p = if n == 0 { 1.0 } else { p1 };
+            let pm = if n == 1 { 1.0 } else { p0 };
+            dp = n as f64 * (x * p - pm) / (x * x - 1.0);
+            let dx = p / dp;
+            x -= dx;
+            if dx.abs() < 1e-16 {
+                break;
+            }
+        }
+        let w = 2.0 / ((1.0 - x * x) * dp * dp);
+        out.push((0.5 * (1.0 - x), 0.5 * w));
+    }
+    out
+}
+
+/// An `n x n`-point rule on the triangle exact to degree `2n - 2` (Duffy map
+/// of Gauss-Legendre; the map adds one degree in `u`): area coordinates and
+/// weights summing to 1.
+pub(crate) fn collapsed_gauss(n: usize) -> Vec<([f64; 3], f64)> {
+    let g = gauss_legendre(n);
+    let mut out = Vec::with_capacity(n * n);
+    for &(u, wu) in &g {
+        for &(v, wv) in &g {
+            let (eta, zeta) = (u, (1.0 - u) * v);
             // d(eta, zeta) = (1 - u) du dv; the triangle's measure is 1/2.
             out.push(([1.0 - eta - zeta, eta, zeta], 2.0 * wu * wv * (1.0 - u)));
         }
@@ -613,7 +630,7 @@ mod tests {
     #[test]
     fn specht_normal_slope_integrals_are_trapezoidal() {
         let v = Vector2::new;
-        let gauss = collapsed_gauss_1d();
+        let gauss = gauss_legendre(5);
         for x in [
             [v(0.1, -0.2), v(1.3, 0.1), v(0.4, 0.9)],
             [v(0.0, 0.0), v(2.0, 0.0), v(1.7, 0.3)],
@@ -659,27 +676,32 @@ mod tests {
         }
     }
 
-    /// 5-point Gauss-Legendre on [0, 1].
-    fn collapsed_gauss_1d() -> Vec<(f64, f64)> {
-        // The triangle rule's eta coordinates at zeta's first node are the 1D nodes.
-        let pts = collapsed_gauss();
-        let mut out: Vec<(f64, f64)> = Vec::new();
-        for (l, _) in pts {
-            if !out.iter().any(|(t, _)| (t - l[1]).abs() < 1e-12) {
-                out.push((l[1], 0.0));
-            }
-        }
-        let w = [
-            0.118_463_442_528_094_54,
-            0.239_314_335_249_683_23,
-            0.284_444_444_444_444_45,
-            0.239_314_335_249_683_23,
-            0.118_463_442_528_094_54,
+    /// Gauss-Legendre against the tabulated 5-point rule and a degree-13
+    /// monomial on 7 points; the 7 x 7 triangle rule a degree-12 monomial.
+    #[test]
+    fn gauss_rules_are_exact() {
+        let g = gauss_legendre(5);
+        let table = [
+            (0.046_910_077_030_668_004, 0.118_463_442_528_094_54),
+            (0.230_765_344_947_158_45, 0.239_314_335_249_683_23),
+            (0.5, 0.284_444_444_444_444_45),
         ];
-        for (o, w) in out.iter_mut().zip(w) {
-            o.1 = w;
+        for (k, (x, w)) in table.iter().enumerate() {
+            assert!(
+                (g[k].0 - x).abs() < 1e-15 && (g[k].1 - w).abs() < 1e-15,
+                "{:?}",
+                g[k]
+            );
         }
-        out
+        let i: f64 = gauss_legendre(7).iter().map(|(x, w)| w * x.powi(13)).sum();
+        assert!((i - 1.0 / 14.0).abs() < 1e-15, "{i}");
+        // mean of eta^5 zeta^7 over the triangle = 2 * 5! 7! / 14!
+        let t: f64 = collapsed_gauss(7)
+            .iter()
+            .map(|(l, w)| w * l[1].powi(5) * l[2].powi(7))
+            .sum();
+        let exact = 2.0 * 120.0 * 5040.0 / 87_178_291_200.0;
+        assert!((t - exact).abs() < 1e-14 * exact, "{t} vs {exact}");
     }
 
     /// The Specht mass matrix: the correction formula equals brute-force
@@ -691,7 +713,7 @@ mod tests {
         let sh = Shape::specht(&[v(0.1, -0.2), v(1.3, 0.1), v(0.4, 0.9)]);
         let m = sh.mass_hat();
         let mut brute = [[0.0; 9]; 9];
-        for (l, w) in collapsed_gauss() {
+        for (l, w) in collapsed_gauss(5) {
             let s = sh.values(l);
             for k in 0..9 {
                 for j in 0..9 {

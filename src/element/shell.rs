@@ -68,6 +68,7 @@ pub struct ShellElement {
     j2_inv: Matrix2<f64>,
     rule: Rule,
     shape: Shape,
+    mass_hat: [[f64; 9]; 9],
     nq: usize,
     qp: [QuadPoint; MAX_QP],
 }
@@ -160,6 +161,31 @@ fn kinematics(q: &QuadPoint, e: &ElemVec) -> Kinematics {
     }
 }
 
+/// `Mhat` of a curved-sided facet: the mean of `s_k s_l` weighted by the
+/// reference Jacobian of its map, by the 49-point collapsed Gauss rule
+/// (exact to degree 12, the integrand's).
+fn curved_mass_hat(shape: &Shape, e0: &[Vector2<f64>; 9]) -> [[f64; 9]; 9] {
+    let mut m = [[0.0; 9]; 9];
+    let mut total = 0.0;
+    for (l, w) in super::shape::collapsed_gauss(7) {
+        let geo = shape.d1(l[1], l[2]);
+        let (mut c1, mut c2) = (Vector2::zeros(), Vector2::zeros());
+        for k in 0..9 {
+            c1 += e0[k] * geo[k][0];
+            c2 += e0[k] * geo[k][1];
+        }
+        let wd = w * c1.perp(&c2);
+        total += wd;
+        let s = shape.values(l);
+        for k in 0..9 {
+            for j in 0..9 {
+                m[k][j] += wd * s[k] * s[j];
+            }
+        }
+    }
+    m.map(|row| row.map(|v| v / total))
+}
+
 #[inline(always)]
 fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -181,7 +207,35 @@ impl ShellElement {
         rule: Rule,
         interpolation: Interpolation,
     ) -> Result<Self, String> {
-        if x.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+        let chords = [
+            x[1] - x[0],
+            x[2] - x[0],
+            x[2] - x[1],
+            x[0] - x[1],
+            x[0] - x[2],
+            x[1] - x[2],
+        ];
+        Self::with_sides(x, chords, rule, interpolation)
+    }
+
+    /// A facet whose sides may be curved in the (flat) reference: corners
+    /// `x` and the six side vectors in element order `[1->2, 1->3, 2->3,
+    /// 2->1, 3->1, 3->2]`, each the reference tangent at its corner along
+    /// the side (the chord on a straight side). The map from `u = (eta, zeta)`
+    /// to the reference plane is then the element's own cubic, so the metric
+    /// `J2`, the weights and the mass come from the quadrature points.
+    ///
+    /// The curvature needs no correction for the curved map: the extra terms
+    /// of the second derivatives are tangent to the surface and drop out of
+    /// `n_hat . r_,ij`; the reference curvature stays zero (a flat reference).
+    pub fn with_sides(
+        x: [Vector2<f64>; 3],
+        sides: [Vector2<f64>; 6],
+        rule: Rule,
+        interpolation: Interpolation,
+    ) -> Result<Self, String> {
+        let finite = |p: &Vector2<f64>| p.x.is_finite() && p.y.is_finite();
+        if !x.iter().all(finite) || !sides.iter().all(finite) {
             return Err(format!("triangle has non-finite coordinates {x:?}"));
         }
         let a1 = x[1] - x[0];
@@ -204,36 +258,79 @@ impl ShellElement {
         }
         let e1 = a1 / a1.norm();
         let e2 = Vector2::new(-e1.y, e1.x);
-        let j2 = Matrix2::new(e1.dot(&a1), e1.dot(&a2), e2.dot(&a1), e2.dot(&a2));
-        let j2_inv = j2
+        let to_frame = |v: Vector2<f64>| Vector2::new(e1.dot(&v), e2.dot(&v));
+        let j2_of = |c1: Vector2<f64>, c2: Vector2<f64>| {
+            let (c1, c2) = (to_frame(c1), to_frame(c2));
+            Matrix2::new(c1.x, c2.x, c1.y, c2.y)
+        };
+        let j2_inv = j2_of(a1, a2)
             .try_inverse()
             .ok_or_else(|| "degenerate triangle (singular Jacobian)".to_string())?;
-        let area = 0.5 * det;
         let shape = interpolation.shape(&x);
+        // The reference element vector in the plane: corners and side vectors.
+        let e0 = [
+            x[0], sides[0], sides[1], x[1], sides[2], sides[3], x[2], sides[4], sides[5],
+        ];
+        let straight = (0..3).all(|i| {
+            let chord = x[(i + 1) % 3] - x[i];
+            let back = x[(i + 2) % 3] - x[i];
+            (sides[2 * i] - chord).norm() <= 1e-14 * scale.sqrt()
+                && (sides[2 * i + 1] - back).norm() <= 1e-14 * scale.sqrt()
+        });
         let pts = rule.points();
         let mut qp = [QuadPoint::default(); MAX_QP];
+        let mut area = 0.0;
         for (q, (l, w)) in qp.iter_mut().zip(pts) {
             let d1 = shape.d1(l[1], l[2]);
             let d2 = shape.d2(l[1], l[2]);
+            let (jinv, det_q) = if straight {
+                (j2_inv, det)
+            } else {
+                // Iso-parametric: the reference map uses the same functions,
+                // so the reference state is strain-free.
+                let (mut c1, mut c2) = (Vector2::zeros(), Vector2::zeros());
+                for k in 0..9 {
+                    c1 += e0[k] * d1[k][0];
+                    c2 += e0[k] * d1[k][1];
+                }
+                let d = c1.perp(&c2);
+                if d.is_nan() || d <= 1e-6 * det {
+                    return Err(format!(
+                        "a curved side folds the facet over itself (reference Jacobian {d:e} \
+                         at area coordinates {l:?}, chord triangle {det:e})"
+                    ));
+                }
+                (
+                    j2_of(c1, c2).try_inverse().expect("positive determinant"),
+                    d,
+                )
+            };
             for k in 0..9 {
                 // du_a/dx_i = (J2^-1)[a][i].
-                let g = |i: usize| d1[k][0] * j2_inv[(0, i)] + d1[k][1] * j2_inv[(1, i)];
+                let g = |i: usize| d1[k][0] * jinv[(0, i)] + d1[k][1] * jinv[(1, i)];
                 q.n1[k] = g(0);
                 q.n2[k] = g(1);
                 let h = Matrix2::new(d2[k][0], d2[k][2], d2[k][2], d2[k][1]);
-                let hx = j2_inv.transpose() * h * j2_inv;
+                let hx = jinv.transpose() * h * jinv;
                 q.n11[k] = hx[(0, 0)];
                 q.n22[k] = hx[(1, 1)];
                 q.n12[k] = 0.5 * (hx[(0, 1)] + hx[(1, 0)]);
             }
-            q.wa = w * area;
+            q.wa = 0.5 * w * det_q;
+            area += q.wa;
         }
+        let mass_hat = if straight {
+            shape.mass_hat()
+        } else {
+            curved_mass_hat(&shape, &e0)
+        };
         Ok(ShellElement {
-            area,
+            area: if straight { 0.5 * det } else { area },
             frame: [e1, e2],
             j2_inv,
             rule,
             shape,
+            mass_hat,
             nq: pts.len(),
             qp,
         })
@@ -246,7 +343,7 @@ impl ShellElement {
 
     /// `Mhat` of this triangle: its mass is `rho h area Mhat (x) I3`.
     pub fn mass_hat(&self) -> [[f64; 9]; 9] {
-        self.shape.mass_hat()
+        self.mass_hat
     }
 
     /// Reference area.
@@ -837,6 +934,96 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A facet with one curved side (1-2 bulging out, its end tangents
+    /// turned by 0.25 rad): the reference state is strain-free, rigid motions
+    /// cost nothing, force and tangent match finite differences of energy and
+    /// force, its area and mass are the quadrature's (mass SPD, unit
+    /// translation energy rho h area / 2).
+    #[test]
+    fn curved_sided_facet() {
+        let (m1, m2) = (material(1.0), material(2.0));
+        let x = triangles()[2];
+        let rot2 = |v: Vector2<f64>, a: f64| {
+            Vector2::new(a.cos() * v.x - a.sin() * v.y, a.sin() * v.x + a.cos() * v.y)
+        };
+        let c12 = x[1] - x[0];
+        let sides = [
+            rot2(c12, -0.25) * 1.02,
+            x[2] - x[0],
+            x[2] - x[1],
+            rot2(-c12, 0.25) * 1.02,
+            x[0] - x[2],
+            x[1] - x[2],
+        ];
+        let el =
+            ShellElement::with_sides(x, sides, Rule::default(), Interpolation::Specht).unwrap();
+        let straight = ShellElement::new(x, Rule::default()).unwrap();
+        assert!(el.area() > straight.area(), "the side bulges out");
+        let v3 = |v: Vector2<f64>| Vector3::new(v.x, v.y, 0.0);
+        let e0: ElemVec = [
+            v3(x[0]),
+            v3(sides[0]),
+            v3(sides[1]),
+            v3(x[1]),
+            v3(sides[2]),
+            v3(sides[3]),
+            v3(x[2]),
+            v3(sides[4]),
+            v3(sides[5]),
+        ];
+        let mut rng = Rng(0xc0ffee);
+        // A deformation: the reference vector under a smooth map plus noise.
+        let mut e = rigid(&e0, &rng.rotation(), rng.vec3());
+        for v in e.iter_mut() {
+            *v += 0.05 * rng.vec3();
+        }
+        let unit = total(&el, &m1, &e);
+        assert!(unit > 0.0);
+        assert!(total(&el, &m1, &e0) < 1e-28, "reference strain energy");
+        let moved = rigid(&e0, &rng.rotation(), rng.vec3());
+        assert!(total(&el, &m1, &moved) < 1e-12 * unit);
+        assert!(force(&el, &m1, &moved).norm() < 1e-10 * force(&el, &m1, &e).norm());
+        let (mut f1, mut f2) = (SVector::zeros(), SVector::zeros());
+        let (mut k1, mut k2) = (
+            SMatrix::<f64, 27, 27>::zeros(),
+            SMatrix::<f64, 27, 27>::zeros(),
+        );
+        el.eval(&m1, &e, &mut f1, Some(&mut k1));
+        el.eval(&m2, &e, &mut f2, Some(&mut k2));
+        let (fm, fb) = split(f1, f2);
+        let (km, kb) = split(k1, k2);
+        let d = 1e-6;
+        let mut f_fd = [SVector::<f64, 27>::zeros(); 2];
+        let mut k_fd = [SMatrix::<f64, 27, 27>::zeros(); 2];
+        for j in 0..27 {
+            let (ep, em) = (perturbed(&e, j, d), perturbed(&e, j, -d));
+            let (up, um) = (el.energy(&m1, &ep), el.energy(&m1, &em));
+            f_fd[0][j] = (up.membrane - um.membrane) / (2.0 * d);
+            f_fd[1][j] = (up.bending - um.bending) / (2.0 * d);
+            let (fpm, fpb) = split(force(&el, &m1, &ep), force(&el, &m2, &ep));
+            let (fmm, fmb) = split(force(&el, &m1, &em), force(&el, &m2, &em));
+            k_fd[0].set_column(j, &((fpm - fmm) / (2.0 * d)));
+            k_fd[1].set_column(j, &((fpb - fmb) / (2.0 * d)));
+        }
+        for (what, err) in [
+            ("membrane force", (f_fd[0] - fm).norm() / fm.norm()),
+            ("bending force", (f_fd[1] - fb).norm() / fb.norm()),
+            ("membrane tangent", (k_fd[0] - km).norm() / km.norm()),
+            ("bending tangent", (k_fd[1] - kb).norm() / kb.norm()),
+        ] {
+            assert!(err < 1e-6, "{what} error {err:e}");
+        }
+        let mh = el.mass_hat();
+        let m = SMatrix::<f64, 9, 9>::from_fn(|i, j| mh[i][j]);
+        assert!((m - m.transpose()).amax() < 1e-15);
+        assert!(m.symmetric_eigenvalues().min() > 0.0);
+        let trans: f64 = [0, 3, 6]
+            .iter()
+            .flat_map(|&i| [0, 3, 6].map(|j| mh[i][j]))
+            .sum();
+        assert!((trans - 1.0).abs() < 1e-12, "{trans}");
     }
 
     /// `B^T D B` alone, with B from finite differences of the strains: used to

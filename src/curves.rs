@@ -1,0 +1,209 @@
+//! Reference geometry of crease curves (MATH.md section 4, corrected rule).
+//!
+//! Where exactly two crease edges meet at a vertex and they are not
+//! collinear, the polyline stands for a smooth curve (or a kink): the two
+//! sides of the crease share only the curve's tangent there, so the crease can
+//! fold at that vertex. The tangent is the one of the circle through the
+//! vertex and its two crease neighbours,
+//! `t ~ (X_v - X_a)/|X_v - X_a|^2 + (X_b - X_v)/|X_b - X_v|^2`: exact for a
+//! circular arc whatever the segment lengths (the bisector of the chords is
+//! exact only for equal segments), and the chord direction when the three
+//! points are collinear.
+//!
+//! A crease edge with such a vertex at one or both ends is curved in the
+//! reference: the cubic Hermite curve between its two vertices whose end
+//! tangents are the curve tangents, with magnitude `chord / cos^2(phi/4)`
+//! (`phi` the angle between the end tangents: the cubic closest to a circular
+//! arc). The two facets on the edge take that side as theirs, so they share
+//! it exactly. Every other side stays the straight chord.
+
+use crate::mesh::{EdgeKind, Mesh};
+use nalgebra::Vector2;
+
+/// Two unit directions closer than this (1 - |cos|) count as parallel.
+const PARALLEL_TOL: f64 = 1e-9;
+
+/// The crease curve tangents of a mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CreaseCurves {
+    /// Unit curve tangent at each vertex where two non-collinear creases
+    /// meet (orientation arbitrary), `None` elsewhere.
+    tangent: Vec<Option<Vector2<f64>>>,
+}
+
+impl CreaseCurves {
+    /// Find the curved crease vertices of a validated mesh: interior
+    /// vertices with exactly two creases, not collinear. (On the boundary the
+    /// sectors between a crease and the boundary are free, so two creases
+    /// there fold without it.)
+    pub fn new(mesh: &Mesh) -> CreaseCurves {
+        let nv = mesh.n_vertices();
+        let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        let mut boundary = vec![false; nv];
+        for (e, faces) in mesh.edges.iter().zip(&mesh.edge_faces) {
+            if e.kind == EdgeKind::Crease {
+                nbrs[e.v[0]].push(e.v[1]);
+                nbrs[e.v[1]].push(e.v[0]);
+            }
+            if faces.len() == 1 {
+                boundary[e.v[0]] = true;
+                boundary[e.v[1]] = true;
+            }
+        }
+        let tangent = (0..nv)
+            .map(|v| {
+                let [a, b] = nbrs[v][..] else {
+                    return None;
+                };
+                if boundary[v] {
+                    return None;
+                }
+                let x = mesh.coords[v];
+                let (da, db) = (x - mesh.coords[a], mesh.coords[b] - x);
+                let collinear = 1.0 - da.normalize().dot(&db.normalize()) < PARALLEL_TOL;
+                if collinear {
+                    return None;
+                }
+                let t = da / da.norm_squared() + db / db.norm_squared();
+                Some(t.normalize())
+            })
+            .collect();
+        CreaseCurves { tangent }
+    }
+
+    /// Whether any crease vertex is curved.
+    pub fn any(&self) -> bool {
+        self.tangent.iter().any(Option::is_some)
+    }
+
+    /// Whether two non-collinear creases meet at `v` (its creases share one
+    /// tangent slot and each side its own second vector).
+    pub fn is_curved(&self, v: usize) -> bool {
+        self.tangent.get(v).is_some_and(Option::is_some)
+    }
+
+    /// Unit tangent at `v` of the side from `v` towards `w` along edge `e`:
+    /// the curve tangent (oriented towards `w`) on a crease edge at a curved
+    /// vertex, the chord direction otherwise.
+    pub fn direction(&self, mesh: &Mesh, e: usize, v: usize, w: usize) -> Vector2<f64> {
+        let chord = mesh.coords[w] - mesh.coords[v];
+        match self.tangent[v] {
+            Some(t) if mesh.edges[e].kind == EdgeKind::Crease => {
+                if t.dot(&chord) >= 0.0 {
+                    t
+                } else {
+                    -t
+                }
+            }
+            _ => chord.normalize(),
+        }
+    }
+
+    /// Whether edge `e` is curved in the reference.
+    pub fn is_curved_edge(&self, mesh: &Mesh, e: usize) -> bool {
+        let edge = &mesh.edges[e];
+        edge.kind == EdgeKind::Crease && (self.is_curved(edge.v[0]) || self.is_curved(edge.v[1]))
+    }
+
+    /// The reference side vector at `v` towards `w` along edge `e`: what a
+    /// facet's gradient DOF there means (`G_s` times it). The chord
+    /// `X_w - X_v` on a straight side, the Hermite end tangent on a curved one.
+    pub fn side(&self, mesh: &Mesh, e: usize, v: usize, w: usize) -> Vector2<f64> {
+        let chord = mesh.coords[w] - mesh.coords[v];
+        if !self.is_curved_edge(mesh, e) {
+            return chord;
+        }
+        let (tv, tw) = (
+            self.direction(mesh, e, v, w),
+            -self.direction(mesh, e, w, v),
+        );
+        let phi = tv.dot(&tw).clamp(-1.0, 1.0).acos();
+        let c = (0.25 * phi).cos();
+        tv * (chord.norm() / (c * c))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Edge;
+
+    /// A fan of triangles around a crease polyline a - v - b (a kink of
+    /// `turn` radians at v), with apexes on both sides.
+    fn kinked(turn: f64) -> Mesh {
+        let v = Vector2::new(0.0, 0.0);
+        let a = Vector2::new(-1.0, 0.0);
+        let b = Vector2::new(turn.cos(), turn.sin());
+        let up = Vector2::new(0.0, 1.5);
+        let down = Vector2::new(0.1, -1.5);
+        let coords = vec![v, a, b, up, down];
+        let tris = vec![[0, 2, 3], [0, 3, 1], [0, 1, 4], [0, 4, 2]];
+        Mesh::new(
+            coords,
+            tris,
+            vec![Edge::crease(1, 0, 1.0), Edge::crease(0, 2, 1.0)],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn circle_tangent_at_a_curve_vertex() {
+        // Points on the unit circle at angles -0.3, 0, 0.5: the tangent at
+        // angle 0 is +y (unequal segments: the chord bisector is not exact).
+        let m = Mesh::new(
+            vec![
+                Vector2::new(f64::cos(-0.3), f64::sin(-0.3)),
+                Vector2::new(1.0, 0.0),
+                Vector2::new(f64::cos(0.5), f64::sin(0.5)),
+                Vector2::new(0.0, 0.0),
+                Vector2::new(2.0, 0.1),
+            ],
+            vec![[0, 1, 3], [1, 2, 3], [1, 0, 4], [2, 1, 4]],
+            vec![Edge::crease(0, 1, 1.0), Edge::crease(1, 2, 1.0)],
+        )
+        .unwrap();
+        let c = CreaseCurves::new(&m);
+        assert!(c.is_curved(1) && !c.is_curved(0) && !c.is_curved(3));
+        let e = m.find_edge(1, 2).unwrap();
+        let t = c.direction(&m, e, 1, 2);
+        assert!((t - Vector2::new(0.0, 1.0)).norm() < 1e-12, "{t}");
+        // The side vector: along the tangent, longer than the chord.
+        let s = c.side(&m, e, 1, 2);
+        let chord = (m.coords[2] - m.coords[1]).norm();
+        assert!(s.normalize().dot(&t) > 1.0 - 1e-12 && s.norm() > chord);
+        // A smooth edge at the curve vertex stays straight.
+        let e3 = m.find_edge(1, 3).unwrap();
+        assert_eq!(c.side(&m, e3, 1, 3), m.coords[3] - m.coords[1]);
+    }
+
+    #[test]
+    fn straight_creases_are_not_curved() {
+        let m = kinked(0.0);
+        let c = CreaseCurves::new(&m);
+        assert!(!c.any());
+        let k = kinked(0.4);
+        assert!(CreaseCurves::new(&k).is_curved(0));
+    }
+
+    /// The Hermite side with these end tangents is close to the circular
+    /// arc through its ends: for a 30 degree arc the midpoint is within
+    /// 1e-5 of the radius.
+    #[test]
+    fn hermite_side_follows_a_circle() {
+        let phi: f64 = 30f64.to_radians();
+        let (p0, p1) = (Vector2::new(1.0, 0.0), Vector2::new(phi.cos(), phi.sin()));
+        let chord = (p1 - p0).norm();
+        let c = (0.25 * phi).cos();
+        let m0 = Vector2::new(0.0, 1.0) * chord / (c * c);
+        let m1 = Vector2::new(-phi.sin(), phi.cos()) * chord / (c * c);
+        let t = 0.5;
+        let h = |t: f64| {
+            let (t2, t3) = (t * t, t * t * t);
+            p0 * (2.0 * t3 - 3.0 * t2 + 1.0)
+                + m0 * (t3 - 2.0 * t2 + t)
+                + p1 * (-2.0 * t3 + 3.0 * t2)
+                + m1 * (t3 - t2)
+        };
+        assert!((h(t).norm() - 1.0).abs() < 1e-5, "{}", h(t).norm());
+    }
+}
