@@ -18,7 +18,7 @@
 //!   and outputs;
 //! - `parameters`: the parameters, one typed list with name, unit,
 //!   description, start value and how each is applied;
-//! - `physics`: the physics a scene asks for ([`physics`]) and the
+//! - `physics`: the physics a scene asks for ([`physics()`]) and the
 //!   automatic damping;
 //! - `system`: what is built from the scene and parameters (assembly,
 //!   solver, stepper settings);
