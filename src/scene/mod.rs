@@ -341,7 +341,10 @@ pub enum NewtonMode {
     Modified,
 }
 
-/// Solver settings.
+/// Solver settings: the scene's `ancf:solver` keys and the FMU's `solver.*`
+/// parameters. The one place of the solver's defaults is its [`Default`];
+/// the Newton tolerance follows from the tolerance
+/// ([`SolverSettings::newton_tolerance`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverSettings {
     /// Integrator.
@@ -352,7 +355,8 @@ pub struct SolverSettings {
     pub max_step: f64,
     /// Smallest internal step before the advance fails, in s.
     pub min_step: f64,
-    /// Relative tolerance (Newton and local error control).
+    /// Relative tolerance of the local error control; Newton's tolerance
+    /// follows from it ([`SolverSettings::newton_tolerance`]).
     pub tolerance: f64,
     /// Maximum Newton iterations per step.
     pub max_newton: usize,
@@ -375,6 +379,22 @@ pub const DEFAULT_MAX_INTERNAL_STEPS: usize = 100_000;
 
 fn default_max_internal_steps() -> usize {
     DEFAULT_MAX_INTERNAL_STEPS
+}
+
+/// Newton's tolerance as a fraction of [`SolverSettings::tolerance`].
+pub const NEWTON_TOLERANCE_RATIO: f64 = 1e-3;
+
+/// Smallest Newton tolerance (near the round-off of a scaled correction).
+pub const NEWTON_TOLERANCE_FLOOR: f64 = 1e-13;
+
+impl SolverSettings {
+    /// Newton stops when every scaled correction is below this:
+    /// [`NEWTON_TOLERANCE_RATIO`] times the tolerance, so that the iteration
+    /// error stays well below the local error the step control accepts, and
+    /// at least [`NEWTON_TOLERANCE_FLOOR`].
+    pub fn newton_tolerance(&self) -> f64 {
+        (NEWTON_TOLERANCE_RATIO * self.tolerance).max(NEWTON_TOLERANCE_FLOOR)
+    }
 }
 
 /// How an input value set before a step acts over that step.

@@ -1,0 +1,87 @@
+//! How input values drive the assembly: rest angles, crease moments,
+//! external forces and prescribed DOFs.
+
+use crate::solver::generalized_alpha::Drive;
+
+/// How input values become rest angles, moments, forces and prescribed
+/// DOFs of the assembly.
+pub(super) struct InputMap {
+    /// For each crease end: (actuator index, fold target) of rest-angle actuators.
+    pub(super) rest: Vec<Vec<(usize, f64)>>,
+    /// For each crease end: torque actuators acting on it.
+    pub(super) torque: Vec<Vec<usize>>,
+    /// Length share of each crease end (moments are per unit length).
+    pub(super) end_length: Vec<f64>,
+    /// Constant external force (gravity), all DOFs; None without gravity.
+    pub(super) gravity: Option<Vec<f64>>,
+    /// Slots fixed by supports (value = reference value), scalar indices.
+    pub(super) supported: Vec<(usize, f64)>,
+    /// Scalar indices of each motion input component (input index, scalar).
+    pub(super) motion: Vec<(usize, usize)>,
+    /// Scalar index of each force input component (input index, scalar).
+    pub(super) force: Vec<(usize, usize)>,
+    pub(super) n_dofs: usize,
+}
+
+/// Inputs of one step turned into what the assembly needs (buffers
+/// reused from step to step).
+#[derive(Default)]
+pub(super) struct DriveValues {
+    pub(super) theta0: Vec<f64>,
+    pub(super) moment: Vec<f64>,
+    pub(super) f_ext: Vec<f64>,
+    pub(super) prescribed: Vec<(usize, f64)>,
+}
+
+impl InputMap {
+    /// Fill `d` from the input values `u`.
+    pub(super) fn drive_into(&self, u: &[f64], d: &mut DriveValues) {
+        let pi = std::f64::consts::PI;
+        d.theta0.clear();
+        d.theta0.extend(
+            self.rest
+                .iter()
+                .map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>()),
+        );
+        d.moment.clear();
+        d.moment.extend(
+            self.torque
+                .iter()
+                .zip(&self.end_length)
+                .map(|(t, l)| t.iter().map(|&a| u[a]).sum::<f64>() * l),
+        );
+        match &self.gravity {
+            Some(g) => d.f_ext.clone_from(g),
+            None => {
+                d.f_ext.clear();
+                d.f_ext.resize(self.n_dofs, 0.0);
+            }
+        }
+        for &(k, i) in &self.force {
+            d.f_ext[i] += u[k];
+        }
+        d.prescribed.clone_from(&self.supported);
+        d.prescribed
+            .extend(self.motion.iter().map(|&(k, i)| (i, u[k])));
+    }
+
+    /// The drive values for `u`, freshly allocated.
+    pub(super) fn drive(&self, u: &[f64]) -> DriveValues {
+        let mut d = DriveValues::default();
+        self.drive_into(u, &mut d);
+        d
+    }
+}
+
+impl DriveValues {
+    /// What a stepper takes for a step from crease angles `theta_prev`.
+    pub(super) fn stepper_drive<'a>(&'a self, theta_prev: &'a [f64]) -> Drive<'a> {
+        Drive {
+            theta0: &self.theta0,
+            moment: &self.moment,
+            f_ext: &self.f_ext,
+            prescribed: &self.prescribed,
+            theta_prev,
+        }
+    }
+}

@@ -1,0 +1,218 @@
+//! The plain Rust `Model` API: one origami scene, its state, and a stepper.
+//! The FMU, the CLI and the tests all drive the model through this API.
+//!
+//! Variables are flat, numbered tables (parameters, inputs, outputs) so that
+//! the FMI layer only maps value references onto indices.
+//!
+//! Life cycle: [`Model::new`] validates and builds the scene;
+//! [`Model::set_parameter`] may change parameters until
+//! [`Model::initialize`]; then [`Model::set_input`] and [`Model::advance`]
+//! alternate. As in FMI 2.0 co-simulation, an input set before an advance
+//! from t is the input at t, held over the advance (plus a slope given with
+//! [`Model::set_input_derivative`]); a scene with `input_timing: "ramp"`
+//! instead ramps each input over the advance to the value set.
+//!
+//! This file holds [`Model`], its errors and phases and the life cycle
+//! (new, initialize); the rest is one job per file:
+//! - `variables`: [`VariableSpec`], the input and output tables, inputs
+//!   and outputs;
+//! - `parameters`: the parameters, one typed list with name, unit,
+//!   description, start value and how each is applied;
+//! - `physics`: the physics a scene asks for ([`physics()`]) and the
+//!   automatic damping;
+//! - `system`: what is built from the scene and parameters (assembly,
+//!   solver, stepper settings);
+//! - `drive`: how input values become loads and prescribed DOFs;
+//! - `step`: the step controller ([`Model::advance`], [`StepReport`]);
+//! - `state`: [`ModelState`], save and restore, consistent accelerations.
+
+mod drive;
+mod parameters;
+mod physics;
+mod state;
+mod step;
+mod system;
+mod variables;
+
+pub use physics::{AUTO_DAMPING_RATIO, physics};
+pub use state::ModelState;
+pub use step::StepReport;
+pub use variables::{VariableSpec, fold_edges};
+
+use crate::scene::Scene;
+use crate::solver::generalized_alpha::Dynamics;
+use parameters::Parameter;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use system::System;
+
+/// Errors of the model API; each names what is wrong.
+#[derive(Clone, Debug, PartialEq)]
+#[allow(missing_docs)] // variant fields are named for what they hold
+pub enum Error {
+    /// The scene cannot be turned into a model.
+    Scene(String),
+    /// A variable index is out of range.
+    NoSuchVariable { kind: &'static str, index: usize },
+    /// A non-finite or out-of-range value for a variable; nothing changed.
+    BadValue {
+        name: String,
+        value: f64,
+        reason: String,
+    },
+    /// A call that is not allowed in the current phase.
+    Phase(String),
+    /// The stepper could not complete; the state is as it was before.
+    StepFailed { time: f64, reason: String },
+    /// A saved state does not fit this model.
+    State(String),
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Scene(m) => write!(f, "invalid scene: {m}"),
+            Error::NoSuchVariable { kind, index } => write!(f, "no {kind} with index {index}"),
+            Error::BadValue {
+                name,
+                value,
+                reason,
+            } => {
+                write!(f, "{name} = {value}: {reason}; value not applied")
+            }
+            Error::Phase(m) => write!(f, "{m}"),
+            Error::StepFailed { time, reason } => {
+                write!(
+                    f,
+                    "step from t = {time} failed: {reason}; state rolled back"
+                )
+            }
+            Error::State(m) => write!(f, "bad saved state: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// Life-cycle phase of a [`Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Phase {
+    /// Built; parameters may change.
+    Setup,
+    /// [`Model::initialize`] done; inputs and steps.
+    Running,
+}
+
+/// One origami scene with its state and stepper.
+pub struct Model {
+    scene: Scene,
+    /// What each parameter is, in the order of `parameters`.
+    parameter_kinds: Vec<Parameter>,
+    parameters: Vec<VariableSpec>,
+    inputs: Vec<VariableSpec>,
+    outputs: Vec<VariableSpec>,
+    state: ModelState,
+    sys: Option<System>,
+    /// Parameter values the current `sys` was built with.
+    built_with: Option<Vec<f64>>,
+    /// Whether the scene asked for automatic damping.
+    auto_damping: bool,
+}
+
+impl Model {
+    /// Build a model of a validated scene.
+    pub fn new(scene: Scene) -> Result<Model, Error> {
+        let facets = scene.mesh.triangles.len();
+        if facets > crate::scene::build::MAX_FACETS {
+            // Refused before the large allocations of the assembly.
+            return Err(Error::Scene(
+                crate::scene::build::over_budget("mesh", facets, "the mesh has").to_string(),
+            ));
+        }
+        let (parameter_kinds, parameters) = parameters::parameter_table(&scene);
+        let inputs = variables::input_table(&scene);
+        let outputs = variables::output_table(&scene);
+        let state = ModelState {
+            time: 0.0,
+            dynamics: Dynamics {
+                q: vec![],
+                v: vec![],
+                qdd: vec![],
+                abar: vec![],
+            },
+            crease_theta: vec![],
+            inputs_now: inputs.iter().map(|v| v.start).collect(),
+            inputs_next: inputs.iter().map(|v| v.start).collect(),
+            input_slopes: vec![0.0; inputs.len()],
+            damping_set: false,
+            jacobian: None,
+            parameters: parameters.iter().map(|v| v.start).collect(),
+            phase: Phase::Setup,
+            h_next: scene.solver.max_step,
+            outputs: outputs.iter().map(|v| v.start).collect(),
+        };
+        // Build once now so that a bad scene fails at instantiation.
+        let auto_damping = scene.auto_damping;
+        let mut m = Model {
+            auto_damping,
+            scene,
+            parameter_kinds,
+            parameters,
+            inputs,
+            outputs,
+            state,
+            sys: None,
+            built_with: None,
+        };
+        m.build()?;
+        Ok(m)
+    }
+
+    /// The scene the model was built from (with parameters as last set).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// Current simulation time in s.
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+    /// Current phase.
+    pub fn phase(&self) -> Phase {
+        self.state.phase
+    }
+    /// Number of scalar degrees of freedom (free and fixed).
+    pub fn n_dofs(&self) -> usize {
+        self.sys.as_ref().map(|s| s.asm.n_dofs()).unwrap_or(0)
+    }
+
+    /// End of setup: apply parameters, build the system and compute the
+    /// initial accelerations.
+    pub fn initialize(&mut self) -> Result<(), Error> {
+        if self.state.phase != Phase::Setup {
+            return Err(Error::Phase("model is already initialized".into()));
+        }
+        self.apply_parameters();
+        // Model::new built the system; build again only for changed parameters.
+        if self.sys.is_none() || self.built_with.as_deref() != Some(&self.state.parameters[..]) {
+            self.build()?;
+        }
+        let sys = self.sys.as_mut().expect("built");
+        let n = sys.asm.n_dofs();
+        let mut q = sys.asm.layout.reference_state(&self.scene.mesh);
+        let u = self.state.inputs_now.clone();
+        for &(i, x) in &sys.inputs.drive(&u).prescribed {
+            q[i] = x;
+        }
+        let theta_prev = vec![std::f64::consts::PI; sys.asm.creases.len()];
+        self.state.dynamics = Dynamics {
+            q,
+            v: vec![0.0; n],
+            qdd: vec![0.0; n],
+            abar: vec![0.0; n],
+        };
+        self.consistent_accelerations(&u, &theta_prev)?;
+        self.state.h_next = self.sys.as_ref().expect("built").settings.max_step;
+        self.state.phase = Phase::Running;
+        Ok(())
+    }
+}

@@ -1,0 +1,296 @@
+//! The model's parameters. One row per parameter (the `parameters!` table
+//! below) gives its name, unit and description; [`Parameter::value`] says
+//! which scenes have it and its start value, [`Parameter::apply`] how a
+//! value goes into the scene. Every match over [`Parameter`] is
+//! exhaustive, so no parameter is matched by its name and none can be
+//! silently ignored.
+
+use super::{Error, Model, Phase, VariableSpec, physics};
+use crate::assembly::Physics;
+use crate::scene::{CreaseStiffness, Scene};
+
+/// Declares [`Parameter`], [`ALL`] and `Parameter::info` from one row per
+/// parameter, in the FMU's order: `Variant => (name, unit, description)`.
+macro_rules! parameters {
+    ($($(#[doc = $doc:literal])* $p:ident => ($name:literal, $unit:literal, $what:literal),)*) => {
+        /// One parameter of the model.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub(super) enum Parameter {
+            $($(#[doc = $doc])* $p,)*
+        }
+
+        /// Every parameter, in the FMU's order (value references follow it).
+        const ALL: &[Parameter] = &[$(Parameter::$p,)*];
+
+        impl Parameter {
+            /// Name (the FMU variable name, and the name of its limit in
+            /// [`crate::scene::limits`]), unit and description.
+            fn info(self) -> (&'static str, &'static str, &'static str) {
+                match self {
+                    $(Parameter::$p => ($name, $unit, $what),)*
+                }
+            }
+        }
+    };
+}
+
+parameters! {
+    YoungsModulus => ("material.youngs_modulus", "Pa", "Young's modulus"),
+    PoissonRatio => ("material.poisson_ratio", "", "Poisson's ratio"),
+    Thickness => ("material.thickness", "m", "sheet thickness"),
+    Density => ("material.density", "kg/m3", "mass density"),
+    /// Only in scenes whose crease stiffness is a length scale.
+    CreaseLengthScale => (
+        "crease.length_scale",
+        "m",
+        "crease stiffness = (crease length / length_scale) * bending stiffness"
+    ),
+    /// Only in scenes whose crease stiffness is given per unit length.
+    CreaseStiffnessPerLength => (
+        "crease.stiffness_per_length",
+        "N/rad",
+        "rotational crease stiffness per unit crease length"
+    ),
+    DampingAlpha => ("damping.alpha", "1/s", "Rayleigh mass-proportional damping"),
+    DampingBeta => ("damping.beta", "s", "Rayleigh stiffness-proportional damping"),
+    DampingCrease => ("damping.crease", "N.s/rad", "crease damping per unit length"),
+    /// Gravity components are only in scenes with gravity.
+    GravityX => ("gravity.x", "m/s2", "gravity, x component"),
+    GravityY => ("gravity.y", "m/s2", "gravity, y component"),
+    GravityZ => ("gravity.z", "m/s2", "gravity, z component"),
+    RhoInf => ("solver.rho_inf", "", "generalized-alpha spectral radius"),
+    MaxStep => ("solver.max_step", "s", "largest internal step"),
+    Tolerance => ("solver.tolerance", "", "relative solver tolerance"),
+    MaxInternalSteps => (
+        "solver.max_internal_steps",
+        "",
+        "most internal steps one communication step may take before it fails"
+    ),
+}
+
+use Parameter::*;
+
+impl Parameter {
+    /// The FMU variable name.
+    pub(super) fn name(self) -> &'static str {
+        self.info().0
+    }
+
+    /// Whether setting it switches automatic damping off.
+    pub(super) fn is_damping(self) -> bool {
+        match self {
+            DampingAlpha | DampingBeta | DampingCrease => true,
+            YoungsModulus
+            | PoissonRatio
+            | Thickness
+            | Density
+            | CreaseLengthScale
+            | CreaseStiffnessPerLength
+            | GravityX
+            | GravityY
+            | GravityZ
+            | RhoInf
+            | MaxStep
+            | Tolerance
+            | MaxInternalSteps => false,
+        }
+    }
+
+    /// Its value in `sc`, where `ph` is `physics(sc)` (the damping in
+    /// effect: the automatic choice, unless the scene sets damping); None
+    /// when the scene has no such parameter.
+    fn value(self, sc: &Scene, ph: &Physics) -> Option<f64> {
+        let m = &sc.material;
+        let s = &sc.solver;
+        match self {
+            YoungsModulus => Some(m.youngs_modulus),
+            PoissonRatio => Some(m.poisson_ratio),
+            Thickness => Some(m.thickness),
+            Density => Some(m.density),
+            CreaseLengthScale => match sc.crease {
+                CreaseStiffness::LengthScale(l) => Some(l),
+                CreaseStiffness::PerLength(_) => None,
+            },
+            CreaseStiffnessPerLength => match sc.crease {
+                CreaseStiffness::PerLength(k) => Some(k),
+                CreaseStiffness::LengthScale(_) => None,
+            },
+            DampingAlpha => Some(ph.alpha),
+            DampingBeta => Some(ph.beta),
+            DampingCrease => Some(ph.crease_c_per_length),
+            GravityX => sc.gravity.map(|g| g[0]),
+            GravityY => sc.gravity.map(|g| g[1]),
+            GravityZ => sc.gravity.map(|g| g[2]),
+            RhoInf => Some(s.rho_inf),
+            MaxStep => Some(s.max_step),
+            Tolerance => Some(s.tolerance),
+            MaxInternalSteps => Some(s.max_internal_steps as f64),
+        }
+    }
+
+    /// Put `x` into the scene. While the scene's automatic damping is on,
+    /// the damping parameters only show the values it chose.
+    fn apply(self, sc: &mut Scene, x: f64) {
+        let auto = sc.auto_damping;
+        let gravity = |sc: &mut Scene, c: usize| {
+            if let Some(g) = sc.gravity.as_mut() {
+                g[c] = x;
+            }
+        };
+        match self {
+            YoungsModulus => sc.material.youngs_modulus = x,
+            PoissonRatio => sc.material.poisson_ratio = x,
+            Thickness => sc.material.thickness = x,
+            Density => sc.material.density = x,
+            CreaseLengthScale => sc.crease = CreaseStiffness::LengthScale(x),
+            CreaseStiffnessPerLength => sc.crease = CreaseStiffness::PerLength(x),
+            DampingAlpha if !auto => sc.damping.alpha = x,
+            DampingBeta if !auto => sc.damping.beta = x,
+            DampingCrease if !auto => sc.damping.crease = x,
+            DampingAlpha | DampingBeta | DampingCrease => {}
+            GravityX => gravity(sc, 0),
+            GravityY => gravity(sc, 1),
+            GravityZ => gravity(sc, 2),
+            RhoInf => sc.solver.rho_inf = x,
+            MaxStep => sc.solver.max_step = x,
+            Tolerance => sc.solver.tolerance = x,
+            MaxInternalSteps => sc.solver.max_internal_steps = x as usize,
+        }
+    }
+
+    /// The variable of the FMU.
+    fn spec(self, start: f64, auto_damping: bool) -> VariableSpec {
+        let (name, unit, description) = self.info();
+        let auto = if auto_damping && self.is_damping() {
+            " (automatic damping until a damping parameter is set)"
+        } else {
+            ""
+        };
+        VariableSpec {
+            name: name.into(),
+            unit: unit.into(),
+            description: format!("{description}{auto}"),
+            start,
+        }
+    }
+}
+
+/// The parameters of `scene`, in the FMU's order, and their variables.
+pub(super) fn parameter_table(scene: &Scene) -> (Vec<Parameter>, Vec<VariableSpec>) {
+    let ph = physics(scene);
+    ALL.iter()
+        .filter_map(|&p| {
+            let start = p.value(scene, &ph)?;
+            Some((p, p.spec(start, scene.auto_damping)))
+        })
+        .unzip()
+}
+
+impl Model {
+    /// Value of parameter `i`.
+    pub fn parameter(&self, i: usize) -> Result<f64, Error> {
+        self.state
+            .parameters
+            .get(i)
+            .copied()
+            .ok_or(Error::NoSuchVariable {
+                kind: "parameter",
+                index: i,
+            })
+    }
+
+    /// Set parameter `i`; only before [`Model::initialize`]. A non-finite or
+    /// out-of-range value is rejected and nothing changes.
+    pub fn set_parameter(&mut self, i: usize, value: f64) -> Result<(), Error> {
+        let spec = self.parameters.get(i).ok_or(Error::NoSuchVariable {
+            kind: "parameter",
+            index: i,
+        })?;
+        let kind = self.parameter_kinds[i];
+        if self.state.phase != Phase::Setup {
+            return Err(Error::Phase(format!(
+                "parameter {} can only be set before initialization",
+                spec.name
+            )));
+        }
+        let bad = |reason: String| Error::BadValue {
+            name: spec.name.clone(),
+            value,
+            reason,
+        };
+        crate::scene::limits::check(kind.name(), value).map_err(bad)?;
+        if kind == MaxStep {
+            let mut so = self.scene.solver;
+            so.max_step = value;
+            crate::scene::limits::check_solver_relations(&so).map_err(|(_, why)| bad(why))?;
+        }
+        if kind.is_damping() {
+            self.state.damping_set = true;
+        }
+        self.state.parameters[i] = value;
+        Ok(())
+    }
+
+    /// Put the parameter values into the scene. Automatic damping stays on
+    /// until a damping parameter is set; while on, the damping parameters
+    /// show the values it chose for the current material.
+    pub(super) fn apply_parameters(&mut self) {
+        let sc = &mut self.scene;
+        sc.auto_damping = self.auto_damping && !self.state.damping_set;
+        for (p, &x) in self.parameter_kinds.iter().zip(&self.state.parameters) {
+            p.apply(sc, x);
+        }
+        if sc.auto_damping {
+            let ph = physics(sc);
+            for (p, x) in self.parameter_kinds.iter().zip(&mut self.state.parameters) {
+                if p.is_damping()
+                    && let Some(v) = p.value(sc, &ph)
+                {
+                    *x = v;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_parameter_has_a_limit_and_its_own_name() {
+        for (k, p) in ALL.iter().enumerate() {
+            assert!(
+                crate::scene::limits::limit(p.name()).is_some(),
+                "{} has no limit",
+                p.name()
+            );
+            assert!(ALL[..k].iter().all(|q| q.name() != p.name()));
+        }
+    }
+
+    /// Applying a value to any parameter a scene has changes the value it
+    /// reads back: no parameter is ignored.
+    #[test]
+    fn every_parameter_is_applied() {
+        let mesh = crate::mesh::builders::square_with_diagonal(0.1, true, 1.0);
+        let mut with_gravity = Scene::with_defaults("sq", mesh);
+        with_gravity.gravity = Some([0.0, 0.0, -9.81]);
+        with_gravity.auto_damping = false;
+        let mut per_length = with_gravity.clone();
+        per_length.crease = CreaseStiffness::PerLength(1e-3);
+        let mut seen = Vec::new();
+        for scene in [with_gravity, per_length] {
+            let (kinds, specs) = parameter_table(&scene);
+            for (&p, spec) in kinds.iter().zip(&specs) {
+                assert_eq!(p.name(), spec.name);
+                let mut sc = scene.clone();
+                let x = 2.0 * spec.start + 1.0;
+                p.apply(&mut sc, x);
+                assert_eq!(p.value(&sc, &physics(&sc)), Some(x), "{}", spec.name);
+                seen.push(p);
+            }
+        }
+        assert!(ALL.iter().all(|p| seen.contains(p)));
+    }
+}

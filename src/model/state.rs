@@ -1,0 +1,199 @@
+//! The model's state: what [`Model::save_state`] copies and
+//! [`Model::restore_state`] puts back, and the changes of state outside a
+//! step (a rigid velocity, accelerations consistent with the equation of
+//! motion).
+
+use super::{Error, Model, Phase};
+use crate::assembly::{Evaluation, State};
+use crate::solver::generalized_alpha::{self as ga, Dynamics};
+use serde::{Deserialize, Serialize};
+
+/// A saved model state (see [`Model::save_state`]); serde-serializable.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelState {
+    /// Simulation time.
+    pub time: f64,
+    /// Positions, velocities, accelerations (all DOFs; empty before initialization).
+    pub dynamics: Dynamics,
+    /// Unwrapped angle of every crease end at `time` (continuity through 0 = 2 pi).
+    pub crease_theta: Vec<f64>,
+    /// Input values in force at `time`.
+    pub inputs_now: Vec<f64>,
+    /// Input values at the end of the next advance before slopes (equal to
+    /// `inputs_now` unless the scene ramps its inputs).
+    pub inputs_next: Vec<f64>,
+    /// First time derivative of each input over the next advance.
+    #[serde(default)]
+    pub input_slopes: Vec<f64>,
+    /// Whether a damping parameter was set (automatic damping is then off).
+    #[serde(default)]
+    pub damping_set: bool,
+    /// Where the implicit stepper's iteration matrix was formed (kept across
+    /// advances by modified Newton; None: the next step forms one).
+    #[serde(default)]
+    pub jacobian: Option<ga::JacobianPoint>,
+    /// Parameter values.
+    pub parameters: Vec<f64>,
+    /// Phase.
+    pub phase: Phase,
+    /// Internal step size the controller proposes next.
+    pub h_next: f64,
+    /// Output values at `time`.
+    pub outputs: Vec<f64>,
+}
+
+impl Model {
+    /// A copy of the complete state, enough to continue bit-identically.
+    pub fn save_state(&self) -> ModelState {
+        self.state.clone()
+    }
+
+    /// Restore a state saved from a model of the same scene.
+    pub fn restore_state(&mut self, s: &ModelState) -> Result<(), Error> {
+        let n = self.sys.as_ref().map(|s| s.asm.n_dofs()).unwrap_or(0);
+        let dyn_ok = match s.phase {
+            Phase::Setup => true,
+            Phase::Running => {
+                let d = &s.dynamics;
+                [d.q.len(), d.v.len(), d.qdd.len(), d.abar.len()]
+                    .iter()
+                    .all(|&l| l == n)
+                    && s.crease_theta.len()
+                        == self.sys.as_ref().map(|s| s.asm.creases.len()).unwrap_or(0)
+            }
+        };
+        let mut s = s.clone();
+        if s.input_slopes.is_empty() {
+            // A state saved before inputs had slopes.
+            s.input_slopes = vec![0.0; s.inputs_now.len()];
+        }
+        let ok = dyn_ok
+            && s.input_slopes.len() == self.inputs.len()
+            && s.inputs_now.len() == self.inputs.len()
+            && s.inputs_next.len() == self.inputs.len()
+            && s.parameters.len() == self.parameters.len()
+            && s.outputs.len() == self.outputs.len();
+        if !ok {
+            return Err(Error::State("its sizes do not match this model".into()));
+        }
+        if s.phase == Phase::Running && self.built_with.as_deref() != Some(&s.parameters[..]) {
+            // The saved state ran with other parameters: rebuild for them.
+            let keep = std::mem::replace(&mut self.state.parameters, s.parameters.clone());
+            self.apply_parameters();
+            if let Err(e) = self.build() {
+                self.state.parameters = keep;
+                self.apply_parameters();
+                self.build()?;
+                return Err(e);
+            }
+        }
+        self.state = s;
+        Ok(())
+    }
+
+    /// Give the sheet a rigid velocity field v(x) = linear + angular x (x -
+    /// center), on every free DOF (supports and prescribed motions keep
+    /// theirs), and make the accelerations consistent with it. Allowed after
+    /// [`Model::initialize`]; the next advance starts from this state.
+    pub fn set_rigid_velocity(
+        &mut self,
+        linear: [f64; 3],
+        angular: [f64; 3],
+        center: [f64; 3],
+    ) -> Result<(), Error> {
+        if self.state.phase != Phase::Running {
+            return Err(Error::Phase(
+                "set_rigid_velocity needs an initialized model".into(),
+            ));
+        }
+        if linear
+            .iter()
+            .chain(&angular)
+            .chain(&center)
+            .any(|x| !x.is_finite())
+        {
+            return Err(Error::BadValue {
+                name: "rigid velocity".into(),
+                value: f64::NAN,
+                reason: "every component must be finite".into(),
+            });
+        }
+        let sys = self.sys.as_ref().expect("initialized");
+        let q = &self.state.dynamics.q;
+        let mut v = vec![0.0; q.len()];
+        sys.asm
+            .rigid
+            .rigid_velocity(q, linear.into(), angular.into(), center.into(), &mut v);
+        // Supports and prescribed motions keep their velocities.
+        for (i, x) in v.iter_mut().enumerate() {
+            if sys.asm.free[i] == crate::assembly::FIXED {
+                *x = self.state.dynamics.v[i];
+            }
+        }
+        let saved = self.state.clone();
+        self.state.dynamics.v = v;
+        let theta = self.state.crease_theta.clone();
+        let u = self.state.inputs_now.clone();
+        if let Err(e) = self.consistent_accelerations(&u, &theta) {
+            self.state = saved;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Accelerations from the equation of motion at the current positions
+    /// and velocities, M qdd = f_ext - f_int on the free DOFs (the mass
+    /// matrix is factored in the stepper's solver, so its iteration matrix
+    /// is forgotten); also the crease angles and outputs.
+    pub(super) fn consistent_accelerations(
+        &mut self,
+        u: &[f64],
+        theta_prev: &[f64],
+    ) -> Result<(), Error> {
+        let sys = self.sys.as_mut().expect("built");
+        let n = sys.asm.n_dofs();
+        let d = sys.inputs.drive(u);
+        let dynm = &self.state.dynamics;
+        let mut ev = Evaluation::default();
+        sys.asm
+            .evaluate(
+                &State {
+                    q: &dynm.q,
+                    v: &dynm.v,
+                    theta0: &d.theta0,
+                    moment: &d.moment,
+                    theta_prev,
+                },
+                &mut ev,
+                None,
+            )
+            .map_err(Error::Scene)?;
+        let mut rhs = vec![0.0; sys.asm.n_free];
+        for i in 0..n {
+            let fi = sys.asm.free[i];
+            if fi != crate::assembly::FIXED {
+                rhs[fi] = d.f_ext[i] - ev.force[i];
+            }
+        }
+        sys.ws.invalidate_jacobian();
+        self.state.jacobian = None;
+        let mvals = sys.asm.mass_values().to_vec();
+        sys.solver
+            .factor(&mvals)
+            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+        sys.solver
+            .solve_in_place(&mut rhs)
+            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+        let mut qdd = vec![0.0; n];
+        for (a, &fi) in qdd.iter_mut().zip(&sys.asm.free) {
+            if fi != crate::assembly::FIXED {
+                *a = rhs[fi];
+            }
+        }
+        self.state.dynamics.abar = qdd.clone();
+        self.state.dynamics.qdd = qdd;
+        self.state.crease_theta = ev.theta.clone();
+        self.state.outputs = self.compute_outputs(&ev);
+        Ok(())
+    }
+}

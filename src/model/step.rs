@@ -1,0 +1,276 @@
+//! Step control: [`Model::advance`] over one communication step with
+//! internal steps (generalized-alpha with local error control and step
+//! rejection, or central differences in equal substeps), and what it
+//! reports.
+
+use super::drive::DriveValues;
+use super::{Error, Model, Phase};
+use crate::solver::generalized_alpha as ga;
+use serde::{Deserialize, Serialize};
+
+/// Safety factor on the step size the error estimate proposes.
+const SAFETY: f64 = 0.9;
+/// The proposed step scales with error^(-1/3) (local error of order h^3).
+const ERROR_EXPONENT: f64 = -1.0 / 3.0;
+/// Smallest factor from one step to the next after an error estimate.
+const MIN_FACTOR: f64 = 0.2;
+/// Largest growth from one accepted step to the next.
+const MAX_GROWTH: f64 = 2.0;
+/// Largest factor after a step rejected for its error (it must shrink).
+const MAX_FACTOR_REJECTED: f64 = 0.9;
+/// Factor after a step whose Newton iteration failed.
+const FACTOR_FAILED: f64 = 0.25;
+/// A rest of the advance shorter than this fraction of the step joins it.
+const JOIN_FRACTION: f64 = 1e-3;
+/// A step within this factor of `min_step` is at the minimum: accepted
+/// whatever its error.
+const AT_MIN_STEP: f64 = 1.000001;
+
+/// The step factor the error estimate `error` (1 = the tolerance) proposes.
+fn proposed_factor(error: f64) -> f64 {
+    SAFETY * error.powf(ERROR_EXPONENT)
+}
+
+/// What one [`Model::advance`] did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepReport {
+    /// Internal steps taken.
+    pub steps: usize,
+    /// Internal steps rejected (Newton failure or error too large) and retried.
+    pub rejected: usize,
+    /// Newton iterations in total.
+    pub newton_iterations: usize,
+    /// Sparse numeric factorizations in total.
+    pub factorizations: usize,
+    /// Smallest internal step used, s.
+    pub min_step: f64,
+    /// CPU time assembling forces and matrices, s.
+    pub assembly_time: f64,
+    /// CPU time in sparse numeric factorizations, s.
+    pub factor_time: f64,
+    /// CPU time in sparse triangular solves, s.
+    pub solve_time: f64,
+}
+
+impl StepReport {
+    /// Add another report's counts and times (the smallest step of both).
+    pub fn accumulate(&mut self, r: &StepReport) {
+        self.min_step = if self.steps == 0 {
+            r.min_step
+        } else {
+            self.min_step.min(r.min_step)
+        };
+        self.steps += r.steps;
+        self.rejected += r.rejected;
+        self.newton_iterations += r.newton_iterations;
+        self.factorizations += r.factorizations;
+        self.assembly_time += r.assembly_time;
+        self.factor_time += r.factor_time;
+        self.solve_time += r.solve_time;
+    }
+}
+
+impl Model {
+    /// Advance from the current time by `h` seconds with internal steps,
+    /// the inputs held at their values in force (plus their slopes), or
+    /// ramped to the values last set when the scene ramps its inputs. The
+    /// step size and the iteration matrix carry over from the last advance.
+    /// On failure the state is exactly as before the call.
+    pub fn advance(&mut self, h: f64) -> Result<StepReport, Error> {
+        if self.state.phase != Phase::Running {
+            return Err(Error::Phase("advance before initialize".into()));
+        }
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::BadValue {
+                name: "step size".into(),
+                value: h,
+                reason: "must be a positive finite number".into(),
+            });
+        }
+        let saved = self.state.clone();
+        match self.advance_inner(h) {
+            Ok(r) => Ok(r),
+            Err(e) => {
+                self.state = saved;
+                Err(e)
+            }
+        }
+    }
+
+    fn advance_inner(&mut self, big_h: f64) -> Result<StepReport, Error> {
+        let t0 = self.state.time;
+        let sys = self.sys.as_mut().expect("initialized");
+        let mut report = StepReport {
+            min_step: f64::INFINITY,
+            ..Default::default()
+        };
+        let mut s = 0.0; // elapsed within the advance
+        let mut h = self.state.h_next.min(sys.settings.max_step);
+        let u0 = self.state.inputs_now.clone();
+        let u1 = self.state.inputs_next.clone();
+        let slopes = self.state.input_slopes.clone();
+        // The inputs at elapsed time `e` of this advance.
+        let inputs_at = |e: f64, u: &mut [f64]| {
+            let frac = e / big_h;
+            for k in 0..u.len() {
+                u[k] = u0[k] + (u1[k] - u0[k]) * frac + slopes[k] * e;
+            }
+        };
+        let cap = sys.settings.max_internal_steps;
+        let too_many = || Error::StepFailed {
+            time: t0,
+            reason: format!(
+                "the step needs more than {cap} internal steps (solver.max_internal_steps); \
+                 use a smaller communication step or raise the limit"
+            ),
+        };
+        // The iteration matrix of the state's history (a restored state
+        // re-forms the one it was saved with), so that modified Newton
+        // keeps it across communication points.
+        if sys.cd.is_none() {
+            ga::restore_jacobian(
+                &sys.asm,
+                &mut sys.solver,
+                sys.coeffs,
+                self.state.jacobian.as_ref(),
+                &mut sys.ws,
+            )
+            .map_err(|reason| Error::StepFailed { time: t0, reason })?;
+        }
+        let stats0 = sys.solver.stats();
+        let mut u = u0.clone();
+        let mut d = DriveValues::default();
+        if let Some(cd) = sys.cd.as_mut() {
+            // Explicit: equal substeps below the stability limit.
+            let n_sub = (big_h / cd.stable_step().min(sys.settings.max_step))
+                .ceil()
+                .max(1.0);
+            if n_sub > cap as f64 {
+                return Err(too_many());
+            }
+            let h = big_h / n_sub;
+            let t_asm = cd.assembly_time;
+            let t_solve = cd.solve_time();
+            for k in 1..=n_sub as usize {
+                inputs_at(k as f64 * h, &mut u);
+                sys.inputs.drive_into(&u, &mut d);
+                let gd = d.stepper_drive(&self.state.crease_theta);
+                cd.step(&sys.asm, &mut self.state.dynamics, h, &gd)
+                    .map_err(|reason| Error::StepFailed {
+                        time: t0 + (k - 1) as f64 * h,
+                        reason,
+                    })?;
+                self.state.crease_theta.clone_from(&cd.evaluation().theta);
+            }
+            report.steps = n_sub as usize;
+            report.min_step = h;
+            report.assembly_time = (cd.assembly_time - t_asm).as_secs_f64();
+            report.solve_time = (cd.solve_time() - t_solve).as_secs_f64();
+            s = big_h;
+        }
+        while s < big_h {
+            if report.steps + report.rejected >= cap {
+                return Err(too_many());
+            }
+            let remaining = big_h - s;
+            if h >= remaining || remaining - h < JOIN_FRACTION * h {
+                h = remaining;
+            }
+            inputs_at(s + h, &mut u);
+            sys.inputs.drive_into(&u, &mut d);
+            let gd = d.stepper_drive(&self.state.crease_theta);
+            let res = ga::step(
+                &sys.asm,
+                &mut sys.solver,
+                sys.coeffs,
+                &self.state.dynamics,
+                h,
+                &gd,
+                &sys.scales,
+                sys.newton,
+                &mut sys.ws,
+            );
+            // Keep the step within [min_step, max_step] (max wins, so a bad
+            // pair of settings cannot panic here).
+            let bounded = |x: f64| x.max(sys.settings.min_step).min(sys.settings.max_step);
+            match res {
+                Ok((next, out)) => {
+                    report.newton_iterations += out.iterations;
+                    report.factorizations += out.factorizations;
+                    report.assembly_time += out.assembly_time.as_secs_f64();
+                    let at_min = h <= sys.settings.min_step * AT_MIN_STEP;
+                    if out.error <= 1.0 || at_min {
+                        self.state.dynamics = next;
+                        self.state
+                            .crease_theta
+                            .clone_from(&sys.ws.evaluation().theta);
+                        s += h;
+                        report.steps += 1;
+                        report.min_step = report.min_step.min(h);
+                        let grow = if out.error > 0.0 {
+                            proposed_factor(out.error)
+                        } else {
+                            MAX_GROWTH
+                        };
+                        let hn = bounded(h * grow.clamp(MIN_FACTOR, MAX_GROWTH));
+                        // A short final step must not shrink the next advance's step.
+                        self.state.h_next = if h < remaining {
+                            hn
+                        } else {
+                            hn.max(self.state.h_next)
+                        };
+                        h = hn;
+                    } else {
+                        report.rejected += 1;
+                        h = bounded(
+                            h * proposed_factor(out.error).clamp(MIN_FACTOR, MAX_FACTOR_REJECTED),
+                        );
+                    }
+                }
+                Err(reason) => {
+                    report.rejected += 1;
+                    h *= FACTOR_FAILED;
+                    if h < sys.settings.min_step {
+                        return Err(Error::StepFailed {
+                            time: t0 + s,
+                            reason,
+                        });
+                    }
+                }
+            }
+        }
+        let stats = sys.solver.stats();
+        if sys.cd.is_none() {
+            report.factor_time = (stats.factor_time - stats0.factor_time).as_secs_f64();
+            report.solve_time = (stats.solve_time - stats0.solve_time).as_secs_f64();
+            self.state.jacobian = sys.ws.jacobian().cloned();
+        }
+        let ev = match &sys.cd {
+            Some(cd) => cd.evaluation().clone(),
+            None => sys.ws.evaluation().clone(),
+        };
+        inputs_at(big_h, &mut u);
+        self.state.time = t0 + big_h;
+        self.state.inputs_now.clone_from(&u);
+        self.state.inputs_next = u;
+        self.state.outputs = self.compute_outputs(&ev);
+        if self.state.outputs.iter().any(|x| !x.is_finite()) {
+            return Err(Error::StepFailed {
+                time: t0,
+                reason: "outputs are not finite".into(),
+            });
+        }
+        Ok(report)
+    }
+
+    /// Counts and times of the implicit stepper's sparse solver so far
+    /// (None before initialize or with an explicit integrator): which
+    /// factorizations (Cholesky, LDLT, LU) the iteration matrices needed.
+    pub fn solver_stats(&self) -> Option<crate::solver::SolverStats> {
+        let sys = self.sys.as_ref()?;
+        if sys.cd.is_some() {
+            return None;
+        }
+        Some(sys.solver.stats())
+    }
+}

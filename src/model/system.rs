@@ -1,0 +1,180 @@
+//! The system built from the scene and parameters: assembly, sparse
+//! solver, stepper settings and the input map ([`Model::build`]).
+
+use super::drive::InputMap;
+use super::{Error, Model, fold_edges, physics};
+use crate::assembly::Assembler;
+use crate::element::ElementOptions;
+use crate::scene::{ActuatorMode, Fix, Integrator, SolverSettings};
+use crate::solver::SparseSolver;
+use crate::solver::central_difference::CentralDifference;
+use crate::solver::generalized_alpha as ga;
+use std::collections::HashMap;
+
+/// Everything built from the scene and parameters: by [`Model::new`], and
+/// again by [`Model::initialize`] or [`Model::restore_state`] only when the
+/// parameters differ from the ones it was built with.
+pub(super) struct System {
+    pub(super) asm: Assembler,
+    pub(super) solver: SparseSolver,
+    pub(super) coeffs: ga::Coefficients,
+    /// The Newton iteration and error estimate of generalized-alpha.
+    pub(super) newton: ga::Settings,
+    pub(super) scales: Vec<f64>,
+    pub(super) inputs: InputMap,
+    /// For each `crease[e]` output: the crease ends averaged.
+    pub(super) angle_ends: Vec<Vec<usize>>,
+    pub(super) ws: ga::Workspace,
+    /// The explicit stepper when the scene asks for central differences
+    /// (made at initialization).
+    pub(super) cd: Option<CentralDifference>,
+    /// The scene's solver settings it was built with (step bounds and
+    /// the internal step limit).
+    pub(super) settings: SolverSettings,
+}
+
+impl Model {
+    /// Build the system for the scene as it is now (parameters applied).
+    pub(super) fn build(&mut self) -> Result<(), Error> {
+        let sc = &self.scene;
+        let mesh = &sc.mesh;
+        let layout = crate::dofs::DofLayout::new(mesh);
+        let q_ref = layout.reference_state(mesh);
+        let mut fixed = Vec::new();
+        let mut is_fixed = vec![false; layout.n_slots()];
+        let mut supported = Vec::new();
+        for sup in &sc.supports {
+            for &v in &sup.vertices {
+                let slots = match sup.fix {
+                    Fix::Position => vec![layout.position_slot[v]],
+                    Fix::Clamped => layout.vertex_slots(v),
+                };
+                for s in slots {
+                    if !is_fixed[s] {
+                        is_fixed[s] = true;
+                        fixed.push(s);
+                        for c in 0..3 {
+                            supported.push((3 * s + c, q_ref[3 * s + c]));
+                        }
+                    }
+                }
+            }
+        }
+        let n_act = sc.actuators.len();
+        let mut motion = Vec::new();
+        let mut idx = n_act + 3 * sc.vertex_forces.len();
+        for m in &sc.vertex_motions {
+            let s = layout.position_slot[m.vertex];
+            if !is_fixed[s] {
+                is_fixed[s] = true;
+                fixed.push(s);
+            }
+            for c in 0..3 {
+                motion.push((idx + c, 3 * s + c));
+            }
+            idx += 3;
+        }
+        let mut force = Vec::new();
+        for (k, f) in sc.vertex_forces.iter().enumerate() {
+            let s = layout.position_slot[f.vertex];
+            for c in 0..3 {
+                force.push((n_act + 3 * k + c, 3 * s + c));
+            }
+        }
+        let physics = physics(sc);
+        let mut asm = Assembler::new(mesh, physics, ElementOptions::default(), &fixed)
+            .map_err(Error::Scene)?;
+        // Damping leaves alone the rigid motion the supports allow.
+        let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
+        asm.rigid
+            .set_supports(&supported_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
+        // Free scalars come in slots of 3 with one pattern.
+        let solver =
+            SparseSolver::new_blocked(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone(), 3)
+                .map_err(Error::Scene)?;
+        let nends = asm.creases.len();
+        let mut rest = vec![Vec::new(); nends];
+        let mut torque = vec![Vec::new(); nends];
+        // The actuators of each mesh edge, in actuator order.
+        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges.len()];
+        for (a, act) in sc.actuators.iter().enumerate() {
+            for &e in &act.edges {
+                if driven_by[e].last() != Some(&a) {
+                    driven_by[e].push(a);
+                }
+            }
+        }
+        for (i, ce) in asm.creases.iter().enumerate() {
+            for &a in &driven_by[ce.edge] {
+                match sc.actuators[a].mode {
+                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edges[ce.edge].fold_target)),
+                    ActuatorMode::Torque => torque[i].push(a),
+                }
+            }
+        }
+        let gravity = sc.gravity.map(|g| {
+            let mut qg = vec![0.0; asm.n_dofs()];
+            for v in 0..mesh.n_vertices() {
+                let s = asm.position_slot(v);
+                qg[3 * s..3 * s + 3].copy_from_slice(&g);
+            }
+            let mut f = vec![0.0; asm.n_dofs()];
+            asm.mass_mul(&qg, &mut f);
+            f
+        });
+        // For each crease output (FOLD edge), its crease ends in order.
+        let outputs = fold_edges(sc);
+        let mut output_of: HashMap<usize, usize> = HashMap::with_capacity(outputs.len());
+        for (k, &fe) in outputs.iter().enumerate() {
+            output_of.insert(fe, k);
+        }
+        let mut angle_ends: Vec<Vec<usize>> = vec![Vec::new(); outputs.len()];
+        for (i, ce) in asm.creases.iter().enumerate() {
+            if let Some(&k) = mesh.edges[ce.edge]
+                .fold_edge
+                .and_then(|fe| output_of.get(&fe))
+            {
+                angle_ends[k].push(i);
+            }
+        }
+        let length = mesh.size().max(f64::MIN_POSITIVE);
+        let scales = asm.scales(length);
+        // The explicit stepper's stable step, estimated on the unstressed sheet.
+        let cd = match sc.solver.integrator {
+            Integrator::CentralDifference => Some(
+                CentralDifference::new(&asm, &q_ref, &vec![std::f64::consts::PI; nends])
+                    .map_err(Error::Scene)?,
+            ),
+            Integrator::GeneralizedAlpha => None,
+        };
+        let sys = System {
+            scales,
+            solver,
+            coeffs: ga::Coefficients::new(sc.solver.rho_inf),
+            newton: ga::Settings {
+                tolerance: sc.solver.tolerance,
+                newton_tolerance: sc.solver.newton_tolerance(),
+                max_newton: sc.solver.max_newton,
+                newton: sc.solver.newton,
+            },
+            settings: sc.solver,
+            inputs: InputMap {
+                rest,
+                torque,
+                end_length: asm.creases.iter().map(|c| c.length).collect(),
+                gravity,
+                supported,
+                motion,
+                force,
+                n_dofs: asm.n_dofs(),
+            },
+            cd,
+            angle_ends,
+            ws: ga::Workspace::default(),
+            asm,
+        };
+        self.sys = Some(sys);
+        self.built_with = Some(self.state.parameters.clone());
+        Ok(())
+    }
+}

@@ -1,0 +1,285 @@
+//! The model's variables as the FMU and CSV files name them: inputs and
+//! outputs ([`VariableSpec`] tables in value-reference order), setting
+//! inputs and reading outputs. Parameters are in [`super::parameters`].
+
+use super::{Error, Model, Phase};
+use crate::assembly::Evaluation;
+use crate::scene::{ActuatorMode, InputTiming, Scene};
+use serde::{Deserialize, Serialize};
+
+/// One scalar variable of the model, as the FMU and CSV files name it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VariableSpec {
+    /// Structured name, e.g. `vertex[3].x`, `crease[7].angle`, `fold`.
+    pub name: String,
+    /// SI unit symbol ("" for dimensionless).
+    pub unit: String,
+    /// One line for a user.
+    pub description: String,
+    /// Start value.
+    pub start: f64,
+}
+
+fn spec(name: String, unit: &str, description: String, start: f64) -> VariableSpec {
+    VariableSpec {
+        name,
+        unit: unit.into(),
+        description,
+        start,
+    }
+}
+
+/// The inputs of `scene`: one per actuator, then the x, y, z of each
+/// vertex force and each prescribed vertex motion.
+pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
+    let mut v = Vec::new();
+    for a in &scene.actuators {
+        let (unit, what) = match a.mode {
+            ActuatorMode::RestAngle => ("", "fold fraction: rest angle = value * target angle"),
+            ActuatorMode::Torque => ("N", "crease moment per unit crease length"),
+        };
+        v.push(spec(
+            a.name.clone(),
+            unit,
+            format!("actuator {}: {what}", a.name),
+            a.start,
+        ));
+    }
+    for f in &scene.vertex_forces {
+        for c in ["x", "y", "z"] {
+            v.push(spec(
+                format!("{}.{c}", f.name),
+                "N",
+                format!("force on vertex {}, {c}", f.vertex),
+                0.0,
+            ));
+        }
+    }
+    for m in &scene.vertex_motions {
+        let x = scene.mesh.coords[m.vertex];
+        for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
+            v.push(spec(
+                format!("{}.{c}", m.name),
+                "m",
+                format!("prescribed position of vertex {}, {c}", m.vertex),
+                start,
+            ));
+        }
+    }
+    v
+}
+
+/// The outputs of `scene`, as its output groups select: vertex positions,
+/// crease angles (one per FOLD crease edge), energies.
+pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
+    let mut v = Vec::new();
+    let o = scene.outputs;
+    if o.positions {
+        for i in 0..scene.fold_vertex_count {
+            let x = scene.mesh.coords[i];
+            for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
+                v.push(spec(
+                    format!("vertex[{i}].{c}"),
+                    "m",
+                    format!("position of vertex {i}, {c}"),
+                    start,
+                ));
+            }
+        }
+    }
+    if o.fold_angles {
+        for e in fold_edges(scene) {
+            v.push(spec(
+                format!("crease[{e}].angle"),
+                "rad",
+                format!("fold angle of FOLD edge {e} (valley positive)"),
+                0.0,
+            ));
+        }
+    }
+    if o.energies {
+        v.push(spec(
+            "energy.kinetic".into(),
+            "J",
+            "kinetic energy".into(),
+            0.0,
+        ));
+        v.push(spec(
+            "energy.strain".into(),
+            "J",
+            "shell strain energy (membrane + bending)".into(),
+            0.0,
+        ));
+        v.push(spec(
+            "energy.crease".into(),
+            "J",
+            "crease spring energy".into(),
+            0.0,
+        ));
+    }
+    v
+}
+
+/// FOLD edge indices that are creases, in increasing order: the `crease[e]`
+/// outputs.
+pub fn fold_edges(scene: &Scene) -> Vec<usize> {
+    let mut es: Vec<usize> = scene
+        .mesh
+        .edges
+        .iter()
+        .filter(|e| e.kind == crate::mesh::EdgeKind::Crease)
+        .filter_map(|e| e.fold_edge)
+        .collect();
+    es.sort_unstable();
+    es.dedup();
+    es
+}
+
+impl Model {
+    /// Parameters (settable before [`Model::initialize`]).
+    pub fn parameters(&self) -> &[VariableSpec] {
+        &self.parameters
+    }
+    /// Inputs, one per actuator, then vertex forces and motions (x, y, z).
+    pub fn inputs(&self) -> &[VariableSpec] {
+        &self.inputs
+    }
+    /// Outputs: vertex positions, crease angles, energies (as the scene selects).
+    pub fn outputs(&self) -> &[VariableSpec] {
+        &self.outputs
+    }
+
+    /// Value of input `i` as last set (in force now; with ramped inputs,
+    /// the value the next advance ends at).
+    pub fn input(&self, i: usize) -> Result<f64, Error> {
+        self.input_spec(i)?;
+        Ok(match self.scene.solver.input_timing {
+            InputTiming::Hold => self.state.inputs_now[i],
+            InputTiming::Ramp => self.state.inputs_next[i],
+        })
+    }
+
+    fn input_spec(&self, i: usize) -> Result<&VariableSpec, Error> {
+        self.inputs.get(i).ok_or(Error::NoSuchVariable {
+            kind: "input",
+            index: i,
+        })
+    }
+
+    /// Set input `i`. Held inputs (the default): the value is in force from
+    /// now and held over the next advance; its slope is reset to zero.
+    /// Ramped inputs: the value the next advance ends at. Non-finite values
+    /// are rejected.
+    pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
+        let spec = self.input_spec(i)?;
+        if !value.is_finite() {
+            return Err(Error::BadValue {
+                name: spec.name.clone(),
+                value,
+                reason: "not a finite number".into(),
+            });
+        }
+        self.state.inputs_next[i] = value;
+        if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
+            self.state.inputs_now[i] = value;
+        }
+        self.state.input_slopes[i] = 0.0;
+        Ok(())
+    }
+
+    /// Set the `order`-th time derivative of input `i` (only order 1: the
+    /// input then grows linearly from its value over the advance, as
+    /// `fmi2SetRealInputDerivatives` asks). It applies until the input or
+    /// its derivative is set again. Not with ramped inputs.
+    pub fn set_input_derivative(&mut self, i: usize, order: i32, value: f64) -> Result<(), Error> {
+        let spec = self.input_spec(i)?;
+        let bad = |reason: &str| Error::BadValue {
+            name: format!("derivative of order {order} of {}", spec.name),
+            value,
+            reason: reason.into(),
+        };
+        if order != 1 {
+            return Err(bad("only first derivatives are taken (order 1)"));
+        }
+        if self.scene.solver.input_timing == InputTiming::Ramp {
+            return Err(bad(
+                "the scene ramps its inputs (solver input_timing \"ramp\"); derivatives need held inputs",
+            ));
+        }
+        if !value.is_finite() {
+            return Err(bad("not a finite number"));
+        }
+        self.state.input_slopes[i] = value;
+        Ok(())
+    }
+
+    /// Current values of all outputs, in the order of [`Model::outputs`].
+    pub fn output_values(&self) -> Vec<f64> {
+        self.state.outputs.clone()
+    }
+
+    /// Kinetic, strain and crease energy now (J).
+    pub fn energies(&self) -> [f64; 3] {
+        let o = &self.state.outputs;
+        if self.scene.outputs.energies {
+            [o[o.len() - 3], o[o.len() - 2], o[o.len() - 1]]
+        } else {
+            [f64::NAN; 3]
+        }
+    }
+
+    /// Current position of mesh vertex `v`.
+    pub fn vertex_position(&self, v: usize) -> [f64; 3] {
+        match &self.sys {
+            Some(sys) if self.state.phase == Phase::Running => {
+                let s = sys.asm.position_slot(v);
+                let q = &self.state.dynamics.q;
+                [q[3 * s], q[3 * s + 1], q[3 * s + 2]]
+            }
+            _ => {
+                let x = self.scene.mesh.coords[v];
+                [x.x, x.y, 0.0]
+            }
+        }
+    }
+
+    /// Strain energy (membrane + bending, J) of each mesh triangle now, in
+    /// the order of `scene().mesh.triangles`; zeros before initialization
+    /// (the flat reference state is stress-free).
+    pub fn facet_strain_energies(&self) -> Vec<f64> {
+        match &self.sys {
+            Some(sys) if self.state.phase == Phase::Running => {
+                sys.asm.facet_strain_energies(&self.state.dynamics.q)
+            }
+            _ => vec![0.0; self.scene.mesh.triangles.len()],
+        }
+    }
+
+    pub(super) fn compute_outputs(&self, ev: &Evaluation) -> Vec<f64> {
+        let sys = self.sys.as_ref().expect("built");
+        let mut out = Vec::with_capacity(self.outputs.len());
+        let o = self.scene.outputs;
+        if o.positions {
+            for v in 0..self.scene.fold_vertex_count {
+                out.extend(self.vertex_position(v));
+            }
+        }
+        if o.fold_angles {
+            for ends in &sys.angle_ends {
+                let sum: f64 = ends
+                    .iter()
+                    .map(|&i| ev.theta[i] - std::f64::consts::PI)
+                    .sum();
+                out.push(sum / ends.len().max(1) as f64);
+            }
+        }
+        if o.energies {
+            let v = &self.state.dynamics.v;
+            let mut mv = vec![0.0; v.len()];
+            sys.asm.mass_mul(v, &mut mv);
+            let ke = 0.5 * v.iter().zip(&mv).map(|(a, b)| a * b).sum::<f64>();
+            out.extend([ke, ev.strain_energy, ev.crease_energy]);
+        }
+        out
+    }
+}
