@@ -3,17 +3,22 @@
 //! `k K + m M + c C` (exactly what an implicit integrator's Newton step
 //! needs) assembled without allocation per call.
 //!
-//! Terms and what they cost: shell elements always; crease springs always;
-//! damping (Rayleigh `alpha M + beta K`, crease dashpots) only when its
-//! coefficients are non-zero; gravity is a constant force computed once.
+//! Forces come from force terms ([`ForceTerm`], in `assembly/terms.rs`):
+//! shell elements and crease springs always; damping (Rayleigh
+//! `alpha M + beta K`, crease dashpots) only when its coefficients are
+//! non-zero; terms from outside (contact, ...) through
+//! [`Assembler::with_terms`]. Gravity is a constant force computed once.
 
-use crate::crease;
+mod terms;
+
+pub use terms::ForceTerm;
+
 use crate::dofs::{Combo, DofLayout, SlotKind};
 use crate::element::{ElemVec, ElementOptions, ShellElement};
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
 use crate::scene::Material;
-use nalgebra::{SMatrix, SVector, Vector2};
+use nalgebra::{SMatrix, Vector2};
 
 /// Marker for "not a free scalar".
 pub const FIXED: usize = usize::MAX;
@@ -85,6 +90,8 @@ pub struct Evaluation {
     pub crease_energy: f64,
     /// Unwrapped angle theta of every crease end.
     pub theta: Vec<f64>,
+    /// Energy of the terms given to [`Assembler::with_terms`] (contact, ...).
+    pub term_energy: f64,
 }
 
 /// Coefficients of the requested matrix `k K + m M + c C`.
@@ -126,6 +133,8 @@ pub struct Assembler {
     pub rigid: RigidModes,
     /// Physics in force.
     pub physics: Physics,
+    /// The force terms, in evaluation order.
+    terms: Vec<Box<dyn ForceTerm>>,
 }
 
 impl Assembler {
@@ -136,6 +145,19 @@ impl Assembler {
         physics: Physics,
         element: ElementOptions,
         fixed_slots: &[usize],
+    ) -> Result<Assembler, String> {
+        Self::with_terms(mesh, physics, element, fixed_slots, Vec::new())
+    }
+
+    /// Like [`Assembler::new`], with more force terms after the built-in
+    /// ones; the slot pairs each declares ([`ForceTerm::pattern`]) join the
+    /// matrix pattern.
+    pub fn with_terms(
+        mesh: &Mesh,
+        physics: Physics,
+        element: ElementOptions,
+        fixed_slots: &[usize],
+        extra: Vec<Box<dyn ForceTerm>>,
     ) -> Result<Assembler, String> {
         let layout = DofLayout::new(mesh);
         let elements = mesh
@@ -199,11 +221,26 @@ impl Assembler {
         // Slot-level adjacency (CSR, sorted, all slots) -> scalar pattern
         // over free DOFs. Sorting each slot's neighbour list keeps this
         // O(n log n) in time and O(n) in memory.
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
+        for t in &extra {
+            for (a, b) in t.pattern(&layout) {
+                if a >= n_slots || b >= n_slots {
+                    return Err(format!(
+                        "force term {}: slot pair ({a}, {b}) outside the {n_slots} slots",
+                        t.name()
+                    ));
+                }
+                pairs.extend([(a, b), (b, a), (a, a), (b, b)]);
+            }
+        }
         let mut count = vec![0usize; n_slots + 1];
         for bm in face_maps.iter().chain(crease_maps.iter()) {
             for &a in &bm.slots {
                 count[a + 1] += bm.slots.len();
             }
+        }
+        for &(a, _) in &pairs {
+            count[a + 1] += 1;
         }
         for s in 0..n_slots {
             count[s + 1] += count[s];
@@ -217,6 +254,10 @@ impl Assembler {
                     fill[a] += 1;
                 }
             }
+        }
+        for &(a, b) in &pairs {
+            raw[fill[a]] = b;
+            fill[a] += 1;
         }
         let mut slot_ptr = Vec::with_capacity(n_slots + 1);
         slot_ptr.push(0);
@@ -290,6 +331,7 @@ impl Assembler {
             mass_values: Vec::new(),
             rigid: RigidModes::default(),
             physics,
+            terms: terms::built_in().into_iter().chain(extra).collect(),
         };
         asm.set_physics(physics);
         Ok(asm)
@@ -393,7 +435,9 @@ impl Assembler {
     }
 
     /// Evaluate internal forces and energies, and, if `matrix` is given,
-    /// write `k K + m M + c C` (free DOFs, pattern order) into it.
+    /// write `k K + m M + c C` (free DOFs, pattern order) into it: the
+    /// inertia `m M`, then every force term in order (shell, crease springs,
+    /// mass damping, then the terms given to [`Assembler::with_terms`]).
     /// Fails (without panicking) on a configuration where a crease angle
     /// is undefined or a value is not finite.
     pub fn evaluate(
@@ -408,136 +452,42 @@ impl Assembler {
         out.theta.clear();
         out.strain_energy = 0.0;
         out.crease_energy = 0.0;
-        let p = self.physics;
-        let damping = self.has_damping();
+        out.term_energy = 0.0;
         if let Some((vals, co)) = matrix.as_mut() {
             for (v, m) in vals.iter_mut().zip(&self.mass_values) {
-                *v = (co.m + co.c * p.alpha) * m;
+                *v = co.m * m;
             }
         }
-        // Stiffness weight in the matrix, and whether element tangents are needed.
-        let kw = matrix
-            .as_ref()
-            .map(|(_, co)| co.k + co.c * p.beta)
-            .unwrap_or(0.0);
-        let need_tangent = matrix.is_some() || p.beta != 0.0;
-
-        let mut fe = SVector::<f64, 27>::zeros();
-        let mut ke = SMatrix::<f64, 27, 27>::zeros();
-        for (f, el) in self.elements.iter().enumerate() {
-            let bm = &self.face_maps[f];
-            let e = local_vector(&self.layout.local[f], st.q);
-            let en = el.eval(
-                &p.material,
-                &e,
-                &mut fe,
-                if need_tangent { Some(&mut ke) } else { None },
-            );
-            out.strain_energy += en.membrane + en.bending;
-            if p.beta != 0.0 {
-                let ve = local_vector(&self.layout.local[f], st.v);
-                let mut vv = SVector::<f64, 27>::zeros();
-                for (k, vk) in ve.iter().enumerate() {
-                    vv.fixed_rows_mut::<3>(3 * k).copy_from(vk);
-                }
-                fe += p.beta * (ke * vv);
-            }
-            scatter_force(bm, fe.as_slice(), &mut out.force);
-            if let Some((vals, _)) = matrix.as_mut() {
-                scatter_matrix::<27>(bm, &ke, kw, vals);
-            }
+        for term in &self.terms {
+            term.add(
+                self,
+                st,
+                out,
+                matrix.as_mut().map(|(v, co)| (&mut **v, *co)),
+            )?;
         }
-
-        let mut f9 = SVector::<f64, 9>::zeros();
-        let mut k9 = SMatrix::<f64, 9, 9>::zeros();
-        for (i, ce) in self.creases.iter().enumerate() {
-            let [a, b, t] = [
-                ce.combos[0].eval(st.q),
-                ce.combos[1].eval(st.q),
-                ce.combos[2].eval(st.q),
-            ];
-            let d = crease::theta_derivatives(&a, &b, &t, matrix.is_some());
-            if !d.theta.is_finite() || a.cross(&t).norm() == 0.0 || b.cross(&t).norm() == 0.0 {
-                return Err(format!(
-                    "crease on edge {} has an undefined fold angle",
-                    ce.edge
-                ));
-            }
-            let theta = crease::unwrap(d.theta, st.theta_prev[i]);
-            out.theta.push(theta);
-            let k = p.crease_k_per_length * ce.length;
-            f9.fill(0.0);
-            let want_k = matrix.is_some();
-            out.crease_energy += crease::spring(
-                k,
-                theta,
-                st.theta0[i],
-                &d,
-                &mut f9,
-                if want_k { Some(&mut k9) } else { None },
-            );
-            let g = SVector::<f64, 9>::from_iterator(d.grad.iter().flat_map(|x| x.iter().copied()));
-            let mom = st.moment[i];
-            if mom != 0.0 {
-                f9 -= mom * g;
-                if want_k && let Some(h) = &d.hess {
-                    for r in 0..3 {
-                        for c in 0..3 {
-                            let blk = h[r][c];
-                            for x in 0..3 {
-                                for y in 0..3 {
-                                    k9[(3 * r + x, 3 * c + y)] -= mom * blk[(x, y)];
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            let cdamp = p.crease_c_per_length * ce.length;
-            let mut cmat_w = 0.0;
-            if damping && cdamp != 0.0 {
-                let vl = [
-                    ce.combos[0].eval(st.v),
-                    ce.combos[1].eval(st.v),
-                    ce.combos[2].eval(st.v),
-                ];
-                let rate: f64 = (0..3).map(|j| d.grad[j].dot(&vl[j])).sum();
-                f9 += cdamp * rate * g;
-                cmat_w = matrix.as_ref().map(|(_, co)| co.c * cdamp).unwrap_or(0.0);
-            }
-            let bm = &self.crease_maps[i];
-            scatter_force(bm, f9.as_slice(), &mut out.force);
-            if let Some((vals, co)) = matrix.as_mut() {
-                let mut kk = (co.k + co.c * p.beta) * k9;
-                if cmat_w != 0.0 {
-                    kk += cmat_w * g * g.transpose();
-                }
-                scatter_matrix::<9>(bm, &kk, 1.0, vals);
-            }
-        }
-        if p.alpha != 0.0 {
-            // alpha M (v - P v): P v the M-orthogonal rigid part of v. The
-            // iteration matrix keeps alpha M (the rank-6 correction is left
-            // out: modified Newton converges with it at a rate ~ alpha h).
-            let mut mv = vec![0.0; n];
-            self.mass_mul(st.v, &mut mv);
-            let mut pv = vec![0.0; n];
-            // A clamped sheet has no rigid motion: nothing to project.
-            if self.rigid.n_allowed() > 0 {
-                let mut mq = vec![0.0; n];
-                self.mass_mul(st.q, &mut mq);
-                if self.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
-                    pv.fill(0.0);
-                }
-            }
-            for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {
-                *f += p.alpha * (x - r);
-            }
-        }
-        if out.force.iter().any(|x| !x.is_finite()) || !out.strain_energy.is_finite() {
+        if out.force.iter().any(|x| !x.is_finite())
+            || !out.strain_energy.is_finite()
+            || !out.term_energy.is_finite()
+        {
             return Err("internal forces are not finite".into());
         }
         Ok(())
+    }
+
+    /// Give every force term the accepted state before a time step (its
+    /// per-step hook: a broad phase, caches).
+    pub fn before_step(&mut self, q: &[f64], v: &[f64]) {
+        let mut terms = std::mem::take(&mut self.terms);
+        for t in terms.iter_mut() {
+            t.before_step(self, q, v);
+        }
+        self.terms = terms;
+    }
+
+    /// Names of the force terms, in evaluation order.
+    pub fn term_names(&self) -> Vec<&str> {
+        self.terms.iter().map(|t| t.name()).collect()
     }
 
     /// Add the 3x3 block `k` at slots (a, b) of the free-DOF matrix values

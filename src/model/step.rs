@@ -155,6 +155,8 @@ impl Model {
                 inputs_at(k as f64 * h, &mut u);
                 sys.inputs.drive_into(&u, &mut d);
                 let gd = d.stepper_drive(&self.state.crease_theta);
+                sys.asm
+                    .before_step(&self.state.dynamics.q, &self.state.dynamics.v);
                 cd.step(&sys.asm, &mut self.state.dynamics, h, &gd)
                     .map_err(|reason| Error::StepFailed {
                         time: t0 + (k - 1) as f64 * h,
@@ -179,6 +181,8 @@ impl Model {
             inputs_at(s + h, &mut u);
             sys.inputs.drive_into(&u, &mut d);
             let gd = d.stepper_drive(&self.state.crease_theta);
+            sys.asm
+                .before_step(&self.state.dynamics.q, &self.state.dynamics.v);
             let res = ga::step(
                 &sys.asm,
                 &mut sys.solver,

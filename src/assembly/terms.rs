@@ -1,0 +1,243 @@
+//! The force-term interface: every contribution to the equations of motion
+//! `M a + f(q, v) = f_ext(t)` is a [`ForceTerm`] that adds its part of `f`,
+//! its energy and its part of the iteration matrix `k df/dq + c df/dv`. The
+//! built-in terms (shell elements, crease springs with their moments and
+//! dashpots, mass damping) are the first clients; contact and friction plug
+//! in the same way through [`super::Assembler::with_terms`], declaring the
+//! slot pairs they couple ([`ForceTerm::pattern`]) and using
+//! [`ForceTerm::before_step`] for per-step work such as a broad phase.
+//!
+//! External loads that depend only on time (gravity, vertex-force inputs)
+//! stay in the stepper's `f_ext`: it evaluates them at the integrator's own
+//! time points, which is where held and interpolated inputs are defined.
+
+use super::{
+    Assembler, Evaluation, MatrixCoeffs, State, local_vector, scatter_force, scatter_matrix,
+};
+use crate::crease;
+use crate::dofs::DofLayout;
+use nalgebra::{SMatrix, SVector};
+
+/// One contribution to the equations of motion.
+pub trait ForceTerm: Send + Sync {
+    /// Name for reports and errors.
+    fn name(&self) -> &str;
+
+    /// Slot pairs whose 3x3 blocks [`ForceTerm::add`] writes, beyond the
+    /// facets' and creases' own (they join the pattern when the assembler is
+    /// built; write them with [`Assembler::add_block`]).
+    fn pattern(&self, _layout: &DofLayout) -> Vec<(usize, usize)> {
+        Vec::new()
+    }
+
+    /// Called with the accepted state `(q, v)` before each time step.
+    fn before_step(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) {}
+
+    /// Add this term's force to `out.force` (all DOFs, internal-force sign:
+    /// it opposes the motion it resists) and its energy to `out`; with a
+    /// matrix, add `k df/dq + c df/dv` (free DOFs, pattern order).
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String>;
+}
+
+/// The built-in terms in evaluation order. (Each implementation repeats the
+/// trait's `add` signature; `duplicates` reports those lines as shared.)
+pub(super) fn built_in() -> Vec<Box<dyn ForceTerm>> {
+    vec![
+        Box::new(Shell),
+        Box::new(CreaseSprings),
+        Box::new(MassDamping),
+    ]
+}
+
+/// Membrane and bending of every facet, with stiffness damping `beta K`.
+struct Shell;
+
+impl ForceTerm for Shell {
+    fn name(&self) -> &str {
+        "shell"
+    }
+
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String> {
+        let p = asm.physics;
+        // Stiffness weight in the matrix, and whether element tangents are needed.
+        let kw = matrix
+            .as_ref()
+            .map(|(_, co)| co.k + co.c * p.beta)
+            .unwrap_or(0.0);
+        let need_tangent = matrix.is_some() || p.beta != 0.0;
+        let mut fe = SVector::<f64, 27>::zeros();
+        let mut ke = SMatrix::<f64, 27, 27>::zeros();
+        for (f, el) in asm.elements.iter().enumerate() {
+            let bm = &asm.face_maps[f];
+            let e = local_vector(&asm.layout.local[f], st.q);
+            let en = el.eval(
+                &p.material,
+                &e,
+                &mut fe,
+                if need_tangent { Some(&mut ke) } else { None },
+            );
+            out.strain_energy += en.membrane + en.bending;
+            if p.beta != 0.0 {
+                let ve = local_vector(&asm.layout.local[f], st.v);
+                let mut vv = SVector::<f64, 27>::zeros();
+                for (k, vk) in ve.iter().enumerate() {
+                    vv.fixed_rows_mut::<3>(3 * k).copy_from(vk);
+                }
+                fe += p.beta * (ke * vv);
+            }
+            scatter_force(bm, fe.as_slice(), &mut out.force);
+            if let Some((vals, _)) = matrix.as_mut() {
+                scatter_matrix::<27>(bm, &ke, kw, vals);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The rotational springs at both ends of every crease, their applied
+/// moments (inputs) and dashpots.
+struct CreaseSprings;
+
+impl ForceTerm for CreaseSprings {
+    fn name(&self) -> &str {
+        "crease springs"
+    }
+
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String> {
+        let p = asm.physics;
+        let damping = asm.has_damping();
+        let mut f9 = SVector::<f64, 9>::zeros();
+        let mut k9 = SMatrix::<f64, 9, 9>::zeros();
+        for (i, ce) in asm.creases.iter().enumerate() {
+            let [a, b, t] = [
+                ce.combos[0].eval(st.q),
+                ce.combos[1].eval(st.q),
+                ce.combos[2].eval(st.q),
+            ];
+            let d = crease::theta_derivatives(&a, &b, &t, matrix.is_some());
+            if !d.theta.is_finite() || a.cross(&t).norm() == 0.0 || b.cross(&t).norm() == 0.0 {
+                return Err(format!(
+                    "crease on edge {} has an undefined fold angle",
+                    ce.edge
+                ));
+            }
+            let theta = crease::unwrap(d.theta, st.theta_prev[i]);
+            out.theta.push(theta);
+            let k = p.crease_k_per_length * ce.length;
+            f9.fill(0.0);
+            let want_k = matrix.is_some();
+            out.crease_energy += crease::spring(
+                k,
+                theta,
+                st.theta0[i],
+                &d,
+                &mut f9,
+                if want_k { Some(&mut k9) } else { None },
+            );
+            let g = SVector::<f64, 9>::from_iterator(d.grad.iter().flat_map(|x| x.iter().copied()));
+            let mom = st.moment[i];
+            if mom != 0.0 {
+                f9 -= mom * g;
+                if want_k && let Some(h) = &d.hess {
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            let blk = h[r][c];
+                            for x in 0..3 {
+                                for y in 0..3 {
+                                    k9[(3 * r + x, 3 * c + y)] -= mom * blk[(x, y)];
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            let cdamp = p.crease_c_per_length * ce.length;
+            let mut cmat_w = 0.0;
+            if damping && cdamp != 0.0 {
+                let vl = [
+                    ce.combos[0].eval(st.v),
+                    ce.combos[1].eval(st.v),
+                    ce.combos[2].eval(st.v),
+                ];
+                let rate: f64 = (0..3).map(|j| d.grad[j].dot(&vl[j])).sum();
+                f9 += cdamp * rate * g;
+                cmat_w = matrix.as_ref().map(|(_, co)| co.c * cdamp).unwrap_or(0.0);
+            }
+            let bm = &asm.crease_maps[i];
+            scatter_force(bm, f9.as_slice(), &mut out.force);
+            if let Some((vals, co)) = matrix.as_mut() {
+                let mut kk = (co.k + co.c * p.beta) * k9;
+                if cmat_w != 0.0 {
+                    kk += cmat_w * g * g.transpose();
+                }
+                scatter_matrix::<9>(bm, &kk, 1.0, vals);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Mass damping `alpha M (v - P v)`, `P v` the M-orthogonal rigid part of
+/// `v` that the supports allow (rigid motion is not damped).
+struct MassDamping;
+
+impl ForceTerm for MassDamping {
+    fn name(&self) -> &str {
+        "mass damping"
+    }
+
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String> {
+        let alpha = asm.physics.alpha;
+        if alpha == 0.0 {
+            return Ok(());
+        }
+        // The iteration matrix keeps c alpha M (the rank-6 correction is left
+        // out: modified Newton converges with it at a rate ~ alpha h).
+        if let Some((vals, co)) = matrix {
+            let w = co.c * alpha;
+            for (v, m) in vals.iter_mut().zip(&asm.mass_values) {
+                *v += w * m;
+            }
+        }
+        let n = asm.n_dofs();
+        let mut mv = vec![0.0; n];
+        asm.mass_mul(st.v, &mut mv);
+        let mut pv = vec![0.0; n];
+        // A clamped sheet has no rigid motion: nothing to project.
+        if asm.rigid.n_allowed() > 0 {
+            let mut mq = vec![0.0; n];
+            asm.mass_mul(st.q, &mut mq);
+            if asm.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
+                pv.fill(0.0);
+            }
+        }
+        for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {
+            *f += alpha * (x - r);
+        }
+        Ok(())
+    }
+}
