@@ -134,12 +134,7 @@ impl Model {
         let outputs = variables::output_table(&scene);
         let state = ModelState {
             time: 0.0,
-            dynamics: Dynamics {
-                q: vec![],
-                v: vec![],
-                qdd: vec![],
-                abar: vec![],
-            },
+            dynamics: Dynamics::default(),
             crease_theta: vec![],
             inputs_now: inputs.iter().map(|v| v.start).collect(),
             inputs_next: inputs.iter().map(|v| v.start).collect(),
@@ -209,6 +204,7 @@ impl Model {
             v: vec![0.0; n],
             qdd: vec![0.0; n],
             abar: vec![0.0; n],
+            extrapolation_streak: 0,
         };
         self.consistent_accelerations(&u, &theta_prev)?;
         self.state.h_next = self.sys.as_ref().expect("built").settings.max_step;
