@@ -10,9 +10,9 @@
 use crate::crease;
 use crate::dofs::{Combo, DofLayout, SlotKind};
 use crate::element::{ElemVec, ElementOptions, ShellElement};
+use crate::material::Material;
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
-use crate::scene::Material;
 use nalgebra::{SMatrix, SVector, Vector2};
 
 /// Marker for "not a free scalar".

@@ -22,6 +22,7 @@ pub mod curves;
 pub mod dofs;
 pub mod element;
 pub mod fmi;
+pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod paraview;
