@@ -15,9 +15,9 @@ pub use terms::ForceTerm;
 
 use crate::dofs::{Combo, DofLayout, SlotKind};
 use crate::element::{ElemVec, ElementOptions, ShellElement};
+use crate::material::Material;
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
-use crate::scene::Material;
 use nalgebra::{SMatrix, Vector2};
 
 /// Marker for "not a free scalar".

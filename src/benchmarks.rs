@@ -8,9 +8,9 @@
 use crate::assembly::{Assembler, Physics};
 use crate::dofs::DofLayout;
 use crate::element::{ElementOptions, Interpolation};
+use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::mesh::builders::{Diagonals, grid_family};
-use crate::scene::Material;
 use crate::solver::statics::{self, Load, StaticReport, StaticSettings};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;

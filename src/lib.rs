@@ -6,11 +6,40 @@
 //! rotational springs at the crease end nodes, and the mass matrix is
 //! constant. The model is packed as an FMI 2.0 co-simulation FMU.
 //!
-//! Layers, bottom up: [`mesh`] (crease pattern as data), [`scene`] (FOLD
-//! scenes with physics keys), and [`model`] (the plain Rust API that the FMU
-//! and the CLI drive), with [`fmi`] on top: the FMI 2.0 co-simulation
-//! functions exported from the cdylib. `unsafe` code is denied everywhere
-//! but in two files of [`fmi`] (the pointer helpers and the exports).
+//! Layers, bottom up: [`mesh`] (crease pattern as data) and [`material`]
+//! (the sheet), the shell [`element`], the [`crease`] springs and the
+//! [`assembly`], [`scene`] (FOLD scenes with physics keys), and [`model`]
+//! (the plain Rust API that the FMU and the CLI drive; it runs the
+//! [`solver`]s), with [`fmi`] on top: the FMI 2.0 co-simulation functions
+//! exported from the cdylib. `unsafe` code is denied everywhere but in two
+//! files of [`fmi`] (the pointer helpers and the exports).
+//!
+//! The names a user of the Rust API needs most are re-exported here:
+//! [`Scene`] (read one with [`scene::load`] or [`scene::from_str`], or build
+//! one around a [`Mesh`]), [`Material`], [`Model`] with its [`Error`],
+//! [`Phase`], [`StepReport`], [`ModelState`] and [`VariableSpec`], and
+//! [`SceneError`]. A square sheet with one creased diagonal, folded a little
+//! for 10 ms:
+//!
+//! ```
+//! use origami_fmu::mesh::builders::square_with_diagonal;
+//! use origami_fmu::{Material, Model, Phase, Scene};
+//!
+//! // 10 cm square, the diagonal a crease with a target of 1.5 rad.
+//! let scene = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));
+//! assert_eq!(scene.material, Material::default());
+//! let mut model = Model::new(scene)?;
+//! model.initialize()?;
+//! assert_eq!(model.phase(), Phase::Running);
+//! // The default actuator `fold` drives the rest angle: 0.1 of the target.
+//! let fold = model.inputs().iter().position(|v| v.name == "fold").unwrap();
+//! model.set_input(fold, 0.1)?;
+//! let report = model.advance(0.01)?;
+//! assert!(report.steps >= 1);
+//! assert!((model.time() - 0.01).abs() < 1e-12);
+//! assert!(model.output_values().iter().all(|x| x.is_finite()));
+//! # Ok::<(), origami_fmu::Error>(())
+//! ```
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
@@ -22,6 +51,7 @@ pub mod curves;
 pub mod dofs;
 pub mod element;
 pub mod fmi;
+pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod paraview;
@@ -29,3 +59,8 @@ pub mod rigid;
 pub mod rng;
 pub mod scene;
 pub mod solver;
+
+pub use material::Material;
+pub use mesh::Mesh;
+pub use model::{Error, Model, ModelState, Phase, StepReport, VariableSpec};
+pub use scene::{Scene, SceneError};

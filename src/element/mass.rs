@@ -8,7 +8,7 @@
 //! the matrix unsymmetric; exact integration gives (31, 19), used here.
 
 use super::shape::Shape;
-use crate::scene::Material;
+use crate::material::Material;
 use nalgebra::SMatrix;
 
 /// `10080 * Mhat`, exact integers (element order as in [`super::ElemVec`]).

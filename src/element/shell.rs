@@ -33,7 +33,7 @@ use super::{
     quadrature::Rule,
     shape::{Interpolation, Shape},
 };
-use crate::scene::Material;
+use crate::material::Material;
 #[cfg(test)]
 use nalgebra::Matrix3;
 use nalgebra::{Matrix2, SMatrix, SVector, Vector2, Vector3};

@@ -10,10 +10,10 @@
 //!
 //! A rejected call (bad argument, wrong order) changes nothing and leaves
 //! the instance in the phase it was in, so the master may go on. A step the
-//! solver cannot complete moves it to [`Phase::StepFailed`] (state rolled
+//! solver cannot complete moves it to [`InstancePhase::StepFailed`] (state rolled
 //! back, `fmi2Terminated` true), from which `fmi2SetFMUstate` retries. Only a
 //! failure inside the model that leaves no consistent state (initialization
-//! failed, non-finite outputs) moves it to [`Phase::Error`], from which
+//! failed, non-finite outputs) moves it to [`InstancePhase::Error`], from which
 //! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
 
 use super::ptr;
@@ -26,9 +26,10 @@ use std::ffi::CString;
 
 use fmi2Status::*;
 
-/// Phase of the FMI 2.0 co-simulation state machine.
+/// Phase of the FMI 2.0 co-simulation state machine (the model has its own,
+/// coarser [`crate::model::Phase`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Phase {
+pub enum InstancePhase {
     /// After `fmi2Instantiate` (and `fmi2Reset`): parameters, inputs, setup.
     Instantiated,
     /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
@@ -47,16 +48,16 @@ pub enum Phase {
     Error,
 }
 
-impl Phase {
+impl InstancePhase {
     /// Human name used in log lines.
     pub fn name(self) -> &'static str {
         match self {
-            Phase::Instantiated => "instantiated",
-            Phase::InitializationMode => "initialization mode",
-            Phase::StepComplete => "step complete",
-            Phase::StepFailed => "step failed",
-            Phase::Terminated => "terminated",
-            Phase::Error => "error",
+            InstancePhase::Instantiated => "instantiated",
+            InstancePhase::InitializationMode => "initialization mode",
+            InstancePhase::StepComplete => "step complete",
+            InstancePhase::StepFailed => "step failed",
+            InstancePhase::Terminated => "terminated",
+            InstancePhase::Error => "error",
         }
     }
 }
@@ -195,7 +196,7 @@ pub struct SavedState {
     /// GUID of the FMU that saved it (checked on restore).
     pub guid: String,
     /// Phase of the state machine.
-    pub phase: Phase,
+    pub phase: InstancePhase,
     /// Start time from `fmi2SetupExperiment`.
     pub start_time: f64,
     /// Stop time from `fmi2SetupExperiment`, if defined.
@@ -206,10 +207,10 @@ pub struct SavedState {
 
 /// The phases in which inputs (and, before initialization ends,
 /// parameters) may be set: FMI 2.0 allows neither after a failed step.
-const SETTABLE: &[Phase] = &[
-    Phase::Instantiated,
-    Phase::InitializationMode,
-    Phase::StepComplete,
+const SETTABLE: &[InstancePhase] = &[
+    InstancePhase::Instantiated,
+    InstancePhase::InitializationMode,
+    InstancePhase::StepComplete,
 ];
 
 /// Relative tolerance with which `currentCommunicationPoint` must match
@@ -265,7 +266,7 @@ pub struct Instance {
     model: Model,
     /// The model's state right after instantiation (what `fmi2Reset` restores).
     initial: ModelState,
-    phase: Phase,
+    phase: InstancePhase,
     start_time: f64,
     stop_time: Option<f64>,
     outputs: Option<Vec<f64>>,
@@ -306,7 +307,7 @@ impl Instance {
                     guid,
                     model,
                     initial,
-                    phase: Phase::Instantiated,
+                    phase: InstancePhase::Instantiated,
                     start_time: 0.0,
                     stop_time: None,
                     outputs: None,
@@ -365,7 +366,7 @@ impl Instance {
         &self.model
     }
     /// Current phase.
-    pub fn phase(&self) -> Phase {
+    pub fn phase(&self) -> InstancePhase {
         self.phase
     }
 
@@ -375,22 +376,24 @@ impl Instance {
     }
 
     /// Reject a call outside the phases it is allowed in.
-    fn require(&self, function: &str, allowed: &[Phase]) -> Result<(), fmi2Status> {
+    fn require(&self, function: &str, allowed: &[InstancePhase]) -> Result<(), fmi2Status> {
         if allowed.contains(&self.phase) {
             return Ok(());
         }
         let hint = match self.phase {
-            Phase::Instantiated => {
+            InstancePhase::Instantiated => {
                 "; call fmi2EnterInitializationMode and fmi2ExitInitializationMode first"
             }
-            Phase::InitializationMode => "; call fmi2ExitInitializationMode first",
-            Phase::Terminated => "; the instance is terminated (fmi2Reset to start again)",
-            Phase::Error => "; the instance is in the error state (fmi2SetFMUstate or fmi2Reset)",
-            Phase::StepFailed => {
+            InstancePhase::InitializationMode => "; call fmi2ExitInitializationMode first",
+            InstancePhase::Terminated => "; the instance is terminated (fmi2Reset to start again)",
+            InstancePhase::Error => {
+                "; the instance is in the error state (fmi2SetFMUstate or fmi2Reset)"
+            }
+            InstancePhase::StepFailed => {
                 "; the last fmi2DoStep was discarded (fmi2SetFMUstate to a saved state to retry, \
                  fmi2Terminate or fmi2Reset)"
             }
-            Phase::StepComplete => "",
+            InstancePhase::StepComplete => "",
         };
         let allowed: Vec<&str> = allowed.iter().map(|p| p.name()).collect();
         Err(self.error(format!(
@@ -430,7 +433,7 @@ impl Instance {
         start: f64,
         stop: Option<f64>,
     ) -> fmi2Status {
-        if let Err(s) = self.require("fmi2SetupExperiment", &[Phase::Instantiated]) {
+        if let Err(s) = self.require("fmi2SetupExperiment", &[InstancePhase::Instantiated]) {
             return s;
         }
         if !start.is_finite() {
@@ -460,17 +463,23 @@ impl Instance {
 
     /// `fmi2EnterInitializationMode`.
     pub fn enter_initialization_mode(&mut self) -> fmi2Status {
-        if let Err(s) = self.require("fmi2EnterInitializationMode", &[Phase::Instantiated]) {
+        if let Err(s) = self.require(
+            "fmi2EnterInitializationMode",
+            &[InstancePhase::Instantiated],
+        ) {
             return s;
         }
-        self.phase = Phase::InitializationMode;
+        self.phase = InstancePhase::InitializationMode;
         fmi2OK
     }
 
     /// `fmi2ExitInitializationMode`: the model computes its initial state
     /// at the start time.
     pub fn exit_initialization_mode(&mut self) -> fmi2Status {
-        if let Err(s) = self.require("fmi2ExitInitializationMode", &[Phase::InitializationMode]) {
+        if let Err(s) = self.require(
+            "fmi2ExitInitializationMode",
+            &[InstancePhase::InitializationMode],
+        ) {
             return s;
         }
         let r =
@@ -478,13 +487,13 @@ impl Instance {
         self.outputs = None;
         match r {
             Ok(()) => {
-                self.phase = Phase::StepComplete;
+                self.phase = InstancePhase::StepComplete;
                 self.log
                     .log(fmi2OK, &format!("initialized at t = {}", self.model.time()));
                 fmi2OK
             }
             Err(e) => {
-                self.phase = Phase::Error;
+                self.phase = InstancePhase::Error;
                 self.error(format!(
                     "fmi2ExitInitializationMode: the model failed to initialize: {e}"
                 ))
@@ -496,11 +505,15 @@ impl Instance {
     pub fn terminate(&mut self) -> fmi2Status {
         if let Err(s) = self.require(
             "fmi2Terminate",
-            &[Phase::StepComplete, Phase::StepFailed, Phase::Error],
+            &[
+                InstancePhase::StepComplete,
+                InstancePhase::StepFailed,
+                InstancePhase::Error,
+            ],
         ) {
             return s;
         }
-        self.phase = Phase::Terminated;
+        self.phase = InstancePhase::Terminated;
         fmi2OK
     }
 
@@ -509,14 +522,14 @@ impl Instance {
     pub fn reset(&mut self) -> fmi2Status {
         match self.model.restore_state(&self.initial) {
             Ok(()) => {
-                self.phase = Phase::Instantiated;
+                self.phase = InstancePhase::Instantiated;
                 self.start_time = 0.0;
                 self.stop_time = None;
                 self.outputs = None;
                 fmi2OK
             }
             Err(e) => {
-                self.phase = Phase::Error;
+                self.phase = InstancePhase::Error;
                 self.error(format!("fmi2Reset: {e}"))
             }
         }
@@ -596,7 +609,7 @@ impl Instance {
                         self.var_name(r)
                     ));
                 }
-                VarRef::Parameter(_) if self.phase == Phase::StepComplete => {
+                VarRef::Parameter(_) if self.phase == InstancePhase::StepComplete => {
                     return self.error(format!(
                         "fmi2SetReal: {} (value reference {vr}) is a fixed parameter; it can only be set \
                          before fmi2ExitInitializationMode",
@@ -707,7 +720,7 @@ impl Instance {
     /// failed" (`fmi2Terminated` true): a master retries through
     /// `fmi2SetFMUstate`, and none can loop on the same failing step.
     pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
-        if let Err(s) = self.require("fmi2DoStep", &[Phase::StepComplete]) {
+        if let Err(s) = self.require("fmi2DoStep", &[InstancePhase::StepComplete]) {
             return s;
         }
         if !(h.is_finite() && h > 0.0) {
@@ -737,19 +750,19 @@ impl Instance {
         match self.model.advance(h) {
             Ok(report) => {
                 if let Err(e) = set_model_time(&mut self.model, target) {
-                    self.phase = Phase::Error;
+                    self.phase = InstancePhase::Error;
                     return self.error(format!("fmi2DoStep: {e}"));
                 }
                 self.outputs = None;
                 let bad = match self.output_values() {
                     Ok(o) => o.iter().position(|x| !x.is_finite()),
                     Err(s) => {
-                        self.phase = Phase::Error;
+                        self.phase = InstancePhase::Error;
                         return s;
                     }
                 };
                 if let Some(k) = bad {
-                    self.phase = Phase::Error;
+                    self.phase = InstancePhase::Error;
                     return self.error(format!(
                         "fmi2DoStep: output {} is not finite at t = {target}; the instance is in the \
                          error state (restore a saved state with fmi2SetFMUstate, or fmi2Reset)",
@@ -769,7 +782,7 @@ impl Instance {
             }
             Err(ModelError::StepFailed { time, reason }) => {
                 self.outputs = None;
-                self.phase = Phase::StepFailed;
+                self.phase = InstancePhase::StepFailed;
                 self.log.log(
                     fmi2Discard,
                     &format!(
@@ -802,7 +815,7 @@ impl Instance {
     /// discarded step (the FMU cannot go on from there without a restore).
     pub fn status_boolean(&self, kind: StatusKind) -> Result<bool, fmi2Status> {
         match kind {
-            StatusKind::Terminated => Ok(self.phase == Phase::StepFailed),
+            StatusKind::Terminated => Ok(self.phase == InstancePhase::StepFailed),
             _ => Err(self.unsupported_status("fmi2GetBooleanStatus", kind)),
         }
     }

@@ -1203,7 +1203,7 @@ fn translate(e: MeshError, tri_face: &[usize]) -> SceneError {
 /// checked against the mesh.
 fn apply_physics(
     scene: &mut Scene,
-    p: keys::Physics,
+    p: keys::PhysicsKeys,
     edges: &FoldEdges,
     copies: &[usize],
     warnings: &mut Vec<String>,

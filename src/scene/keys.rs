@@ -95,8 +95,10 @@ pub struct SupportSpec {
 }
 
 /// Everything the `ancf:` keys say, checked key by key; defaults filled in.
+/// (Not to be confused with [`crate::assembly::Physics`], the coefficients
+/// the assembly is given once the scene is built.)
 #[derive(Clone, Debug, PartialEq)]
-pub struct Physics {
+pub struct PhysicsKeys {
     /// `ancf:name`.
     pub name: Option<String>,
     /// `ancf:material`.
@@ -329,7 +331,10 @@ fn vertex_inputs(v: &Value, key: &str) -> Result<Vec<(VertexInput, String)>, Sce
 
 /// Read all `ancf:` keys. Unknown `ancf:` keys and unknown fields are errors
 /// with a suggestion; notes for the user go to `warnings`.
-pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Physics, SceneError> {
+pub fn parse(
+    ancf: &Map<String, Value>,
+    warnings: &mut Vec<String>,
+) -> Result<PhysicsKeys, SceneError> {
     let mut keys: Vec<&String> = ancf.keys().collect();
     keys.sort();
     for k in keys {
@@ -344,7 +349,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
             ));
         }
     }
-    let mut p = Physics {
+    let mut p = PhysicsKeys {
         name: None,
         material: Material::default(),
         crease: CreaseStiffness::default(),
@@ -744,7 +749,7 @@ pub fn parse(ancf: &Map<String, Value>, warnings: &mut Vec<String>) -> Result<Ph
 mod tests {
     use super::*;
 
-    fn keys(json: &str) -> Result<Physics, SceneError> {
+    fn keys(json: &str) -> Result<PhysicsKeys, SceneError> {
         let map: Map<String, Value> = serde_json::from_str(json).unwrap();
         parse(&map, &mut Vec::new())
     }

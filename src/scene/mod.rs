@@ -53,6 +53,7 @@ mod planar;
 pub mod refine;
 pub mod triangulate;
 
+pub use crate::material::Material;
 pub use build::from_fold;
 pub use error::SceneError;
 pub use fold::{FoldFile, FrameSelector};
@@ -204,44 +205,6 @@ fn crease_pattern_frames(text: &str, failed: &FoldFile, options: &LoadOptions) -
             "; frames {} are crease patterns: pick one with --frame N (LoadOptions::frame)",
             good.join(", ")
         ),
-    }
-}
-
-/// Sheet material, SI units.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Material {
-    /// Young's modulus E in Pa.
-    pub youngs_modulus: f64,
-    /// Poisson's ratio nu, in (-1, 0.5).
-    pub poisson_ratio: f64,
-    /// Sheet thickness h in m.
-    pub thickness: f64,
-    /// Mass density rho in kg/m^3.
-    pub density: f64,
-}
-
-impl Default for Material {
-    /// Paper-like sheet: E = 3 GPa, nu = 0.3, h = 0.1 mm, rho = 800 kg/m^3.
-    fn default() -> Self {
-        Material {
-            youngs_modulus: 3.0e9,
-            poisson_ratio: 0.3,
-            thickness: 1.0e-4,
-            density: 800.0,
-        }
-    }
-}
-
-impl Material {
-    /// Bending stiffness D = E h^3 / (12 (1 - nu^2)) in N m.
-    pub fn bending_stiffness(&self) -> f64 {
-        let Material {
-            youngs_modulus: e,
-            poisson_ratio: nu,
-            thickness: h,
-            ..
-        } = *self;
-        e * h * h * h / (12.0 * (1.0 - nu * nu))
     }
 }
 
