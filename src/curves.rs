@@ -23,6 +23,13 @@ use nalgebra::Vector2;
 /// Two unit directions closer than this (1 - |cos|) count as parallel.
 const PARALLEL_TOL: f64 = 1e-9;
 
+/// Largest turn of the crease at a vertex (rad) that counts as a curve: a
+/// polyline standing for a smooth curve turns gently at each vertex; a
+/// sharper turn is a corner, which keeps the straight-crease rule (its sides
+/// stay straight; curved ones would fold the facets there over themselves,
+/// measured from a turn of about 60 degrees on).
+const MAX_CURVE_TURN: f64 = std::f64::consts::FRAC_PI_4;
+
 /// The crease curve tangents of a mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CreaseCurves {
@@ -33,9 +40,9 @@ pub struct CreaseCurves {
 
 impl CreaseCurves {
     /// Find the curved crease vertices of a validated mesh: interior
-    /// vertices with exactly two creases, not collinear. (On the boundary the
-    /// sectors between a crease and the boundary are free, so two creases
-    /// there fold without it.)
+    /// vertices with exactly two creases that turn by more than round-off and
+    /// at most [`MAX_CURVE_TURN`]. (On the boundary the sectors between a
+    /// crease and the boundary are free, so two creases there fold without it.)
     pub fn new(mesh: &Mesh) -> CreaseCurves {
         let nv = mesh.n_vertices();
         let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nv];
@@ -60,8 +67,9 @@ impl CreaseCurves {
                 }
                 let x = mesh.coords[v];
                 let (da, db) = (x - mesh.coords[a], mesh.coords[b] - x);
-                let collinear = 1.0 - da.normalize().dot(&db.normalize()) < PARALLEL_TOL;
-                if collinear {
+                let cos_turn = da.normalize().dot(&db.normalize());
+                let collinear = 1.0 - cos_turn < PARALLEL_TOL;
+                if collinear || cos_turn < MAX_CURVE_TURN.cos() {
                     return None;
                 }
                 let t = da / da.norm_squared() + db / db.norm_squared();
@@ -177,12 +185,18 @@ mod tests {
     }
 
     #[test]
-    fn straight_creases_are_not_curved() {
+    fn straight_creases_and_corners_are_not_curved() {
         let m = kinked(0.0);
         let c = CreaseCurves::new(&m);
         assert!(!c.any());
         let k = kinked(0.4);
         assert!(CreaseCurves::new(&k).is_curved(0));
+        // A 69 degree corner keeps straight sides (curved ones would fold
+        // a facet over) and the model builds.
+        let corner = kinked(1.2);
+        assert!(!CreaseCurves::new(&corner).any());
+        let layout = crate::dofs::DofLayout::new(&corner);
+        assert_eq!(layout.vertex_slots(0).len(), 3);
     }
 
     /// The Hermite side with these end tangents is close to the circular
