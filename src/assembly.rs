@@ -593,6 +593,9 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
         for (v, w) in [(edge.v[0], edge.v[1]), (edge.v[1], edge.v[0])] {
             // The crease tangent at v: the chord, or the curve's tangent.
             let d: Vector2<f64> = layout.curves.direction(mesh, e, v, w);
+            // Which side of the edge a facet is on: by its chord (robust on
+            // curved sides).
+            let chord = mesh.coords[w] - mesh.coords[v];
             let mut right = None;
             let mut left = None;
             for &f in &mesh.edge_faces[e] {
@@ -601,8 +604,6 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
                     .find(|&&x| x != v && x != w)
                     .expect("triangle");
                 let x = mesh.coords[third] - mesh.coords[v];
-                // Which side of the edge: by its chord (robust on curved sides).
-                let chord = mesh.coords[w] - mesh.coords[v];
                 let side = chord.x * x.y - chord.y * x.x;
                 let g = layout.gradient_along(v, f, x);
                 if side < 0.0 {

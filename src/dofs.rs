@@ -103,6 +103,26 @@ pub struct DofLayout {
     pub curves: CreaseCurves,
 }
 
+/// The gradient of the sector (among a vertex's `sectors`) holding `face`,
+/// applied to the reference vector `x`.
+fn gradient_in(sectors: &[Sector], face: usize, x: Vector2<f64>) -> Combo {
+    let s = sectors
+        .iter()
+        .find(|s| s.faces.contains(&face))
+        .expect("every face is in a sector at its corners");
+    let (s0, c0) = s.terms[0];
+    let (s1, c1) = s.terms[1];
+    Combo::two(s0, c0.dot(&x), s1, c1.dot(&x))
+}
+
+/// The six sides of facet `f` in element order `[1->2, 1->3, 2->3, 2->1,
+/// 3->1, 3->2]`: (corner, towards, reference side vector).
+fn facet_sides(mesh: &Mesh, curves: &CreaseCurves, f: usize) -> [(usize, usize, Vector2<f64>); 6] {
+    let [a, b, c] = mesh.triangles[f];
+    [(a, b), (a, c), (b, c), (b, a), (c, a), (c, b)]
+        .map(|(v, w)| (v, w, curves.side(mesh, side_edge(mesh, f, v, w), v, w)))
+}
+
 /// The edge of facet `f` between its corners `v` and `w`.
 fn side_edge(mesh: &Mesh, f: usize, v: usize, w: usize) -> usize {
     let t = mesh.triangles[f];
@@ -256,34 +276,24 @@ impl DofLayout {
             }
         }
 
-        let sector_of = |v: usize, f: usize| {
-            sectors[v]
-                .iter()
-                .find(|s| s.faces.contains(&f))
-                .expect("every face is in a sector")
-        };
-        let grad = |v: usize, w: usize, f: usize| {
-            let s = sector_of(v, f);
-            let x = curves.side(mesh, side_edge(mesh, f, v, w), v, w);
-            let (s0, c0) = s.terms[0];
-            let (s1, c1) = s.terms[1];
-            Combo::two(s0, c0.dot(&x), s1, c1.dot(&x))
-        };
-        let local = mesh
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(f, &[a, b, c])| {
+        let local = (0..mesh.triangles.len())
+            .map(|f| {
+                let [a, b, c] = mesh.triangles[f];
+                let sides = facet_sides(mesh, &curves, f);
+                let grad = |k: usize| {
+                    let (v, _, x) = sides[k];
+                    gradient_in(&sectors[v], f, x)
+                };
                 [
                     Combo::one(position_slot[a], 1.0),
-                    grad(a, b, f),
-                    grad(a, c, f),
+                    grad(0),
+                    grad(1),
                     Combo::one(position_slot[b], 1.0),
-                    grad(b, c, f),
-                    grad(b, a, f),
+                    grad(2),
+                    grad(3),
                     Combo::one(position_slot[c], 1.0),
-                    grad(c, a, f),
-                    grad(c, b, f),
+                    grad(4),
+                    grad(5),
                 ]
             })
             .collect();
@@ -301,16 +311,7 @@ impl DofLayout {
     /// 1->3, 2->3, 2->1, 3->1, 3->2]`: chords, or Hermite tangents on curved
     /// crease sides (what the facet's gradient DOFs mean).
     pub fn side_vectors(&self, mesh: &Mesh, f: usize) -> [Vector2<f64>; 6] {
-        let [a, b, c] = mesh.triangles[f];
-        let side = |v: usize, w: usize| self.curves.side(mesh, side_edge(mesh, f, v, w), v, w);
-        [
-            side(a, b),
-            side(a, c),
-            side(b, c),
-            side(b, a),
-            side(c, a),
-            side(c, b),
-        ]
+        facet_sides(mesh, &self.curves, f).map(|(_, _, x)| x)
     }
 
     /// Number of vector slots.
@@ -326,13 +327,7 @@ impl DofLayout {
     /// The gradient of `face` at vertex `v` applied to the reference vector
     /// `x` (a combination of slots).
     pub fn gradient_along(&self, v: usize, face: usize, x: Vector2<f64>) -> Combo {
-        let s = self.sectors[v]
-            .iter()
-            .find(|s| s.faces.contains(&face))
-            .expect("face at vertex");
-        let (s0, c0) = s.terms[0];
-        let (s1, c1) = s.terms[1];
-        Combo::two(s0, c0.dot(&x), s1, c1.dot(&x))
+        gradient_in(&self.sectors[v], face, x)
     }
 
     /// Slots owned by vertex `v` (its position first).

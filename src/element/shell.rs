@@ -161,6 +161,18 @@ fn kinematics(q: &QuadPoint, e: &ElemVec) -> Kinematics {
     }
 }
 
+/// `dX/d eta`, `dX/d zeta` of the reference map `X = sum_k S_k e0_k` from the
+/// shape functions' first derivatives `d1` (iso-parametric: the same functions
+/// as the field, so the reference state is strain-free).
+fn reference_tangents(e0: &[Vector2<f64>; 9], d1: &[[f64; 2]; 9]) -> (Vector2<f64>, Vector2<f64>) {
+    let (mut c1, mut c2) = (Vector2::zeros(), Vector2::zeros());
+    for k in 0..9 {
+        c1 += e0[k] * d1[k][0];
+        c2 += e0[k] * d1[k][1];
+    }
+    (c1, c2)
+}
+
 /// `Mhat` of a curved-sided facet: the mean of `s_k s_l` weighted by the
 /// reference Jacobian of its map, by the 49-point collapsed Gauss rule
 /// (exact to degree 12, the integrand's).
@@ -168,12 +180,7 @@ fn curved_mass_hat(shape: &Shape, e0: &[Vector2<f64>; 9]) -> [[f64; 9]; 9] {
     let mut m = [[0.0; 9]; 9];
     let mut total = 0.0;
     for (l, w) in super::shape::collapsed_gauss(7) {
-        let geo = shape.d1(l[1], l[2]);
-        let (mut c1, mut c2) = (Vector2::zeros(), Vector2::zeros());
-        for k in 0..9 {
-            c1 += e0[k] * geo[k][0];
-            c2 += e0[k] * geo[k][1];
-        }
+        let (c1, c2) = reference_tangents(e0, &shape.d1(l[1], l[2]));
         let wd = w * c1.perp(&c2);
         total += wd;
         let s = shape.values(l);
@@ -286,13 +293,7 @@ impl ShellElement {
             let (jinv, det_q) = if straight {
                 (j2_inv, det)
             } else {
-                // Iso-parametric: the reference map uses the same functions,
-                // so the reference state is strain-free.
-                let (mut c1, mut c2) = (Vector2::zeros(), Vector2::zeros());
-                for k in 0..9 {
-                    c1 += e0[k] * d1[k][0];
-                    c2 += e0[k] * d1[k][1];
-                }
+                let (c1, c2) = reference_tangents(&e0, &d1);
                 let d = c1.perp(&c2);
                 if d.is_nan() || d <= 1e-6 * det {
                     return Err(format!(
