@@ -44,6 +44,7 @@
 #![deny(unsafe_code)]
 
 pub mod assembly;
+pub mod contact;
 pub mod benchmarks;
 pub mod cli;
 pub mod crease;

@@ -1,0 +1,9 @@
+//! Self-contact of the sheet: the sampled contact surface, the broad phase,
+//! the barrier and friction force term, and the geometric kernels under them
+//! (distances with exact derivatives, continuous collision detection,
+//! triangle-triangle intersection).
+
+pub mod ccd;
+pub mod distance;
+pub mod intersect;
+pub mod scalar;
