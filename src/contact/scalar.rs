@@ -441,12 +441,11 @@ mod tests {
         );
         assert_eq!(d.v, f64s(P));
         let g = fd_gradient(P, 1e-6);
-        for i in 0..3 {
+        for (i, gi) in g.iter().enumerate() {
             assert!(
-                (d.g[i] - g[i]).abs() < 1e-7 * (1.0 + g[i].abs()),
-                "{i}: {} vs {}",
-                d.g[i],
-                g[i]
+                (d.g[i] - gi).abs() < 1e-7 * (1.0 + gi.abs()),
+                "{i}: {} vs {gi}",
+                d.g[i]
             );
         }
     }
