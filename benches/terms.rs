@@ -14,7 +14,7 @@ use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::VertexInput;
 use std::time::Instant;
 
-use origami_fmu::benchmarks::arg;
+use origami_fmu::benchmarks::{arg, best_us};
 
 /// Deterministic pseudo-random numbers in [-1, 1].
 fn noise(i: usize) -> f64 {
@@ -22,17 +22,6 @@ fn noise(i: usize) -> f64 {
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
     ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-}
-
-/// Best-of-`repeats` time of `f` in microseconds (the machine is shared).
-fn best_us(repeats: usize, mut f: impl FnMut()) -> f64 {
-    let mut best = f64::INFINITY;
-    for _ in 0..repeats {
-        let t = Instant::now();
-        f();
-        best = best.min(t.elapsed().as_secs_f64() * 1e6);
-    }
-    best
 }
 
 fn main() {

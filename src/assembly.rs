@@ -92,6 +92,10 @@ pub struct Evaluation {
     pub theta: Vec<f64>,
     /// Energy of the terms given to [`Assembler::with_terms`] (contact, ...).
     pub term_energy: f64,
+    /// Power dissipated by friction (W).
+    pub friction_power: f64,
+    /// Power dissipated by the contact's normal dashpots (W).
+    pub contact_damping_power: f64,
 }
 
 /// Coefficients of the requested matrix `k K + m M + c C`.
@@ -126,6 +130,10 @@ pub struct Assembler {
     /// Slot-level pattern (all slots, CSR, sorted rows): which slots couple.
     slot_ptr: Vec<usize>,
     slot_idx: Vec<usize>,
+    /// Which slots are supported or prescribed.
+    is_fixed: Vec<bool>,
+    /// Slot pairs force terms asked for (sorted, a <= b).
+    extra_pairs: Vec<(usize, usize)>,
     /// Mass matrix by slots: for each slot, (other slot, coefficient of I3).
     pub mass_rows: Vec<Vec<(usize, f64)>>,
     mass_values: Vec<f64>,
@@ -214,13 +222,8 @@ impl Assembler {
                 offsets: Vec::new(),
             }
         };
-        let mut face_maps: Vec<BlockMap> = layout.local.iter().map(|l| block_map_of(l)).collect();
-        let mut crease_maps: Vec<BlockMap> =
-            creases.iter().map(|c| block_map_of(&c.combos)).collect();
-
-        // Slot-level adjacency (CSR, sorted, all slots) -> scalar pattern
-        // over free DOFs. Sorting each slot's neighbour list keeps this
-        // O(n log n) in time and O(n) in memory.
+        let face_maps: Vec<BlockMap> = layout.local.iter().map(|l| block_map_of(l)).collect();
+        let crease_maps: Vec<BlockMap> = creases.iter().map(|c| block_map_of(&c.combos)).collect();
         let mut pairs: Vec<(usize, usize)> = Vec::new();
         for t in &extra {
             for (a, b) in t.pattern(&layout) {
@@ -230,24 +233,61 @@ impl Assembler {
                         t.name()
                     ));
                 }
-                pairs.extend([(a, b), (b, a), (a, a), (b, b)]);
+                pairs.push((a.min(b), a.max(b)));
             }
         }
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut asm = Assembler {
+            layout,
+            elements,
+            creases,
+            free,
+            n_free,
+            col_ptr: Vec::new(),
+            row_idx: Vec::new(),
+            face_maps,
+            crease_maps,
+            slot_ptr: Vec::new(),
+            slot_idx: Vec::new(),
+            is_fixed,
+            extra_pairs: pairs,
+            mass_rows: Vec::new(),
+            mass_values: Vec::new(),
+            rigid: RigidModes::default(),
+            physics,
+            terms: terms::built_in().into_iter().chain(extra).collect(),
+        };
+        asm.build_pattern();
+        asm.set_physics(physics);
+        Ok(asm)
+    }
+
+    /// The slot-level and free-DOF patterns and the scatter offsets, from
+    /// the facets, the creases and `extra_pairs`.
+    fn build_pattern(&mut self) {
+        let n_slots = self.layout.n_slots();
+        let is_fixed = &self.is_fixed;
+        let free = &self.free;
+        // Slot-level adjacency (CSR, sorted, all slots) -> scalar pattern
+        // over free DOFs. Sorting each slot's neighbour list keeps this
+        // O(n log n) in time and O(n) in memory.
         let mut count = vec![0usize; n_slots + 1];
-        for bm in face_maps.iter().chain(crease_maps.iter()) {
+        for bm in self.face_maps.iter().chain(self.crease_maps.iter()) {
             for &a in &bm.slots {
                 count[a + 1] += bm.slots.len();
             }
         }
-        for &(a, _) in &pairs {
-            count[a + 1] += 1;
+        for &(a, b) in &self.extra_pairs {
+            count[a + 1] += 2;
+            count[b + 1] += 2;
         }
         for s in 0..n_slots {
             count[s + 1] += count[s];
         }
         let mut fill = count.clone();
         let mut raw = vec![0usize; count[n_slots]];
-        for bm in face_maps.iter().chain(crease_maps.iter()) {
+        for bm in self.face_maps.iter().chain(self.crease_maps.iter()) {
             for &a in &bm.slots {
                 for &b in &bm.slots {
                     raw[fill[a]] = b;
@@ -255,9 +295,11 @@ impl Assembler {
                 }
             }
         }
-        for &(a, b) in &pairs {
-            raw[fill[a]] = b;
-            fill[a] += 1;
+        for &(a, b) in &self.extra_pairs {
+            for (x, y) in [(a, b), (b, a), (a, a), (b, b)] {
+                raw[fill[x]] = y;
+                fill[x] += 1;
+            }
         }
         let mut slot_ptr = Vec::with_capacity(n_slots + 1);
         slot_ptr.push(0);
@@ -305,7 +347,7 @@ impl Assembler {
             }
             o
         };
-        for bm in face_maps.iter_mut().chain(crease_maps.iter_mut()) {
+        for bm in self.face_maps.iter_mut().chain(self.crease_maps.iter_mut()) {
             let ns = bm.slots.len();
             bm.offsets = Vec::with_capacity(ns * ns);
             for i in 0..ns {
@@ -314,27 +356,40 @@ impl Assembler {
                 }
             }
         }
+        self.col_ptr = col_ptr;
+        self.row_idx = row_idx;
+        self.slot_ptr = slot_ptr;
+        self.slot_idx = slot_idx;
+    }
 
-        let mut asm = Assembler {
-            layout,
-            elements,
-            creases,
-            free,
-            n_free,
-            col_ptr,
-            row_idx,
-            face_maps,
-            crease_maps,
-            slot_ptr,
-            slot_idx,
-            mass_rows: Vec::new(),
-            mass_values: Vec::new(),
-            rigid: RigidModes::default(),
-            physics,
-            terms: terms::built_in().into_iter().chain(extra).collect(),
-        };
-        asm.set_physics(physics);
-        Ok(asm)
+    /// Whether slots `a` and `b` couple in the pattern.
+    pub fn has_pair(&self, a: usize, b: usize) -> bool {
+        self.slot_idx[self.slot_ptr[a]..self.slot_ptr[a + 1]]
+            .binary_search(&b)
+            .is_ok()
+    }
+
+    /// Slot pairs beyond the facets' and creases' own (sorted, `a <= b`):
+    /// what force terms asked for. Part of a saved state, so that a
+    /// restore factors with the very pattern the run had.
+    pub fn extra_pairs(&self) -> &[(usize, usize)] {
+        &self.extra_pairs
+    }
+
+    /// Make the pattern exactly the built-in one plus `pairs` (rebuilds the
+    /// pattern and the mass values; the solver must be rebuilt after).
+    pub fn set_extra_pairs(&mut self, mut pairs: Vec<(usize, usize)>) {
+        for p in pairs.iter_mut() {
+            *p = (p.0.min(p.1), p.0.max(p.1));
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        if pairs == self.extra_pairs {
+            return;
+        }
+        self.extra_pairs = pairs;
+        self.build_pattern();
+        self.set_physics(self.physics);
     }
 
     /// Change the physical coefficients (rebuilds the mass matrix).
@@ -453,6 +508,8 @@ impl Assembler {
         out.strain_energy = 0.0;
         out.crease_energy = 0.0;
         out.term_energy = 0.0;
+        out.friction_power = 0.0;
+        out.contact_damping_power = 0.0;
         if let Some((vals, co)) = matrix.as_mut() {
             for (v, m) in vals.iter_mut().zip(&self.mass_values) {
                 *v = co.m * m;
@@ -477,12 +534,48 @@ impl Assembler {
 
     /// Give every force term the accepted state before a time step (its
     /// per-step hook: a broad phase, caches).
-    pub fn before_step(&mut self, q: &[f64], v: &[f64]) {
+    /// Returns whether the pattern grew (the solver's symbolic analysis
+    /// must then be redone).
+    pub fn before_step(&mut self, q: &[f64], v: &[f64]) -> bool {
         let mut terms = std::mem::take(&mut self.terms);
+        let mut wanted = Vec::new();
         for t in terms.iter_mut() {
-            t.before_step(self, q, v);
+            wanted.extend(t.before_step(self, q, v));
         }
         self.terms = terms;
+        wanted.retain(|&(a, b)| !(self.has_pair(a, b) || self.is_fixed[a] || self.is_fixed[b]));
+        if wanted.is_empty() {
+            return false;
+        }
+        let mut pairs = self.extra_pairs.clone();
+        pairs.extend(wanted);
+        self.set_extra_pairs(pairs);
+        true
+    }
+
+    /// The largest fraction in (0, 1] of the move `q -> q + dq` every force
+    /// term admits (contact: free of collisions).
+    pub fn max_step_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        self.terms
+            .iter()
+            .map(|t| t.max_step_fraction(self, q, dq))
+            .fold(1.0, f64::min)
+    }
+
+    /// The force term of type `T`, if the assembler has one.
+    pub fn term<T: 'static>(&self) -> Option<&T> {
+        self.terms
+            .iter()
+            .find_map(|t| t.as_any().and_then(|a| a.downcast_ref::<T>()))
+    }
+
+    /// Append a force term built after the assembler (it may need the
+    /// layout and elements, as contact does); its declared pattern joins.
+    pub fn add_term(&mut self, term: Box<dyn ForceTerm>) {
+        let mut pairs = self.extra_pairs.clone();
+        pairs.extend(term.pattern(&self.layout));
+        self.terms.push(term);
+        self.set_extra_pairs(pairs);
     }
 
     /// Names of the force terms, in evaluation order.
@@ -492,21 +585,38 @@ impl Assembler {
 
     /// Add the 3x3 block `k` at slots (a, b) of the free-DOF matrix values
     /// (nothing when either slot is fixed). For loads outside the elements.
+    /// Panics when the pair is not in the pattern.
     pub fn add_block(&self, a: usize, b: usize, k: &nalgebra::Matrix3<f64>, vals: &mut [f64]) {
+        assert!(self.try_add_block(a, b, k, vals), "block in pattern");
+    }
+
+    /// [`Assembler::add_block`] that leaves out a block not in the pattern
+    /// and says so (false): an iteration matrix may lack couplings that
+    /// appeared within a step (the pattern grows before the next one).
+    pub fn try_add_block(
+        &self,
+        a: usize,
+        b: usize,
+        k: &nalgebra::Matrix3<f64>,
+        vals: &mut [f64],
+    ) -> bool {
         if self.free[3 * a] == FIXED || self.free[3 * b] == FIXED {
-            return;
+            return true;
         }
+        let r0 = self.free[3 * a];
+        // The three columns of a slot hold the same rows: one search.
+        let c0 = self.free[3 * b];
+        let rows = &self.row_idx[self.col_ptr[c0]..self.col_ptr[c0 + 1]];
+        let Ok(k0) = rows.binary_search(&r0) else {
+            return false;
+        };
         for y in 0..3 {
-            let col = self.free[3 * b + y];
-            let range = self.col_ptr[col]..self.col_ptr[col + 1];
-            let r0 = self.free[3 * a];
-            let k0 = self.row_idx[range.clone()]
-                .binary_search(&r0)
-                .expect("block in pattern");
+            let start = self.col_ptr[c0 + y] + k0;
             for x in 0..3 {
-                vals[range.start + k0 + x] += k[(x, y)];
+                vals[start + x] += k[(x, y)];
             }
         }
+        true
     }
 
     /// Membrane + bending energy of each facet (J) at slot vector `q`, in

@@ -44,9 +44,9 @@
 #![deny(unsafe_code)]
 
 pub mod assembly;
-pub mod contact;
 pub mod benchmarks;
 pub mod cli;
+pub mod contact;
 pub mod crease;
 pub mod curves;
 pub mod dofs;

@@ -37,8 +37,9 @@ impl ForceTerm for Spring {
         vec![(layout.position_slot[self.a], layout.position_slot[self.b])]
     }
 
-    fn before_step(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) {
+    fn before_step(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
         self.hooks.fetch_add(1, Ordering::Relaxed);
+        Vec::new()
     }
 
     fn add(

@@ -30,8 +30,24 @@ pub trait ForceTerm: Send + Sync {
         Vec::new()
     }
 
-    /// Called with the accepted state `(q, v)` before each time step.
-    fn before_step(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) {}
+    /// Called with the accepted state `(q, v)` before each time step; returns
+    /// slot pairs the term may write in this step (the pattern grows by the
+    /// ones it lacks; an empty list keeps it).
+    fn before_step(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
+        Vec::new()
+    }
+
+    /// Largest fraction in (0, 1] of the move `q -> q + dq` (all DOFs) the
+    /// term admits (contact: free of collisions); the stepper limits its
+    /// Newton steps and predictors to it.
+    fn max_step_fraction(&self, _asm: &Assembler, _q: &[f64], _dq: &[f64]) -> f64 {
+        1.0
+    }
+
+    /// The term as `Any`, for callers that need its own reports.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
 
     /// Add this term's force to `out.force` (all DOFs, internal-force sign:
     /// it opposes the motion it resists) and its energy to `out`; with a

@@ -3,7 +3,13 @@
 //! (distances with exact derivatives, continuous collision detection,
 //! triangle-triangle intersection).
 
+pub mod broad;
 pub mod ccd;
+pub mod check;
 pub mod distance;
 pub mod intersect;
 pub mod scalar;
+pub mod surface;
+pub mod term;
+
+pub use term::{ContactReport, ContactSettings, ContactTerm};

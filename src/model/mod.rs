@@ -35,7 +35,7 @@ mod system;
 mod variables;
 
 pub use physics::{AUTO_DAMPING_RATIO, physics};
-pub use state::ModelState;
+pub use state::{ContactWork, ModelState};
 pub use step::StepReport;
 pub use variables::{VariableSpec, fold_edges};
 
@@ -145,6 +145,8 @@ impl Model {
             phase: Phase::Setup,
             h_next: scene.solver.max_step,
             outputs: outputs.iter().map(|v| v.start).collect(),
+            work: Default::default(),
+            extra_pairs: Vec::new(),
         };
         // Build once now so that a bad scene fails at instantiation.
         let auto_damping = scene.auto_damping;
@@ -210,5 +212,40 @@ impl Model {
         self.state.h_next = self.sys.as_ref().expect("built").settings.max_step;
         self.state.phase = Phase::Running;
         Ok(())
+    }
+}
+
+impl Model {
+    /// Contact at the current state (None without contact): smallest gap,
+    /// active pairs, normal force.
+    pub fn contact(&self) -> Option<crate::contact::ContactReport> {
+        let sys = self.sys.as_ref()?;
+        let c = sys.asm.term::<crate::contact::ContactTerm>()?;
+        let m = &self.scene.mesh;
+        let search =
+            (0..m.edges.len()).map(|e| m.edge_length(e)).sum::<f64>() / m.edges.len().max(1) as f64;
+        Some(c.report(&self.state.dynamics.q, search))
+    }
+
+    /// Work dissipated by contact so far (friction and normal dashpots).
+    pub fn contact_work(&self) -> state::ContactWork {
+        self.state.work
+    }
+
+    /// Run the intersection checker on the current state: facets sampled
+    /// with `m` subdivisions, distances searched up to `search` (m).
+    pub fn check_intersections(
+        &self,
+        m: usize,
+        search: f64,
+    ) -> Option<crate::contact::check::IntersectionReport> {
+        let sys = self.sys.as_ref()?;
+        Some(crate::contact::check::check(
+            &sys.asm,
+            &self.scene.mesh,
+            &self.state.dynamics.q,
+            m,
+            search,
+        ))
     }
 }

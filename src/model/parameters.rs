@@ -66,6 +66,8 @@ parameters! {
         "",
         "most internal steps one communication step may take before it fails"
     ),
+    /// Only in scenes with contact.
+    ContactFriction => ("contact.friction", "", "Coulomb friction coefficient of self-contact"),
 }
 
 use Parameter::*;
@@ -92,7 +94,8 @@ impl Parameter {
             | RhoInf
             | MaxStep
             | Tolerance
-            | MaxInternalSteps => false,
+            | MaxInternalSteps
+            | ContactFriction => false,
         }
     }
 
@@ -125,6 +128,7 @@ impl Parameter {
             MaxStep => Some(s.max_step),
             Tolerance => Some(s.tolerance),
             MaxInternalSteps => Some(s.max_internal_steps as f64),
+            ContactFriction => sc.contact.map(|c| c.friction),
         }
     }
 
@@ -155,6 +159,11 @@ impl Parameter {
             MaxStep => sc.solver.max_step = x,
             Tolerance => sc.solver.tolerance = x,
             MaxInternalSteps => sc.solver.max_internal_steps = x as usize,
+            ContactFriction => {
+                if let Some(c) = sc.contact.as_mut() {
+                    c.friction = x;
+                }
+            }
         }
     }
 
@@ -277,6 +286,7 @@ mod tests {
         let mut with_gravity = Scene::with_defaults("sq", mesh);
         with_gravity.gravity = Some([0.0, 0.0, -9.81]);
         with_gravity.auto_damping = false;
+        with_gravity.contact = Some(Default::default());
         let mut per_length = with_gravity.clone();
         per_length.crease = CreaseStiffness::PerLength(1e-3);
         let mut seen = Vec::new();

@@ -40,6 +40,27 @@ pub struct ModelState {
     pub h_next: f64,
     /// Output values at `time`.
     pub outputs: Vec<f64>,
+    /// Work dissipated by contact so far.
+    #[serde(default)]
+    pub work: ContactWork,
+    /// Slot pairs the matrix pattern holds beyond the sheet's own (contact
+    /// pairs met so far): a restore factors with the same pattern.
+    #[serde(default)]
+    pub extra_pairs: Vec<(usize, usize)>,
+}
+
+/// Work dissipated by contact (J), and the powers (W) at the last accepted
+/// state (the trapezoidal rule over each step).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ContactWork {
+    /// Friction work.
+    pub friction: f64,
+    /// Work of the normal dashpots.
+    pub contact_damping: f64,
+    /// Friction power at the last accepted state.
+    pub friction_power: f64,
+    /// Dashpot power at the last accepted state.
+    pub contact_damping_power: f64,
 }
 
 impl Model {
@@ -87,6 +108,12 @@ impl Model {
                 return Err(e);
             }
         }
+        if let Some(sys) = self.sys.as_mut()
+            && sys.asm.extra_pairs() != &s.extra_pairs[..]
+        {
+            sys.asm.set_extra_pairs(s.extra_pairs.clone());
+            sys.rebuild_solver().map_err(Error::State)?;
+        }
         self.state = s;
         Ok(())
     }
@@ -132,6 +159,74 @@ impl Model {
         }
         let saved = self.state.clone();
         self.state.dynamics.v = v;
+        let theta = self.state.crease_theta.clone();
+        let u = self.state.inputs_now.clone();
+        if let Err(e) = self.consistent_accelerations(&u, &theta) {
+            self.state = saved;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Move the listed vertices rigidly, `x -> R x + t` (their gradients
+    /// turn with `R`), and make the accelerations consistent: to start a
+    /// scene with parts placed apart from the flat pattern (a panel above
+    /// another). List every vertex of a connected part, or the facets
+    /// between moved and unmoved vertices are strained. After
+    /// [`Model::initialize`]; supported and prescribed slots do not move.
+    pub fn move_rigidly(
+        &mut self,
+        vertices: &[usize],
+        rotation: [[f64; 3]; 3],
+        translation: [f64; 3],
+    ) -> Result<(), Error> {
+        if self.state.phase != Phase::Running {
+            return Err(Error::Phase(
+                "move_rigidly needs an initialized model".into(),
+            ));
+        }
+        let nv = self.scene.mesh.n_vertices();
+        if let Some(&v) = vertices.iter().find(|&&v| v >= nv) {
+            return Err(Error::BadValue {
+                name: "vertex".into(),
+                value: v as f64,
+                reason: format!("the mesh has {nv} vertices"),
+            });
+        }
+        let r = nalgebra::Matrix3::from_fn(|i, j| rotation[i][j]);
+        if r.iter().chain(&translation).any(|x| !x.is_finite())
+            || (r.transpose() * r - nalgebra::Matrix3::identity()).norm() > 1e-9
+            || r.determinant() < 0.0
+        {
+            return Err(Error::BadValue {
+                name: "rotation".into(),
+                value: f64::NAN,
+                reason: "must be a finite proper rotation (orthonormal, determinant 1) \
+                         and the translation finite"
+                    .into(),
+            });
+        }
+        let sys = self.sys.as_ref().expect("initialized");
+        let layout = &sys.asm.layout;
+        let t = nalgebra::Vector3::from(translation);
+        let saved = self.state.clone();
+        let q = &mut self.state.dynamics.q;
+        let mut done = vec![false; layout.n_slots()];
+        for &v in vertices {
+            for s in layout.vertex_slots(v) {
+                if done[s] || sys.asm.free[3 * s] == crate::assembly::FIXED {
+                    continue;
+                }
+                done[s] = true;
+                let x = nalgebra::Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
+                let y = if s == layout.position_slot[v] {
+                    r * x + t
+                } else {
+                    r * x
+                };
+                q[3 * s..3 * s + 3].copy_from_slice(y.as_slice());
+            }
+        }
         let theta = self.state.crease_theta.clone();
         let u = self.state.inputs_now.clone();
         if let Err(e) = self.consistent_accelerations(&u, &theta) {

@@ -50,6 +50,13 @@ pub struct StepReport {
     pub factor_time: f64,
     /// CPU time in sparse triangular solves, s.
     pub solve_time: f64,
+    /// Newton steps cut short by contact's collision check.
+    #[serde(default)]
+    pub limited_steps: usize,
+    /// Times the matrix pattern grew (new contact pairs; each one a new
+    /// symbolic analysis).
+    #[serde(default)]
+    pub pattern_growths: usize,
 }
 
 impl StepReport {
@@ -67,6 +74,8 @@ impl StepReport {
         self.assembly_time += r.assembly_time;
         self.factor_time += r.factor_time;
         self.solve_time += r.solve_time;
+        self.limited_steps += r.limited_steps;
+        self.pattern_growths += r.pattern_growths;
     }
 }
 
@@ -181,8 +190,17 @@ impl Model {
             inputs_at(s + h, &mut u);
             sys.inputs.drive_into(&u, &mut d);
             let gd = d.stepper_drive(&self.state.crease_theta);
-            sys.asm
-                .before_step(&self.state.dynamics.q, &self.state.dynamics.v);
+            if sys
+                .asm
+                .before_step(&self.state.dynamics.q, &self.state.dynamics.v)
+            {
+                // Contact pairs appeared: new blocks, new symbolic analysis.
+                sys.rebuild_solver().map_err(|reason| Error::StepFailed {
+                    time: t0 + s,
+                    reason,
+                })?;
+                report.pattern_growths += 1;
+            }
             let res = ga::step(
                 &sys.asm,
                 &mut sys.solver,
@@ -202,9 +220,17 @@ impl Model {
                     report.newton_iterations += out.iterations;
                     report.factorizations += out.factorizations;
                     report.assembly_time += out.assembly_time.as_secs_f64();
+                    report.limited_steps += out.limited_steps;
                     let at_min = h <= sys.settings.min_step * AT_MIN_STEP;
                     if out.error <= 1.0 || at_min {
                         self.state.dynamics = next;
+                        let ev = sys.ws.evaluation();
+                        let w = &mut self.state.work;
+                        w.friction += 0.5 * h * (w.friction_power + ev.friction_power);
+                        w.contact_damping +=
+                            0.5 * h * (w.contact_damping_power + ev.contact_damping_power);
+                        w.friction_power = ev.friction_power;
+                        w.contact_damping_power = ev.contact_damping_power;
                         self.state
                             .crease_theta
                             .clone_from(&sys.ws.evaluation().theta);
@@ -248,6 +274,7 @@ impl Model {
             report.factor_time = (stats.factor_time - stats0.factor_time).as_secs_f64();
             report.solve_time = (stats.solve_time - stats0.solve_time).as_secs_f64();
             self.state.jacobian = sys.ws.jacobian().cloned();
+            self.state.extra_pairs = sys.asm.extra_pairs().to_vec();
         }
         let ev = match &sys.cd {
             Some(cd) => cd.evaluation().clone(),

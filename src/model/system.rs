@@ -4,6 +4,7 @@
 use super::drive::InputMap;
 use super::{Error, Model, fold_edges, physics};
 use crate::assembly::Assembler;
+use crate::contact::ContactTerm;
 use crate::element::ElementOptions;
 use crate::scene::{ActuatorMode, Fix, Integrator, SolverSettings};
 use crate::solver::SparseSolver;
@@ -31,6 +32,23 @@ pub(super) struct System {
     /// The scene's solver settings it was built with (step bounds and
     /// the internal step limit).
     pub(super) settings: SolverSettings,
+}
+
+impl System {
+    /// A new sparse solver for the assembler's pattern as it is now (after
+    /// the pattern grew or was restored); the iteration matrix is gone.
+    pub(super) fn rebuild_solver(&mut self) -> Result<(), String> {
+        let stats = self.solver.stats();
+        self.solver = SparseSolver::new_blocked(
+            self.asm.n_free,
+            self.asm.col_ptr.clone(),
+            self.asm.row_idx.clone(),
+            3,
+        )?;
+        self.solver.carry_stats(stats);
+        self.ws.invalidate_jacobian();
+        Ok(())
+    }
 }
 
 impl Model {
@@ -84,6 +102,26 @@ impl Model {
         let physics = physics(sc);
         let mut asm = Assembler::new(mesh, physics, ElementOptions::default(), &fixed)
             .map_err(Error::Scene)?;
+        if let Some(c) = &sc.contact {
+            if sc.solver.integrator == Integrator::CentralDifference {
+                return Err(Error::Scene(
+                    "ancf:contact needs the implicit integrator (its Newton steps are \
+                     collision-checked); remove \"integrator\": \"central_difference\""
+                        .into(),
+                ));
+            }
+            let m = &physics.material;
+            let term = ContactTerm::new(
+                mesh,
+                &asm.layout,
+                &asm.elements,
+                c,
+                m.density * m.thickness,
+                m.youngs_modulus * m.thickness,
+            )
+            .map_err(Error::Scene)?;
+            asm.add_term(Box::new(term));
+        }
         // Damping leaves alone the rigid motion the supports allow.
         let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
         asm.rigid

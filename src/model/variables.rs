@@ -117,8 +117,30 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
             0.0,
         ));
     }
+    if scene.contact.is_some() {
+        for (name, unit, what) in CONTACT_OUTPUTS {
+            v.push(spec(name.into(), unit, what.into(), 0.0));
+        }
+    }
     v
 }
+
+/// The outputs of a scene with contact (after the energies).
+const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
+    (
+        "contact.min_gap",
+        "m",
+        "smallest surface distance minus the contact thickness (searched up to a facet size)",
+    ),
+    (
+        "contact.pairs",
+        "",
+        "contact pairs within the barrier width",
+    ),
+    ("contact.normal_force", "N", "total normal contact force"),
+    ("energy.contact", "J", "contact barrier energy"),
+    ("energy.friction", "J", "work dissipated by friction"),
+];
 
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`
 /// outputs.
@@ -221,8 +243,8 @@ impl Model {
     /// Kinetic, strain and crease energy now (J).
     pub fn energies(&self) -> [f64; 3] {
         let o = &self.state.outputs;
-        if self.scene.outputs.energies {
-            [o[o.len() - 3], o[o.len() - 2], o[o.len() - 1]]
+        if let Some(k) = self.outputs.iter().position(|v| v.name == "energy.kinetic") {
+            [o[k], o[k + 1], o[k + 2]]
         } else {
             [f64::NAN; 3]
         }
@@ -279,6 +301,15 @@ impl Model {
             sys.asm.mass_mul(v, &mut mv);
             let ke = 0.5 * v.iter().zip(&mv).map(|(a, b)| a * b).sum::<f64>();
             out.extend([ke, ev.strain_energy, ev.crease_energy]);
+        }
+        if let Some(r) = self.contact() {
+            out.extend([
+                r.min_gap,
+                r.pairs as f64,
+                r.normal_force,
+                ev.term_energy,
+                self.state.work.friction,
+            ]);
         }
         out
     }

@@ -1220,6 +1220,12 @@ fn apply_physics(
     };
     scene.auto_damping = p.damping.is_none();
     scene.gravity = p.gravity;
+    scene.contact = p.contact.map(|mut c| {
+        if c.thickness == 0.0 {
+            c.thickness = p.material.thickness;
+        }
+        c
+    });
     scene.solver = p.solver;
     scene.outputs = p.outputs;
 

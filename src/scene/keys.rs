@@ -10,7 +10,7 @@
 //! | `ancf:supports` | `[{vertices, fix}]` |
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
-//! | `ancf:contact` | `{enabled: false, friction, stiffness, thickness}` |
+//! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
 //! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
@@ -28,6 +28,7 @@ use super::{
     ActuatorMode, CreaseStiffness, Fix, FlatEdges, InputTiming, Integrator, Material, NewtonMode,
     Outputs, SolverSettings, VertexInput,
 };
+use crate::contact::ContactSettings;
 use serde_json::{Map, Value};
 
 /// Every `ancf:` key this version understands.
@@ -123,6 +124,8 @@ pub struct PhysicsKeys {
     pub solver: SolverSettings,
     /// `ancf:outputs`.
     pub outputs: Outputs,
+    /// `ancf:contact` when enabled (thickness 0: the sheet's).
+    pub contact: Option<ContactSettings>,
     /// `ancf:refine`.
     pub refine: usize,
     /// `ancf:import`.
@@ -364,6 +367,7 @@ pub fn parse(
         outputs: Outputs::default(),
         refine: 0,
         import: Import::default(),
+        contact: None,
     };
     let positive = |x: f64| x > 0.0;
     let non_negative = |x: f64| x >= 0.0;
@@ -558,7 +562,16 @@ pub fn parse(
         let o = Obj::new(
             "ancf:contact",
             v,
-            &["enabled", "friction", "stiffness", "thickness"],
+            &[
+                "enabled",
+                "friction",
+                "stiffness",
+                "thickness",
+                "barrier_width",
+                "stick_velocity",
+                "damping_ratio",
+                "subdivisions",
+            ],
         )?;
         let enabled = match o.get("enabled") {
             None => false,
@@ -570,14 +583,33 @@ pub fn parse(
                 ));
             }
         };
-        o.num_where("friction", non_negative, "zero or positive")?;
-        o.num_where("stiffness", positive, "positive (N/m)")?;
-        o.num_where("thickness", non_negative, "zero or positive (m)")?;
+        let d = ContactSettings::default();
+        let friction = o.num_where("friction", non_negative, "zero or positive")?;
+        let stiffness = o.num_where("stiffness", positive, "positive (N/m)")?;
+        let thickness = o.num_where("thickness", positive, "positive (m)")?;
+        let width = o.num_where(
+            "barrier_width",
+            |x| x > 0.0 && x <= 1.0,
+            "in (0, 1] (a fraction of the thickness)",
+        )?;
+        let stick = o.num_where("stick_velocity", positive, "positive (m/s)")?;
+        let zeta = o.num_where("damping_ratio", non_negative, "zero or positive")?;
+        let subdivisions = o.num_where(
+            "subdivisions",
+            |x| x.fract() == 0.0 && (1.0..=8.0).contains(&x),
+            "a whole number from 1 to 8",
+        )?;
         if enabled {
-            return Err(SceneError::invalid(
-                o.path("enabled"),
-                "contact is not supported yet; set \"enabled\": false or remove ancf:contact",
-            ));
+            p.contact = Some(ContactSettings {
+                // 0 = the sheet thickness (filled in with the material).
+                thickness: thickness.unwrap_or(0.0),
+                width: width.unwrap_or(d.width),
+                stiffness,
+                friction: friction.unwrap_or(d.friction),
+                stick_velocity: stick.unwrap_or(d.stick_velocity),
+                damping_ratio: zeta.unwrap_or(d.damping_ratio),
+                subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
+            });
         }
     }
 
@@ -879,8 +911,13 @@ mod tests {
 
     #[test]
     fn other_value_errors() {
-        let e = err(r#"{"ancf:contact": {"enabled": true}}"#);
-        assert!(e.contains("contact is not supported yet"), "{e}");
+        let e = err(r#"{"ancf:contact": {"enabled": true, "subdivisions": 0}}"#);
+        assert!(
+            e.contains("ancf:contact.subdivisions") && e.contains("whole number"),
+            "{e}"
+        );
+        let e = err(r#"{"ancf:contact": {"enabled": true, "barrier_width": 2}}"#);
+        assert!(e.contains("barrier_width"), "{e}");
         let e = err(r#"{"ancf:crease": {"length_scale": 0.01, "stiffness_per_length": 1}}"#);
         assert!(e.contains("not both"), "{e}");
         let e = err(r#"{"ancf:actuators": [{"name": "a", "edges": []}]}"#);

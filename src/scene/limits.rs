@@ -100,6 +100,7 @@ pub const LIMITS: &[Limit] = &[
         "",
     ),
     lim("solver.stop_time", Range::Positive, "s"),
+    lim("contact.friction", Range::NonNegative, ""),
 ];
 
 /// The limit of `name`, if it has one.

@@ -462,6 +462,8 @@ pub struct Scene {
     pub supports: Vec<Support>,
     /// Gravity in m/s^2, `None` when absent.
     pub gravity: Option<[f64; 3]>,
+    /// Self-contact with friction, `None` when off (nothing is searched).
+    pub contact: Option<crate::contact::ContactSettings>,
     /// Vertex force inputs.
     pub vertex_forces: Vec<VertexInput>,
     /// Prescribed vertex position inputs.
@@ -506,6 +508,7 @@ impl Scene {
             }],
             supports: vec![],
             gravity: None,
+            contact: None,
             vertex_forces: vec![],
             vertex_motions: vec![],
             solver: SolverSettings::default(),

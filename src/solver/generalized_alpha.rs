@@ -111,6 +111,8 @@ pub struct Outcome {
     pub error: f64,
     /// Time spent assembling forces and matrices.
     pub assembly_time: Duration,
+    /// Newton steps cut short by a force term (contact's collision check).
+    pub limited_steps: usize,
 }
 
 /// Reusable work vectors, and which iteration matrix the solver holds.
@@ -120,6 +122,8 @@ pub struct Workspace {
     matrix: Vec<f64>,
     rhs: Vec<f64>,
     mqdd: Vec<f64>,
+    /// A Newton correction over all DOFs (zero on fixed ones).
+    dq: Vec<f64>,
     /// The predictor's second guess (buffers reused across steps).
     guess: Dynamics,
     /// The residual of the predictor's first guess (kept for Newton's
@@ -263,6 +267,7 @@ pub fn step(
     ws.matrix.resize(asm.nnz(), 0.0);
     ws.rhs.resize(asm.n_free, 0.0);
     ws.mqdd.resize(n, 0.0);
+    ws.dq.resize(n, 0.0);
     let mut next = cur.clone();
     let mut alt = std::mem::take(&mut ws.guess);
     alt.clone_from(cur);
@@ -279,6 +284,15 @@ pub fn step(
     let evaluate = |k: usize, guess: &mut Dynamics, ws: &mut Workspace, out: &mut Outcome| {
         for &(i, x) in drive.prescribed {
             guess.q[i] = x;
+        }
+        // A guess the surfaces cannot reach without touching is no guess.
+        if k == 1 {
+            for i in 0..n {
+                ws.dq[i] = guess.q[i] - cur.q[i];
+            }
+            if asm.max_step_fraction(&cur.q, &ws.dq) < 1.0 {
+                return f64::INFINITY;
+            }
         }
         update_rates(guess, cur, co, h);
         let t0 = Instant::now();
@@ -380,11 +394,25 @@ pub fn step(
         }
         for i in 0..n {
             let fi = asm.free[i];
-            if fi != FIXED {
-                next.q[i] += ws.rhs[fi];
-            }
+            ws.dq[i] = if fi != FIXED { ws.rhs[fi] } else { 0.0 };
         }
-        let remaining = if modified && stale {
+        // Force terms may admit only part of the step (contact: the largest
+        // collision-free fraction); the iteration then goes on from there.
+        let fraction = asm.max_step_fraction(&next.q, &ws.dq);
+        if fraction <= 0.0 {
+            return Err("contact: no collision-free Newton step".into());
+        }
+        if fraction < 1.0 {
+            // The matrix did not see the contact that stopped the step.
+            out.limited_steps += 1;
+            refresh |= stale;
+        }
+        for i in 0..n {
+            next.q[i] += fraction * ws.dq[i];
+        }
+        let remaining = if fraction < 1.0 {
+            f64::INFINITY
+        } else if modified && stale {
             if rate < 1.0 {
                 norm * (rate / (1.0 - rate)).max(1.0)
             } else {

@@ -200,6 +200,12 @@ impl SparseSolver {
         self.stats
     }
 
+    /// Continue the counts of a solver this one replaces (same system, a
+    /// grown pattern), so that totals stay totals.
+    pub fn carry_stats(&mut self, from: SolverStats) {
+        self.stats = from;
+    }
+
     /// Factor the matrix with these values (in pattern order).
     pub fn factor(&mut self, values: &[f64]) -> Result<(), String> {
         let start = Instant::now();

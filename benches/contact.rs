@@ -1,0 +1,108 @@
+//! What contact costs. Part 1: the contact search (broad phase, pair
+//! filters, distances) on n x n Miura sheets folded half-way, against
+//! the facet count: near-linear growth means a flat time per facet.
+//! Part 2: whole folds with and without contact (CPU time, steps,
+//! rejections, Newton steps cut by the collision check, pattern growths).
+//!
+//! `cargo bench --bench contact -- [--repeats 5]`
+
+use origami_fmu::benchmarks::{arg, best_us, fold_by_ramp, miura_scene};
+use origami_fmu::contact::{ContactSettings, ContactTerm};
+use origami_fmu::model::Model;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+fn with_contact(mut scene: origami_fmu::Scene) -> origami_fmu::Scene {
+    scene.contact = Some(ContactSettings {
+        thickness: scene.material.thickness,
+        ..Default::default()
+    });
+    scene
+}
+
+fn main() {
+    let repeats = arg("--repeats", 5);
+    println!("## Contact search against facet count (Miura n x n, folded to 0.5 of its targets)");
+    println!("| n | facets | contact vertices | search (ms) | per facet (us) |");
+    println!("|---|---|---|---|---|");
+    for n in [2, 4, 8, 16] {
+        let mut model = Model::new(with_contact(miura_scene(n))).unwrap();
+        model.initialize().unwrap();
+        fold_by_ramp(&mut model, 20, 0.01, 0.4);
+        let facets = model.scene().mesh.triangles.len();
+        let state = model.save_state();
+        let q = state.dynamics.q.clone();
+        let scene = model.scene().clone();
+        let asm = origami_fmu::assembly::Assembler::new(
+            &scene.mesh,
+            origami_fmu::model::physics(&scene),
+            Default::default(),
+            &[],
+        )
+        .unwrap();
+        let m = &scene.material;
+        let term = ContactTerm::new(
+            &scene.mesh,
+            &asm.layout,
+            &asm.elements,
+            scene.contact.as_ref().unwrap(),
+            m.density * m.thickness,
+            m.youngs_modulus * m.thickness,
+        )
+        .unwrap();
+        let search = 0.01;
+        let us = best_us(repeats, || {
+            std::hint::black_box(term.report(&q, search));
+        });
+        println!(
+            "| {n} | {facets} | {} | {:.3} | {:.2} |",
+            term.surface().n_vertices(),
+            us / 1e3,
+            us / facets as f64
+        );
+    }
+    println!();
+    println!("## Folds with and without contact (defaults, 10 ms communication steps)");
+    println!(
+        "| scene | contact | CPU (s) | steps | rejected | cut by CCD | pattern growths | pairs at end |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for (name, path) in [
+        ("diagonal to 180 deg", "diag"),
+        ("Miura 4x4 to +-180 deg", "scenes/miura_4x4.fold"),
+        ("waterbomb base to +-180 deg", "scenes/waterbomb.fold"),
+    ] {
+        for contact in [false, true] {
+            let mut scene = if path == "diag" {
+                origami_fmu::Scene::with_defaults(
+                    "diag",
+                    origami_fmu::mesh::builders::square_with_diagonal(0.1, true, PI),
+                )
+            } else {
+                origami_fmu::scene::load(path).unwrap().0
+            };
+            for e in scene.mesh.edges.iter_mut() {
+                if e.kind == origami_fmu::mesh::EdgeKind::Crease {
+                    e.fold_target = PI * e.fold_target.signum();
+                }
+            }
+            if contact {
+                scene = with_contact(scene);
+            }
+            let mut model = Model::new(scene).unwrap();
+            model.initialize().unwrap();
+            let t = Instant::now();
+            let r = fold_by_ramp(&mut model, 80, 0.01, 0.5);
+            let cpu = t.elapsed().as_secs_f64();
+            let pairs = model.contact().map(|c| c.pairs).unwrap_or(0);
+            println!(
+                "| {name} | {} | {cpu:.2} | {} | {} | {} | {} | {pairs} |",
+                if contact { "on" } else { "off" },
+                r.steps,
+                r.rejected,
+                r.limited_steps,
+                r.pattern_growths
+            );
+        }
+    }
+}

@@ -1,0 +1,239 @@
+//! The contact surface: points of the shell's own curved surface, sampled
+//! on a lattice of `n` subdivisions per facet side, each an exact linear
+//! map of the slots (`r = S(xi) e`, so a force at a sample maps to the
+//! nodal coordinates through `S^T`), with the sub-triangles and edges
+//! between them. Samples on a shared side or corner are one vertex (the
+//! side traces of neighbouring facets coincide, creases included).
+//!
+//! Two families of primitives: the fine ones (sub-triangles and their
+//! edges) between facets that share no vertex, and the coarse ones (each
+//! facet's corner triangle and the mesh edges) between facets that do.
+//! A midsurface model has no hinge radius: two panels that meet at a crease
+//! folded flat close to a wedge, and between neighbours only the corners
+//! keep the thickness apart (the open end of the wedge is one thickness).
+
+use crate::dofs::DofLayout;
+use crate::element::ShellElement;
+use crate::mesh::Mesh;
+use nalgebra::Vector3;
+use std::collections::HashMap;
+
+/// One contact vertex as a linear map of the slots: `x = sum c_k q[slot_k]`.
+pub type VertexMap = Vec<(usize, f64)>;
+
+/// The sampled surface of a mesh (built once; positions come from `q`).
+#[derive(Clone, Debug)]
+pub struct ContactSurface {
+    /// Subdivisions per facet side.
+    pub n: usize,
+    /// Slot map of each contact vertex.
+    pub maps: Vec<VertexMap>,
+    /// Position of each contact vertex in the flat reference (z = 0).
+    pub rest: Vec<Vector3<f64>>,
+    /// Facets each contact vertex lies on (sorted).
+    pub vertex_facets: Vec<Vec<usize>>,
+    /// Contact vertex at each mesh vertex.
+    pub corner: Vec<usize>,
+    /// Fine triangles (contact vertices) and their facet.
+    pub fine_tris: Vec<([usize; 3], usize)>,
+    /// Fine edges and the facets they lie on (one or two, sorted).
+    pub fine_edges: Vec<([usize; 2], Vec<usize>)>,
+    /// Coarse edges (mesh edges as contact vertices) and their facets.
+    pub coarse_edges: Vec<([usize; 2], Vec<usize>)>,
+    /// Facets that share a mesh vertex with each facet, itself included
+    /// (sorted).
+    pub neighbours: Vec<Vec<usize>>,
+    /// Slots each facet's samples depend on (sorted): the pattern blocks a
+    /// pair of facets in contact needs.
+    pub facet_slots: Vec<Vec<usize>>,
+}
+
+/// Where a lattice sample sits: a mesh corner, a point of a mesh edge
+/// (lower vertex, upper vertex, steps from the lower), or inside a facet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Site {
+    Corner(usize),
+    Side(usize, usize, usize),
+    Inside(usize, usize, usize),
+}
+
+impl ContactSurface {
+    /// Sample every facet of `mesh` with `n >= 1` subdivisions per side.
+    #[allow(clippy::needless_range_loop)] // i, j are lattice coordinates
+    pub fn new(mesh: &Mesh, layout: &DofLayout, elements: &[ShellElement], n: usize) -> Self {
+        let n = n.max(1);
+        let q_ref = layout.reference_state(mesh);
+        let mut index: HashMap<Site, usize> = HashMap::new();
+        let mut maps: Vec<VertexMap> = Vec::new();
+        let mut vertex_facets: Vec<Vec<usize>> = Vec::new();
+        let mut fine_tris = Vec::new();
+        let mut facet_slots = Vec::with_capacity(mesh.triangles.len());
+        for (f, tri) in mesh.triangles.iter().enumerate() {
+            let shape = elements[f].shape();
+            let local = &layout.local[f];
+            let mut slots: Vec<usize> = local
+                .iter()
+                .flat_map(|c| c.terms().map(|(s, _)| s))
+                .collect();
+            slots.sort_unstable();
+            slots.dedup();
+            facet_slots.push(slots);
+            // Lattice (i, j): area coordinates ((n-i-j), i, j) / n.
+            let mut id = vec![vec![0usize; n + 1]; n + 1];
+            for i in 0..=n {
+                for j in 0..=(n - i) {
+                    let k = n - i - j;
+                    let counts = [k, i, j];
+                    let nonzero: Vec<usize> = (0..3).filter(|&c| counts[c] > 0).collect();
+                    let site = match nonzero.len() {
+                        1 => Site::Corner(tri[nonzero[0]]),
+                        2 => {
+                            let (a, b) = (nonzero[0], nonzero[1]);
+                            let (va, vb) = (tri[a], tri[b]);
+                            if va < vb {
+                                Site::Side(va, vb, counts[b])
+                            } else {
+                                Site::Side(vb, va, counts[a])
+                            }
+                        }
+                        _ => Site::Inside(f, i, j),
+                    };
+                    let v = *index.entry(site).or_insert_with(|| {
+                        let l = [
+                            k as f64 / n as f64,
+                            i as f64 / n as f64,
+                            j as f64 / n as f64,
+                        ];
+                        let s = shape.values(l);
+                        let mut terms: HashMap<usize, f64> = HashMap::new();
+                        for (node, combo) in local.iter().enumerate() {
+                            for (slot, c) in combo.terms() {
+                                *terms.entry(slot).or_insert(0.0) += s[node] * c;
+                            }
+                        }
+                        let mut m: VertexMap =
+                            terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
+                        m.sort_unstable_by_key(|&(s, _)| s);
+                        maps.push(m);
+                        vertex_facets.push(Vec::new());
+                        maps.len() - 1
+                    });
+                    if !vertex_facets[v].contains(&f) {
+                        vertex_facets[v].push(f);
+                    }
+                    id[i][j] = v;
+                }
+            }
+            for i in 0..n {
+                for j in 0..(n - i) {
+                    fine_tris.push(([id[i][j], id[i + 1][j], id[i][j + 1]], f));
+                    if i + j + 1 < n {
+                        fine_tris.push(([id[i + 1][j], id[i + 1][j + 1], id[i][j + 1]], f));
+                    }
+                }
+            }
+        }
+        for vf in vertex_facets.iter_mut() {
+            vf.sort_unstable();
+        }
+        let rest: Vec<Vector3<f64>> = maps.iter().map(|m| eval_map(m, &q_ref)).collect();
+        let corner: Vec<usize> = (0..mesh.n_vertices())
+            .map(|v| index.get(&Site::Corner(v)).copied().unwrap_or(usize::MAX))
+            .collect();
+        // Fine edges: each sub-triangle side once, with the facets it lies on.
+        let mut edge_of: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut fine_edges: Vec<([usize; 2], Vec<usize>)> = Vec::new();
+        for &(t, f) in &fine_tris {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                let e = *edge_of.entry(key).or_insert_with(|| {
+                    fine_edges.push(([key.0, key.1], Vec::new()));
+                    fine_edges.len() - 1
+                });
+                if !fine_edges[e].1.contains(&f) {
+                    fine_edges[e].1.push(f);
+                    fine_edges[e].1.sort_unstable();
+                }
+            }
+        }
+        let coarse_edges = mesh
+            .edges
+            .iter()
+            .zip(&mesh.edge_faces)
+            .map(|(e, faces)| {
+                let mut fs = faces.clone();
+                fs.sort_unstable();
+                ([corner[e.v[0]], corner[e.v[1]]], fs)
+            })
+            .collect();
+        let mut vertex_faces = vec![Vec::new(); mesh.n_vertices()];
+        for (f, tri) in mesh.triangles.iter().enumerate() {
+            for &v in tri {
+                vertex_faces[v].push(f);
+            }
+        }
+        let neighbours = mesh
+            .triangles
+            .iter()
+            .map(|tri| {
+                let mut nb: Vec<usize> = tri
+                    .iter()
+                    .flat_map(|&v| vertex_faces[v].iter().copied())
+                    .collect();
+                nb.sort_unstable();
+                nb.dedup();
+                nb
+            })
+            .collect();
+        ContactSurface {
+            n,
+            maps,
+            rest,
+            vertex_facets,
+            corner,
+            fine_tris,
+            fine_edges,
+            coarse_edges,
+            neighbours,
+            facet_slots,
+        }
+    }
+
+    /// Number of contact vertices.
+    pub fn n_vertices(&self) -> usize {
+        self.maps.len()
+    }
+
+    /// Positions (or velocities) of every contact vertex from a slot vector.
+    pub fn positions(&self, q: &[f64], out: &mut Vec<Vector3<f64>>) {
+        out.clear();
+        out.extend(self.maps.iter().map(|m| eval_map(m, q)));
+    }
+
+    /// Whether facets `f` and `g` share a mesh vertex (or are the same).
+    pub fn are_neighbours(&self, f: usize, g: usize) -> bool {
+        self.neighbours[f].binary_search(&g).is_ok()
+    }
+
+    /// Whether any facet of `a` is a neighbour of any facet of `b`.
+    pub fn any_neighbours(&self, a: &[usize], b: &[usize]) -> bool {
+        a.iter()
+            .any(|&f| b.iter().any(|&g| self.are_neighbours(f, g)))
+    }
+
+    /// The corner triangle of facet `f` (contact vertices).
+    pub fn coarse_tri(&self, mesh: &Mesh, f: usize) -> [usize; 3] {
+        let t = mesh.triangles[f];
+        [self.corner[t[0]], self.corner[t[1]], self.corner[t[2]]]
+    }
+}
+
+/// `sum c_k q[slot_k]` for one vertex map.
+pub fn eval_map(m: &VertexMap, q: &[f64]) -> Vector3<f64> {
+    let mut x = Vector3::zeros();
+    for &(s, c) in m {
+        x += c * Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
+    }
+    x
+}
