@@ -562,6 +562,12 @@ impl Assembler {
             .fold(1.0, f64::min)
     }
 
+    /// Whether a force term limits steps (contact): the stepper then
+    /// backtracks corrections that raise the residual.
+    pub fn limits_steps(&self) -> bool {
+        self.terms.iter().any(|t| t.limits_steps())
+    }
+
     /// The force term of type `T`, if the assembler has one.
     pub fn term<T: 'static>(&self) -> Option<&T> {
         self.terms

@@ -371,17 +371,6 @@ fn fold_flat(path: &str, t_fold: f64, t_end: f64) -> Model {
         model.set_input_derivative(fold, 1, slope).unwrap();
         stats.advance(&mut model, dt);
         assert_clear(&model, path);
-        if std::env::var("DBG").is_ok() {
-            let c = model.contact().unwrap();
-            eprintln!(
-                "t {t:.2} pairs {} gap {:.3e} {} lim {} grow {}",
-                c.pairs,
-                c.min_gap,
-                stats.line(),
-                stats.total.limited_steps,
-                stats.total.pattern_growths
-            );
-        }
     }
     let c = model.contact().unwrap();
     eprintln!(
@@ -407,4 +396,101 @@ fn waterbomb_base_collapses_without_intersection() {
     let model = fold_flat("scenes/waterbomb.fold", 0.5, 0.8);
     let c = model.contact().unwrap();
     assert!(c.pairs > 0, "the layers touch");
+}
+
+fn output(model: &Model, name: &str) -> f64 {
+    let i = model
+        .outputs()
+        .iter()
+        .position(|v| v.name == name)
+        .unwrap_or_else(|| panic!("no output {name}"));
+    model.output_values()[i]
+}
+
+/// A deployable: the diagonal fold closed flat on its contact, then its
+/// crease released (the rest angle back to flat at t = 0.4 s) so that the
+/// stored crease energy opens it against contact and friction. No damping
+/// (the trapezoidal rule, no dashpots): kinetic + strain + crease + contact
+/// energy + friction work stays what it was after the release within 1 %,
+/// with and without friction, and the friction work is reported.
+#[test]
+#[ignore = "open: the first output after the release shows 2.95 J, the later ones 4.84 J \
+            (then constant within 0.15 %); to be understood before this counts"]
+fn deployable_closes_its_energy_balance() {
+    for mu in [0.0, 0.5] {
+        let mut scene = Scene::with_defaults("deploy", square_with_diagonal(0.1, true, PI));
+        scene.material.thickness = 5e-4;
+        scene.auto_damping = false;
+        scene.solver.rho_inf = 1.0;
+        scene.solver.tolerance = 1e-7;
+        scene.supports.push(Support {
+            vertices: vec![1],
+            fix: Fix::Clamped,
+        });
+        let mut c = contact_on(&mut scene, mu);
+        c.damping_ratio = 0.0;
+        scene.contact = Some(c);
+        let mut model = Model::new(scene).unwrap();
+        model.initialize().unwrap();
+        let fold = common::input(&model, "fold");
+        let dt = 0.005;
+        let total = |m: &Model| {
+            m.energies().iter().sum::<f64>()
+                + output(m, "energy.contact")
+                + output(m, "energy.friction")
+        };
+        let mut reference = None;
+        let mut worst: f64 = 0.0;
+        for k in 0..140 {
+            let t = k as f64 * dt;
+            if k < 80 {
+                model.set_input(fold, (t / 0.3).min(1.0)).unwrap();
+                let slope = if t < 0.3 { 1.0 / 0.3 } else { 0.0 };
+                model.set_input_derivative(fold, 1, slope).unwrap();
+            } else if k == 80 {
+                model.set_input(fold, 0.0).unwrap();
+            }
+            model.advance(dt).unwrap();
+            assert_clear(&model, "deployable");
+            if k >= 80 {
+                let e = total(&model);
+                let e0 = *reference.get_or_insert(e);
+
+                worst = worst.max((e - e0).abs() / e0);
+            }
+        }
+        let w = model.contact_work();
+        eprintln!(
+            "deployable mu = {mu}: energy balance within {:.3e}, friction work {:.3e} J, end angle {:.1} deg",
+            worst,
+            w.friction,
+            common::crease_angle(&model).to_degrees()
+        );
+        assert!(worst <= 0.01, "energy balance off by {worst:.3e}");
+        assert!(common::crease_angle(&model) < PI - 0.5, "it opened");
+        if mu > 0.0 {
+            assert!(w.friction >= 0.0);
+        } else {
+            assert_eq!(w.friction, 0.0);
+        }
+    }
+}
+
+/// A scene pays only for what it uses: without `ancf:contact` there is no
+/// contact term (nothing is searched) and no contact variable.
+#[test]
+fn without_contact_nothing_exists() {
+    let scene = Scene::with_defaults("plain", square_with_diagonal(0.1, true, 1.0));
+    let mut model = Model::new(scene).unwrap();
+    model.initialize().unwrap();
+    model.advance(0.01).unwrap();
+    assert!(model.contact().is_none());
+    assert!(model.check_intersections(2, 1e-3).is_some());
+    assert!(
+        model
+            .outputs()
+            .iter()
+            .chain(model.parameters())
+            .all(|v| !v.name.starts_with("contact.") && v.name != "energy.friction")
+    );
 }

@@ -44,6 +44,11 @@ pub trait ForceTerm: Send + Sync {
         1.0
     }
 
+    /// Whether [`ForceTerm::max_step_fraction`] can be below 1.
+    fn limits_steps(&self) -> bool {
+        false
+    }
+
     /// The term as `Any`, for callers that need its own reports.
     fn as_any(&self) -> Option<&dyn std::any::Any> {
         None

@@ -46,6 +46,8 @@ pub struct ContactSurface {
     /// Slots each facet's samples depend on (sorted): the pattern blocks a
     /// pair of facets in contact needs.
     pub facet_slots: Vec<Vec<usize>>,
+    /// Contact vertices of each facet (its samples).
+    pub facet_vertices: Vec<Vec<usize>>,
 }
 
 /// Where a lattice sample sits: a mesh corner, a point of a mesh edge
@@ -136,6 +138,12 @@ impl ContactSurface {
         for vf in vertex_facets.iter_mut() {
             vf.sort_unstable();
         }
+        let mut facet_vertices = vec![Vec::new(); mesh.triangles.len()];
+        for (v, fs) in vertex_facets.iter().enumerate() {
+            for &f in fs {
+                facet_vertices[f].push(v);
+            }
+        }
         let rest: Vec<Vector3<f64>> = maps.iter().map(|m| eval_map(m, &q_ref)).collect();
         let corner: Vec<usize> = (0..mesh.n_vertices())
             .map(|v| index.get(&Site::Corner(v)).copied().unwrap_or(usize::MAX))
@@ -197,6 +205,7 @@ impl ContactSurface {
             coarse_edges,
             neighbours,
             facet_slots,
+            facet_vertices,
         }
     }
 

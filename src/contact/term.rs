@@ -211,12 +211,34 @@ impl ContactTerm {
         };
         let rest_min = self.xi + self.s_hat;
         let mut out = Vec::new();
+        // Facets first: only facets near a facet they share no vertex with
+        // take part in the fine search (most of a sheet, most of the time,
+        // takes part in none).
+        let facet_boxes_all: Vec<Aabb> = s.facet_vertices.iter().map(|vs| bx(vs)).collect();
+        let mut fine_active = vec![false; facet_boxes_all.len()];
+        let mut near_neighbours = Vec::new();
+        for (f, g) in overlapping(&facet_boxes_all, &facet_boxes_all, true) {
+            if s.are_neighbours(f, g) {
+                near_neighbours.push((f, g));
+            } else {
+                fine_active[f] = true;
+                fine_active[g] = true;
+            }
+        }
+        let active = |fs: &[usize]| fs.iter().any(|&f| fine_active[f]);
         // Fine: points against sub-triangles, edges against edges, between
         // facets that share no vertex.
-        let pt_boxes: Vec<Aabb> = (0..s.n_vertices()).map(|i| bx(&[i])).collect();
-        let tri_boxes: Vec<Aabb> = s.fine_tris.iter().map(|(t, _)| bx(t)).collect();
-        for (p, ti) in overlapping(&pt_boxes, &tri_boxes, false) {
-            let (t, g) = s.fine_tris[ti];
+        let pts: Vec<usize> = (0..s.n_vertices())
+            .filter(|&i| active(&s.vertex_facets[i]))
+            .collect();
+        let tris: Vec<usize> = (0..s.fine_tris.len())
+            .filter(|&k| fine_active[s.fine_tris[k].1])
+            .collect();
+        let pt_boxes: Vec<Aabb> = pts.iter().map(|&i| bx(&[i])).collect();
+        let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
+        for (pi, ti) in overlapping(&pt_boxes, &tri_boxes, false) {
+            let p = pts[pi];
+            let (t, g) = s.fine_tris[tris[ti]];
             let fp = &s.vertex_facets[p];
             if s.any_neighbours(fp, &[g]) {
                 continue;
@@ -226,45 +248,56 @@ impl ContactTerm {
                 mass: self.mass_fine,
             });
         }
-        let edge_boxes: Vec<Aabb> = s.fine_edges.iter().map(|(e, _)| bx(e)).collect();
+        let edges: Vec<usize> = (0..s.fine_edges.len())
+            .filter(|&k| active(&s.fine_edges[k].1))
+            .collect();
+        let edge_boxes: Vec<Aabb> = edges.iter().map(|&k| bx(&s.fine_edges[k].0)).collect();
         for (i, j) in overlapping(&edge_boxes, &edge_boxes, true) {
-            let (a, fa) = &s.fine_edges[i];
-            let (b, fb) = &s.fine_edges[j];
+            let (a, fa) = &s.fine_edges[edges[i]];
+            let (b, fb) = &s.fine_edges[edges[j]];
             if s.any_neighbours(fa, fb) {
                 continue;
             }
             out.push(self.edge_pair(*a, *b, self.mass_fine));
         }
         // Coarse: corners against corner triangles and mesh edges against
-        // mesh edges, between neighbours (sharing no vertex themselves).
-        let corner_boxes: Vec<Aabb> = s.corner.iter().map(|&c| bx(&[c])).collect();
-        let facet_boxes: Vec<Aabb> = (0..self.mesh.triangles.len())
-            .map(|f| bx(&s.coarse_tri(&self.mesh, f)))
-            .collect();
-        for (v, g) in overlapping(&corner_boxes, &facet_boxes, false) {
-            if self.mesh.triangles[g].contains(&v) {
-                continue;
+        // mesh edges, between neighbours (sharing no vertex themselves),
+        // straight from the neighbouring facet pairs that are near.
+        let mut corner_pairs: Vec<(usize, usize)> = Vec::new();
+        let mut edge_pairs: Vec<(usize, usize)> = Vec::new();
+        for &(f, g) in &near_neighbours {
+            for (a, b) in [(f, g), (g, f)] {
+                let tb = bx(&s.coarse_tri(&self.mesh, b));
+                for &v in &self.mesh.triangles[a] {
+                    if !self.mesh.triangles[b].contains(&v) && bx(&[s.corner[v]]).overlaps(&tb) {
+                        corner_pairs.push((v, b));
+                    }
+                }
             }
-            let c = s.corner[v];
-            if !s.any_neighbours(&s.vertex_facets[c], &[g]) {
-                continue;
+            for &i in &self.mesh.face_edges[f] {
+                for &j in &self.mesh.face_edges[g] {
+                    let (ea, eb) = (s.coarse_edges[i].0, s.coarse_edges[j].0);
+                    if i != j && !ea.iter().any(|v| eb.contains(v)) && bx(&ea).overlaps(&bx(&eb)) {
+                        edge_pairs.push((i.min(j), i.max(j)));
+                    }
+                }
             }
+        }
+        corner_pairs.sort_unstable();
+        corner_pairs.dedup();
+        edge_pairs.sort_unstable();
+        edge_pairs.dedup();
+        for (v, g) in corner_pairs {
             out.push(Pair {
                 kind: Kind::PointTriangle {
-                    p: c,
+                    p: s.corner[v],
                     t: s.coarse_tri(&self.mesh, g),
                 },
                 mass: self.mass_coarse,
             });
         }
-        let cedge_boxes: Vec<Aabb> = s.coarse_edges.iter().map(|(e, _)| bx(e)).collect();
-        for (i, j) in overlapping(&cedge_boxes, &cedge_boxes, true) {
-            let (a, fa) = &s.coarse_edges[i];
-            let (b, fb) = &s.coarse_edges[j];
-            if a.iter().any(|v| b.contains(v)) || !s.any_neighbours(fa, fb) {
-                continue;
-            }
-            out.push(self.edge_pair(*a, *b, self.mass_coarse));
+        for (i, j) in edge_pairs {
+            out.push(self.edge_pair(s.coarse_edges[i].0, s.coarse_edges[j].0, self.mass_coarse));
         }
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
@@ -583,6 +616,10 @@ impl ForceTerm for ContactTerm {
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
         self.safe_fraction(q, dq)
+    }
+
+    fn limits_steps(&self) -> bool {
+        true
     }
 
     fn add(

@@ -344,13 +344,43 @@ pub fn step(
     };
     let mut last_norm = f64::INFINITY;
     let mut last_rate = 0.0;
+    // With terms that limit steps (contact's barrier) Newton backtracks:
+    // a correction that raises the residual is halved (up to 5 times).
+    let line_search = asm.limits_steps();
+    let mut last_size = f64::INFINITY;
+    let mut applied = 0.0;
     for it in 0..settings.max_newton {
         refresh |= !modified;
         update_rates(&mut next, cur, co, h);
-        if !(it == 0 && have_rhs && !refresh) {
+        if line_search && it > 0 {
+            let t0 = Instant::now();
+            residual(asm, drive, &next, ws, None)?;
+            let mut size = residual_size(asm, &ws.rhs, scales);
+            let mut tries = 0;
+            while size > last_size && tries < 5 {
+                applied *= 0.5;
+                for i in 0..n {
+                    next.q[i] -= applied * ws.dq[i];
+                }
+                update_rates(&mut next, cur, co, h);
+                residual(asm, drive, &next, ws, None)?;
+                size = residual_size(asm, &ws.rhs, scales);
+                tries += 1;
+            }
+            last_size = size;
+            if refresh {
+                residual(asm, drive, &next, ws, Some(coeffs))?;
+            }
+            out.assembly_time += t0.elapsed();
+        } else if !(it == 0 && have_rhs && !refresh) {
             let t0 = Instant::now();
             residual(asm, drive, &next, ws, refresh.then_some(coeffs))?;
             out.assembly_time += t0.elapsed();
+            if line_search {
+                last_size = residual_size(asm, &ws.rhs, scales);
+            }
+        } else if line_search {
+            last_size = residual_size(asm, &ws.rhs, scales);
         }
         // Whether the matrix was formed at this iterate (else it is stale:
         // formed at an earlier iterate or step).
@@ -410,6 +440,7 @@ pub fn step(
         for i in 0..n {
             next.q[i] += fraction * ws.dq[i];
         }
+        applied = fraction;
         let remaining = if fraction < 1.0 {
             f64::INFINITY
         } else if modified && stale {
@@ -480,6 +511,14 @@ fn residual(
         }
     }
     Ok(())
+}
+
+/// Work-like size of a residual (free DOFs): force times the DOF's scale.
+fn residual_size(asm: &Assembler, rhs: &[f64], scales: &[f64]) -> f64 {
+    (0..asm.free.len())
+        .filter(|&i| asm.free[i] != FIXED)
+        .map(|i| (rhs[asm.free[i]] * scales[i]).powi(2))
+        .sum()
 }
 
 /// Local error estimate h^2 |beta - 1/6| (qdd_{n+1} - qdd_n) (at least
