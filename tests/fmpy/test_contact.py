@@ -5,12 +5,14 @@ fold closes flat and stops at the sheet thickness; FMU states continue
 bit-identically while the contact pattern grows; contact.friction is a
 parameter that refuses negative values."""
 
+import json
+
 import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
-from fmu_helpers import Instance, run_ramp
+from fmu_helpers import Instance, build, run_ramp, unzip
 
 FMI2_ERROR = 3
 THICKNESS = 5e-4
@@ -25,6 +27,24 @@ CONTACT_OUTPUTS = {
     "contact.normal_force": "N",
     "energy.contact": "J",
     "energy.friction": "J",
+}
+
+
+# diagonal_contact as FOLD, refined twice (32 facets). Not in scenes/: the
+# every-scene tests would fold it in 0.1 s, which takes minutes.
+FINE_FOLD = {
+    "file_spec": 1.2,
+    "frame_classes": ["creasePattern"],
+    "vertices_coords": [[0, 0], [0.1, 0], [0.1, 0.1], [0, 0.1]],
+    "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+    "edges_assignment": ["B", "B", "B", "B", "V"],
+    "edges_foldAngle": [None, None, None, None, 180],
+    "faces_vertices": [[0, 1, 2], [0, 2, 3]],
+    "ancf:name": "diagonal_contact_fine",
+    "ancf:material": {"thickness": THICKNESS},
+    "ancf:supports": [{"vertices": [1], "fix": "clamped"}],
+    "ancf:contact": {"enabled": True, "friction": 0.0},
+    "ancf:refine": 2,
 }
 
 
@@ -93,10 +113,8 @@ def test_states_continue_bit_identically_through_contact(unzipped, save_at, fric
     also after serializing the state into a fresh instance that was
     initialized with the scene's own parameters (friction 0), so with
     friction 0.5 the restore must also bring the parameter back. Saved at
-    0.5 s the facets are still centimetres apart and the pattern grows
-    after the save (the restore must drop the pairs added later); saved at
-    0.7 s they are in contact and the pattern has grown before it (the
-    fresh instance only gets it from the state)."""
+    0.5 s the panels are still centimetres apart and close after the save;
+    saved at 0.7 s they are in contact (pairs active, friction lagged)."""
     d = unzipped("diagonal_contact")
     a = Instance(d, "original").initialize({"contact.friction": friction})
     b = Instance(d, "restored").initialize()
@@ -123,6 +141,44 @@ def test_states_continue_bit_identically_through_contact(unzipped, save_at, fric
         b.time = t0
         third = fold_until(b, END)
         assert first.tobytes() == third.tobytes()
+
+        a.slave.freeFMUstate(state)
+        b.slave.freeFMUstate(restored)
+    finally:
+        a.close()
+        b.close()
+
+
+def test_states_restore_the_contact_pattern(tmp_path):
+    """The same on the square refined to 32 facets (FINE_FOLD).
+    In diagonal_contact the two facets are near each other from the first
+    step, so the matrix pattern only grows then and a restore that ignored
+    the pattern would go unnoticed; here facets away from the crease come
+    near while it folds: saved at 0.4 s, the pattern has grown before the
+    save (which the fresh instance only gets from the state) and grows
+    again by 0.45 s (which the restore must undo)."""
+    scene = tmp_path / "diagonal_contact_fine.fold"
+    scene.write_text(json.dumps(FINE_FOLD))
+    r = build(scene, tmp_path / "fine.fmu")
+    assert r.returncode == 0, r.stderr
+    d = unzip(tmp_path / "fine.fmu", tmp_path / "fine")
+    a = Instance(d, "original").initialize()
+    b = Instance(d, "restored").initialize()
+    try:
+        fold_until(a, 0.4)
+        state = a.slave.getFMUstate()
+        t0 = a.time
+        first = fold_until(a, 0.45)
+        assert np.all(np.isfinite(first))
+
+        a.slave.setFMUstate(state)
+        a.time = t0
+        assert first.tobytes() == fold_until(a, 0.45).tobytes()
+
+        restored = b.slave.deSerializeFMUstate(a.slave.serializeFMUstate(state))
+        b.slave.setFMUstate(restored)
+        b.time = t0
+        assert first.tobytes() == fold_until(b, 0.45).tobytes()
 
         a.slave.freeFMUstate(state)
         b.slave.freeFMUstate(restored)
