@@ -11,6 +11,7 @@
 //! and review the diff.
 
 use nalgebra::Vector2;
+use origami_fmu::contact::ContactSettings;
 use origami_fmu::fmi::{self, resources::scene_bytes};
 use origami_fmu::mesh::{Edge, Mesh, builders};
 use origami_fmu::scene::{
@@ -147,8 +148,37 @@ fn miura() -> Scene {
     s
 }
 
+/// The contact test of the fmpy suite (tests/contact.rs's diagonal folded
+/// flat): a 0.1 m square with a valley crease along the diagonal 0-2 to
+/// 180 degrees, the corner off the diagonal at vertex 1 clamped, a 0.5 mm
+/// sheet, self-contact without friction, automatic damping.
+fn diagonal_contact() -> Scene {
+    let mut s = tag_fold_edges(Scene::with_defaults(
+        "diagonal_contact",
+        builders::square_with_diagonal(0.1, true, PI),
+    ));
+    s.material.thickness = 5e-4;
+    s.supports.push(Support {
+        vertices: vec![1],
+        fix: Fix::Clamped,
+    });
+    s.contact = Some(ContactSettings {
+        thickness: s.material.thickness,
+        friction: 0.0,
+        ..Default::default()
+    });
+    s
+}
+
 fn examples() -> Vec<Scene> {
-    vec![square(), strip(), case_c(), case_c_nocut(), miura()]
+    vec![
+        square(),
+        strip(),
+        case_c(),
+        case_c_nocut(),
+        miura(),
+        diagonal_contact(),
+    ]
 }
 
 fn check(path: &Path, want: &[u8], update: bool, drift: &mut Vec<String>) {
