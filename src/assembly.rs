@@ -553,6 +553,16 @@ impl Assembler {
         true
     }
 
+    /// Let every term take its lagged data from the step start `(q, v)`
+    /// (as in [`Assembler::before_step`], without growing the pattern).
+    pub fn lag(&mut self, q: &[f64], v: &[f64]) {
+        let mut terms = std::mem::take(&mut self.terms);
+        for t in terms.iter_mut() {
+            t.lag(self, q, v);
+        }
+        self.terms = terms;
+    }
+
     /// The largest fraction in (0, 1] of the move `q -> q + dq` every force
     /// term admits (contact: free of collisions).
     pub fn max_step_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
@@ -562,8 +572,8 @@ impl Assembler {
             .fold(1.0, f64::min)
     }
 
-    /// Whether a force term limits steps (contact): the stepper then
-    /// backtracks corrections that raise the residual.
+    /// Whether a force term limits this step (contact in touch): the
+    /// stepper then backtracks corrections that raise the residual.
     pub fn limits_steps(&self) -> bool {
         self.terms.iter().any(|t| t.limits_steps())
     }

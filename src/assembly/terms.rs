@@ -37,6 +37,10 @@ pub trait ForceTerm: Send + Sync {
         Vec::new()
     }
 
+    /// Take lagged data (contact: friction's normal forces and bases) from
+    /// the step start `(q, v)`; [`ForceTerm::before_step`] does this too.
+    fn lag(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) {}
+
     /// Largest fraction in (0, 1] of the move `q -> q + dq` (all DOFs) the
     /// term admits (contact: free of collisions); the stepper limits its
     /// Newton steps and predictors to it.
@@ -44,7 +48,8 @@ pub trait ForceTerm: Send + Sync {
         1.0
     }
 
-    /// Whether [`ForceTerm::max_step_fraction`] can be below 1.
+    /// Whether the term limits this step's Newton corrections (contact:
+    /// pairs within the barrier at the step start); Newton then backtracks.
     fn limits_steps(&self) -> bool {
         false
     }

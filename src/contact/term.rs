@@ -133,6 +133,8 @@ pub struct ContactTerm {
     pattern_pad: f64,
     /// Project each pair's Hessian to positive semi-definite (for Newton).
     project: bool,
+    /// Whether pairs were within the barrier at the step start.
+    touching: bool,
 }
 
 impl ContactTerm {
@@ -178,6 +180,7 @@ impl ContactTerm {
             lagged: Vec::new(),
             pattern_pad: 0.5 * edge,
             project: true,
+            touching: false,
         })
     }
 
@@ -591,13 +594,20 @@ impl ForceTerm for ContactTerm {
         Some(self)
     }
 
-    fn before_step(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
+        self.lag(asm, q, v);
+        let mut x = Vec::new();
+        self.surf.positions(q, &mut x);
+        self.pattern_pairs(asm, &x)
+    }
+
+    fn lag(&mut self, _asm: &Assembler, q: &[f64], _v: &[f64]) {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
         self.lagged.clear();
-        if self.mu > 0.0
-            && let Ok(act) = self.active(&x)
-        {
+        let act = self.active(&x).unwrap_or_default();
+        self.touching = !act.is_empty();
+        if self.mu > 0.0 {
             for (p, s) in act {
                 let xs = self.points(&x, &p);
                 let lambda =
@@ -611,7 +621,6 @@ impl ForceTerm for ContactTerm {
                 });
             }
         }
-        self.pattern_pairs(asm, &x)
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
@@ -619,7 +628,7 @@ impl ForceTerm for ContactTerm {
     }
 
     fn limits_steps(&self) -> bool {
-        true
+        self.touching
     }
 
     fn add(

@@ -138,7 +138,7 @@ impl Model {
         // keeps it across communication points.
         if sys.cd.is_none() {
             ga::restore_jacobian(
-                &sys.asm,
+                &mut sys.asm,
                 &mut sys.solver,
                 sys.coeffs,
                 self.state.jacobian.as_ref(),

@@ -153,6 +153,13 @@ pub struct JacobianPoint {
     pub moment: Vec<f64>,
     /// Unwrapped crease angles at the step start.
     pub theta_prev: Vec<f64>,
+    /// Positions and velocities at the step start: what terms lag from
+    /// (contact's friction), so a restore forms the same matrix.
+    #[serde(default)]
+    pub q_start: Vec<f64>,
+    /// Velocities at the step start.
+    #[serde(default)]
+    pub v_start: Vec<f64>,
 }
 
 impl Workspace {
@@ -188,7 +195,7 @@ fn matrix_coeffs(co: Coefficients, h: f64) -> MatrixCoeffs {
 /// otherwise the matrix is assembled at `point` and factored, which gives
 /// bit for bit the factorization the saved run held.
 pub fn restore_jacobian(
-    asm: &Assembler,
+    asm: &mut Assembler,
     solver: &mut SparseSolver,
     co: Coefficients,
     point: Option<&JacobianPoint>,
@@ -202,6 +209,11 @@ pub fn restore_jacobian(
         return Ok(());
     };
     ws.matrix.resize(asm.nnz(), 0.0);
+    if !p.q_start.is_empty() {
+        // The lagged data the matrix was formed with (the next step lags
+        // again from its own start).
+        asm.lag(&p.q_start, &p.v_start);
+    }
     let st = State {
         q: &p.q,
         v: &p.v,
@@ -344,8 +356,9 @@ pub fn step(
     };
     let mut last_norm = f64::INFINITY;
     let mut last_rate = 0.0;
-    // With terms that limit steps (contact's barrier) Newton backtracks:
-    // a correction that raises the residual is halved (up to 5 times).
+    // While a term limits steps (contact's barrier is active at the step
+    // start) Newton backtracks: a correction that raises the residual is
+    // halved (up to 5 times).
     let line_search = asm.limits_steps();
     let mut last_size = f64::INFINITY;
     let mut applied = 0.0;
@@ -398,6 +411,8 @@ pub fn step(
             jp.moment.extend_from_slice(drive.moment);
             jp.theta_prev.clear();
             jp.theta_prev.extend_from_slice(drive.theta_prev);
+            jp.q_start.clone_from(&cur.q);
+            jp.v_start.clone_from(&cur.v);
             ws.jacobian = Some(jp);
             out.factorizations += 1;
             refresh = false;
