@@ -129,6 +129,8 @@ pub struct ContactTerm {
     mass_fine: f64,
     mass_coarse: f64,
     lagged: Vec<Lagged>,
+    /// Mean facet side (m): the default search of [`ContactTerm::report`].
+    mean_side: f64,
     /// Facets within this distance join the matrix pattern (m).
     pattern_pad: f64,
     /// Project each pair's Hessian to positive semi-definite (for Newton).
@@ -178,6 +180,7 @@ impl ContactTerm {
             mass_fine: areal_mass * area / (n * n),
             mass_coarse: areal_mass * area / 3.0,
             lagged: Vec::new(),
+            mean_side: edge,
             pattern_pad: 0.5 * edge,
             project: true,
             touching: false,
@@ -194,6 +197,12 @@ impl ContactTerm {
     /// The sampled surface.
     pub fn surface(&self) -> &ContactSurface {
         &self.surf
+    }
+
+    /// Mean facet side (m), how far [`crate::model::Model::contact`]
+    /// searches the smallest gap.
+    pub fn mean_side(&self) -> f64 {
+        self.mean_side
     }
 
     /// Barrier stiffness kappa in force (N/m).
@@ -366,9 +375,7 @@ impl ContactTerm {
         self.surf.positions(dq, &mut d);
         let mut t: f64 = 1.0;
         for p in self.candidates(&x, Some(&d), self.xi) {
-            let ids = p.ids();
-            let xs = [x[ids[0]], x[ids[1]], x[ids[2]], x[ids[3]]];
-            let ds = [d[ids[0]], d[ids[1]], d[ids[2]], d[ids[3]]];
+            let (xs, ds) = (self.points(&x, &p), self.points(&d, &p));
             let toi = match p.kind {
                 Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, self.xi, t),
                 Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, self.xi, t),
@@ -397,12 +404,35 @@ impl ContactTerm {
             if s < self.s_hat {
                 r.pairs += 1;
                 if s > 0.0 {
-                    r.normal_force +=
-                        self.kappa * mollifier::<f64>(&p.kind, &lift(&xs)) * -db(s, self.s_hat);
+                    r.normal_force += self.normal_force(&p, &xs, s);
                 }
             }
         }
         r
+    }
+
+    /// Normal force of a pair at gap `s` (N): `-kappa m(x) b'(s)`.
+    fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64) -> f64 {
+        self.kappa * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat)
+    }
+
+    /// Friction's normal forces and bases from contact-vertex positions `x`.
+    fn lag_at(&mut self, x: &[Vector3<f64>]) {
+        self.lagged.clear();
+        let act = self.active(x).unwrap_or_default();
+        self.touching = !act.is_empty();
+        if self.mu > 0.0 {
+            for (p, s) in act {
+                let xs = self.points(x, &p);
+                let (w, n) = self.closest(&p, &xs);
+                self.lagged.push(Lagged {
+                    ids: p.ids(),
+                    w,
+                    basis: tangent_basis(&n),
+                    lambda: self.normal_force(&p, &xs, s),
+                });
+            }
+        }
     }
 
     fn points(&self, x: &[Vector3<f64>], p: &Pair) -> [Vector3<f64>; 4] {
@@ -594,33 +624,17 @@ impl ForceTerm for ContactTerm {
         Some(self)
     }
 
-    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
-        self.lag(asm, q, v);
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
+        self.lag_at(&x);
         self.pattern_pairs(asm, &x)
     }
 
     fn lag(&mut self, _asm: &Assembler, q: &[f64], _v: &[f64]) {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
-        self.lagged.clear();
-        let act = self.active(&x).unwrap_or_default();
-        self.touching = !act.is_empty();
-        if self.mu > 0.0 {
-            for (p, s) in act {
-                let xs = self.points(&x, &p);
-                let lambda =
-                    self.kappa * mollifier::<f64>(&p.kind, &lift(&xs)) * -db(s, self.s_hat);
-                let (w, n) = self.closest(&p, &xs);
-                self.lagged.push(Lagged {
-                    ids: p.ids(),
-                    w,
-                    basis: tangent_basis(&n),
-                    lambda,
-                });
-            }
-        }
+        self.lag_at(&x);
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
@@ -645,22 +659,21 @@ impl ForceTerm for ContactTerm {
         for (p, s) in self.active(&x)? {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let vs = [v[ids[0]], v[ids[1]], v[ids[2]], v[ids[3]]];
+            let vs = self.points(&v, &p);
             let vv = SVector::<f64, 12>::from_iterator(vs.iter().flat_map(|a| a.iter().copied()));
-            let (grad, grad_s, hess) = if let Some((_, co)) = matrix.as_ref() {
+            let (energy, grad, grad_s, hess) = if let Some((_, co)) = matrix.as_ref() {
                 let (e, sd) = self.energy::<Dual2<12>>(&p, &xs);
                 let h = if co.k != 0.0 {
                     Some(if self.project { project_psd(&e.h) } else { e.h })
                 } else {
                     None
                 };
-                (e.g, sd.g, h)
+                (e.v, e.g, sd.g, h)
             } else {
                 let (e, sd) = self.energy::<Dual1<12>>(&p, &xs);
-                (e.g, sd.g, None)
+                (e.v, e.g, sd.g, None)
             };
-            out.term_energy +=
-                self.kappa * barrier(s, self.s_hat) * mollifier::<f64>(&p.kind, &lift(&xs));
+            out.term_energy += energy;
             // Dashpot on the gap rate, critical for zeta = 1.
             let k = self.kappa * ddb(s, self.s_hat).max(0.0);
             let c = 2.0 * self.zeta * (k * p.mass).sqrt();

@@ -221,10 +221,7 @@ impl Model {
     pub fn contact(&self) -> Option<crate::contact::ContactReport> {
         let sys = self.sys.as_ref()?;
         let c = sys.asm.term::<crate::contact::ContactTerm>()?;
-        let m = &self.scene.mesh;
-        let search =
-            (0..m.edges.len()).map(|e| m.edge_length(e)).sum::<f64>() / m.edges.len().max(1) as f64;
-        Some(c.report(&self.state.dynamics.q, search))
+        Some(c.report(&self.state.dynamics.q, c.mean_side()))
     }
 
     /// Work dissipated by contact so far (friction and normal dashpots).

@@ -159,13 +159,7 @@ impl Model {
         }
         let saved = self.state.clone();
         self.state.dynamics.v = v;
-        let theta = self.state.crease_theta.clone();
-        let u = self.state.inputs_now.clone();
-        if let Err(e) = self.consistent_accelerations(&u, &theta) {
-            self.state = saved;
-            return Err(e);
-        }
-        Ok(())
+        self.accelerations_or_roll_back(saved)
     }
 
     /// Move the listed vertices rigidly, `x -> R x + t` (their gradients
@@ -227,6 +221,13 @@ impl Model {
                 q[3 * s..3 * s + 3].copy_from_slice(y.as_slice());
             }
         }
+        self.accelerations_or_roll_back(saved)
+    }
+
+    /// After a change of positions or velocities outside a step: make the
+    /// accelerations consistent with the inputs in force, or put `saved`
+    /// back and fail.
+    fn accelerations_or_roll_back(&mut self, saved: ModelState) -> Result<(), Error> {
         let theta = self.state.crease_theta.clone();
         let u = self.state.inputs_now.clone();
         if let Err(e) = self.consistent_accelerations(&u, &theta) {
