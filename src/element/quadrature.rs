@@ -4,16 +4,22 @@
 //! shell, so only the 7-point (degree 5) and 12-point (degree 6) rules are
 //! offered. Points are area coordinates `(xi, eta, zeta)`; weights sum to 1
 //! and are multiplied by the triangle area.
+//!
+//! The 7-point rule is the default: on every mesh family and study of
+//! `benches/element_families.rs` its errors equal the 12-point rule's to two
+//! digits, with full rank 21 at the reference, and force and tangent cost
+//! 0.60x of the 12-point rule's (605 against 999 ns, 2990 against 5088 ns
+//! per element, one run).
 
 use serde::{Deserialize, Serialize};
 
 /// A quadrature rule for the shell energy.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Rule {
-    /// 7 points, exact for polynomials of degree 5: the cheap option.
-    Dunavant7,
-    /// 12 points, exact for polynomials of degree 6: the default.
+    /// 7 points, exact for polynomials of degree 5: the default.
     #[default]
+    Dunavant7,
+    /// 12 points, exact for polynomials of degree 6.
     Dunavant12,
 }
 
@@ -104,7 +110,7 @@ mod tests {
                 assert!(l.iter().all(|&x| x > 0.0) && *w > 0.0);
             }
         }
-        assert_eq!(Rule::default(), Rule::Dunavant12);
+        assert_eq!(Rule::default(), Rule::Dunavant7);
         assert_eq!(Rule::Dunavant7.points().len(), 7);
         assert_eq!(Rule::Dunavant12.points().len(), 12);
     }
