@@ -5,7 +5,8 @@
 //! (fmi2SetRealInputDerivatives), the continuous ramp; "hold": only the
 //! value at the step start (sample and hold, a staircase).
 //!
-//! `cargo bench --bench cosim -- [--size 4] [--time 1.0] [--slopes-only]`
+//! `cargo bench --bench cosim -- [--size 4] [--time 1.0] [--slopes-only]
+//! [--steps 1e-2,1e-3,1e-4]`
 //!
 //! CPU seconds are the process's CPU time (the machine is shared: compare
 //! the ratios within one run).
@@ -33,6 +34,13 @@ fn main() {
             .unwrap_or(default)
     };
     let n = arg("--size", 4.0) as usize;
+    // Communication steps (the first is the base of the ratios).
+    let dts: Vec<f64> = args
+        .iter()
+        .position(|a| a == "--steps")
+        .and_then(|i| args.get(i + 1))
+        .map(|v| v.split(',').map(|x| x.parse().expect("a step")).collect())
+        .unwrap_or_else(|| vec![1e-2, 1e-3, 1e-4]);
     let time = arg("--time", 1.0);
     println!(
         "| sheet | inputs | communication step (s) | CPU s per simulated s | vs 1e-2 | internal steps | rejected | Newton its | factorizations |"
@@ -45,7 +53,7 @@ fn main() {
     };
     for &with_slopes in modes {
         let mut base = None;
-        for dt in [1e-2, 1e-3, 1e-4] {
+        for &dt in &dts {
             let mut m = Model::new(miura_scene(n)).expect("Miura model");
             m.initialize().expect("initialize");
             let steps = (time / dt).round() as usize;

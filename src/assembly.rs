@@ -18,7 +18,7 @@ use crate::element::{ElemVec, ElementOptions, ShellElement};
 use crate::material::Material;
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
-use nalgebra::{SMatrix, Vector2};
+use nalgebra::{SMatrix, Vector2, Vector3};
 
 /// Marker for "not a free scalar".
 pub const FIXED: usize = usize::MAX;
@@ -33,6 +33,35 @@ pub struct CreaseEnd {
     /// Gradient into the facet to the right of `t`, into the left facet, and
     /// the crease tangent: `[a, b, t]`.
     pub combos: [Combo; 3],
+}
+
+impl CreaseEnd {
+    /// The crease's `[a, b, t]` at positions `q`.
+    pub fn vectors(&self, q: &[f64]) -> [Vector3<f64>; 3] {
+        [
+            self.combos[0].eval(q),
+            self.combos[1].eval(q),
+            self.combos[2].eval(q),
+        ]
+    }
+
+    /// `raw` (the angle of `[a, b, t]`) unwrapped nearest `previous`, or an
+    /// error naming the crease where the angle is undefined (a facet
+    /// gradient along the crease, or no tangent).
+    pub fn checked_angle(
+        &self,
+        raw: f64,
+        [a, b, t]: &[Vector3<f64>; 3],
+        previous: f64,
+    ) -> Result<f64, String> {
+        if !raw.is_finite() || a.cross(t).norm() == 0.0 || b.cross(t).norm() == 0.0 {
+            return Err(format!(
+                "crease on edge {} has an undefined fold angle",
+                self.edge
+            ));
+        }
+        Ok(crate::crease::unwrap(raw, previous))
+    }
 }
 
 /// Scatter map of one term (element or spring): its distinct slots and,
@@ -530,6 +559,29 @@ impl Assembler {
             return Err("internal forces are not finite".into());
         }
         Ok(())
+    }
+
+    /// The unwrapped angle of every crease end at `q` (each nearest its
+    /// `theta_prev`), into `theta`: what [`Assembler::evaluate`] gives as
+    /// `theta`, without forces or energies.
+    pub fn crease_angles(
+        &self,
+        q: &[f64],
+        theta_prev: &[f64],
+        theta: &mut Vec<f64>,
+    ) -> Result<(), String> {
+        theta.clear();
+        for (ce, &prev) in self.creases.iter().zip(theta_prev) {
+            let v = ce.vectors(q);
+            theta.push(ce.checked_angle(crate::crease::theta(&v[0], &v[1], &v[2]), &v, prev)?);
+        }
+        Ok(())
+    }
+
+    /// Whether a force term reports powers the stepper integrates
+    /// ([`ForceTerm::reports_power`]).
+    pub fn reports_power(&self) -> bool {
+        self.terms.iter().any(|t| t.reports_power())
     }
 
     /// Give every force term the accepted state before a time step (its

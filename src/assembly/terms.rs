@@ -54,6 +54,13 @@ pub trait ForceTerm: Send + Sync {
         false
     }
 
+    /// Whether the term reports powers in [`Evaluation`] (contact:
+    /// friction, dashpots) that the stepper integrates over each step: the
+    /// stepper then evaluates every accepted state in full.
+    fn reports_power(&self) -> bool {
+        false
+    }
+
     /// The term as `Any`, for callers that need its own reports.
     fn as_any(&self) -> Option<&dyn std::any::Any> {
         None
@@ -153,19 +160,9 @@ impl ForceTerm for CreaseSprings {
         let mut f9 = SVector::<f64, 9>::zeros();
         let mut k9 = SMatrix::<f64, 9, 9>::zeros();
         for (i, ce) in asm.creases.iter().enumerate() {
-            let [a, b, t] = [
-                ce.combos[0].eval(st.q),
-                ce.combos[1].eval(st.q),
-                ce.combos[2].eval(st.q),
-            ];
+            let [a, b, t] = ce.vectors(st.q);
             let d = crease::theta_derivatives(&a, &b, &t, matrix.is_some());
-            if !d.theta.is_finite() || a.cross(&t).norm() == 0.0 || b.cross(&t).norm() == 0.0 {
-                return Err(format!(
-                    "crease on edge {} has an undefined fold angle",
-                    ce.edge
-                ));
-            }
-            let theta = crease::unwrap(d.theta, st.theta_prev[i]);
+            let theta = ce.checked_angle(d.theta, &[a, b, t], st.theta_prev[i])?;
             out.theta.push(theta);
             let k = p.crease_k_per_length * ce.length;
             f9.fill(0.0);

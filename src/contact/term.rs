@@ -645,6 +645,10 @@ impl ForceTerm for ContactTerm {
         self.touching
     }
 
+    fn reports_power(&self) -> bool {
+        true
+    }
+
     fn add(
         &self,
         asm: &Assembler,

@@ -117,6 +117,9 @@ pub struct Model {
     built_with: Option<Vec<f64>>,
     /// Whether the scene asked for automatic damping.
     auto_damping: bool,
+    /// The outputs evaluated from the state when `state.outputs` is None
+    /// (filled on the first read, emptied whenever the state changes).
+    outputs_cache: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl Model {
@@ -144,7 +147,7 @@ impl Model {
             parameters: parameters.iter().map(|v| v.start).collect(),
             phase: Phase::Setup,
             h_next: scene.solver.max_step,
-            outputs: outputs.iter().map(|v| v.start).collect(),
+            outputs: Some(outputs.iter().map(|v| v.start).collect()),
             work: Default::default(),
             extra_pairs: Vec::new(),
         };
@@ -160,6 +163,7 @@ impl Model {
             state,
             sys: None,
             built_with: None,
+            outputs_cache: Default::default(),
         };
         m.build()?;
         Ok(m)

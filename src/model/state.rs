@@ -38,8 +38,12 @@ pub struct ModelState {
     pub phase: Phase,
     /// Internal step size the controller proposes next.
     pub h_next: f64,
-    /// Output values at `time`.
-    pub outputs: Vec<f64>,
+    /// Output values at `time` where the last step evaluated them (its
+    /// state was evaluated in full); None: they are evaluated from this
+    /// state when read ([`Model::output_values`]), so a communication step
+    /// pays for its outputs only if the master reads them.
+    #[serde(default)]
+    pub outputs: Option<Vec<f64>>,
     /// Work dissipated by contact so far.
     #[serde(default)]
     pub work: ContactWork,
@@ -93,7 +97,9 @@ impl Model {
             && s.inputs_now.len() == self.inputs.len()
             && s.inputs_next.len() == self.inputs.len()
             && s.parameters.len() == self.parameters.len()
-            && s.outputs.len() == self.outputs.len();
+            && s.outputs
+                .as_ref()
+                .is_none_or(|o| o.len() == self.outputs.len());
         if !ok {
             return Err(Error::State("its sizes do not match this model".into()));
         }
@@ -115,6 +121,7 @@ impl Model {
             sys.rebuild_solver().map_err(Error::State)?;
         }
         self.state = s;
+        self.outputs_cache = Default::default();
         Ok(())
     }
 
@@ -232,6 +239,7 @@ impl Model {
         let u = self.state.inputs_now.clone();
         if let Err(e) = self.consistent_accelerations(&u, &theta) {
             self.state = saved;
+            self.outputs_cache = Default::default();
             return Err(e);
         }
         Ok(())
@@ -289,7 +297,8 @@ impl Model {
         self.state.dynamics.abar = qdd.clone();
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
-        self.state.outputs = self.compute_outputs(&ev);
+        self.state.outputs = Some(self.compute_outputs(&ev));
+        self.outputs_cache = Default::default();
         Ok(())
     }
 }

@@ -101,6 +101,7 @@ impl Model {
             Ok(r) => Ok(r),
             Err(e) => {
                 self.state = saved;
+                self.outputs_cache = Default::default();
                 Err(e)
             }
         }
@@ -183,10 +184,14 @@ impl Model {
             if report.steps + report.rejected >= cap {
                 return Err(too_many());
             }
+            // Land on the communication point in equal steps no longer than
+            // the proposed one (a rest within JOIN_FRACTION joins): the
+            // steps of one advance then share one step size, and modified
+            // Newton one iteration matrix, where a long step and a short
+            // rest would each form their own.
             let remaining = big_h - s;
-            if h >= remaining || remaining - h < JOIN_FRACTION * h {
-                h = remaining;
-            }
+            let pieces = (remaining / h * (1.0 - JOIN_FRACTION)).ceil().max(1.0);
+            h = remaining / pieces;
             inputs_at(s + h, &mut u);
             sys.inputs.drive_into(&u, &mut d);
             let gd = d.stepper_drive(&self.state.crease_theta);
@@ -224,16 +229,17 @@ impl Model {
                     let at_min = h <= sys.settings.min_step * AT_MIN_STEP;
                     if out.error <= 1.0 || at_min {
                         self.state.dynamics = next;
-                        let ev = sys.ws.evaluation();
-                        let w = &mut self.state.work;
-                        w.friction += 0.5 * h * (w.friction_power + ev.friction_power);
-                        w.contact_damping +=
-                            0.5 * h * (w.contact_damping_power + ev.contact_damping_power);
-                        w.friction_power = ev.friction_power;
-                        w.contact_damping_power = ev.contact_damping_power;
+                        if let Some(ev) = sys.ws.evaluation() {
+                            let w = &mut self.state.work;
+                            w.friction += 0.5 * h * (w.friction_power + ev.friction_power);
+                            w.contact_damping +=
+                                0.5 * h * (w.contact_damping_power + ev.contact_damping_power);
+                            w.friction_power = ev.friction_power;
+                            w.contact_damping_power = ev.contact_damping_power;
+                        }
                         self.state
                             .crease_theta
-                            .clone_from(&sys.ws.evaluation().theta);
+                            .clone_from_slice(sys.ws.crease_angles());
                         s += h;
                         report.steps += 1;
                         report.min_step = report.min_step.min(h);
@@ -276,16 +282,29 @@ impl Model {
             self.state.jacobian = sys.ws.jacobian().cloned();
             self.state.extra_pairs = sys.asm.extra_pairs().to_vec();
         }
+        // The outputs now, where the last step evaluated its state in full;
+        // else they are evaluated from the state when read.
         let ev = match &sys.cd {
-            Some(cd) => cd.evaluation().clone(),
-            None => sys.ws.evaluation().clone(),
+            Some(cd) => Some(cd.evaluation().clone()),
+            None => sys.ws.evaluation().cloned(),
         };
         inputs_at(big_h, &mut u);
         self.state.time = t0 + big_h;
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
-        self.state.outputs = self.compute_outputs(&ev);
-        if self.state.outputs.iter().any(|x| !x.is_finite()) {
+        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev));
+        self.outputs_cache = Default::default();
+        let d = &self.state.dynamics;
+        let finite = match &self.state.outputs {
+            Some(o) => o.iter().all(|x| x.is_finite()),
+            None => {
+                d.q.iter()
+                    .chain(&d.v)
+                    .chain(&self.state.crease_theta)
+                    .all(|x| x.is_finite())
+            }
+        };
+        if !finite {
             return Err(Error::StepFailed {
                 time: t0,
                 reason: "outputs are not finite".into(),

@@ -119,6 +119,9 @@ pub struct Outcome {
 #[derive(Default)]
 pub struct Workspace {
     eval: Evaluation,
+    /// Whether `eval` is the full evaluation at the last accepted state
+    /// (else only its crease angles are).
+    evaluated: bool,
     matrix: Vec<f64>,
     rhs: Vec<f64>,
     mqdd: Vec<f64>,
@@ -163,9 +166,16 @@ pub struct JacobianPoint {
 }
 
 impl Workspace {
-    /// The last evaluation (energies and crease angles at the accepted state).
-    pub fn evaluation(&self) -> &Evaluation {
-        &self.eval
+    /// The full evaluation (forces, energies, powers) at the last accepted
+    /// state, where the step made one: only when a force term reports
+    /// powers ([`Assembler::reports_power`]); outputs evaluate otherwise.
+    pub fn evaluation(&self) -> Option<&Evaluation> {
+        self.evaluated.then_some(&self.eval)
+    }
+
+    /// The unwrapped crease angles at the last accepted state.
+    pub fn crease_angles(&self) -> &[f64] {
+        &self.eval.theta
     }
 
     /// Forget the iteration matrix: the next step forms a fresh one (after
@@ -472,11 +482,19 @@ pub fn step(
         // membrane-stiff) system: as converged as it gets.
         let floor = !stale && it >= 2 && rate > 0.5 && norm <= 100.0 * settings.newton_tolerance;
         if remaining <= settings.newton_tolerance || floor {
-            // Final consistent update and evaluation at the converged state.
+            // Final consistent update. The converged state is evaluated in
+            // full only where a term's powers are integrated over the step
+            // (contact's friction work); otherwise only its crease angles
+            // (the next step's unwrapping reference) are needed here, and
+            // outputs evaluate forces and energies where they are read.
             update_rates(&mut next, cur, co, h);
-            let st = drive.at(&next);
             let t0 = Instant::now();
-            asm.evaluate(&st, &mut ws.eval, None)?;
+            ws.evaluated = asm.reports_power();
+            if ws.evaluated {
+                asm.evaluate(&drive.at(&next), &mut ws.eval, None)?;
+            } else {
+                asm.crease_angles(&next.q, drive.theta_prev, &mut ws.eval.theta)?;
+            }
             out.assembly_time += t0.elapsed();
             out.error = local_error(&next, cur, asm, h, beta, scales, settings.tolerance);
             return Ok((next, out));
