@@ -6,23 +6,15 @@
 //! value at the step start (sample and hold, a staircase).
 //!
 //! `cargo bench --bench cosim -- [--size 4] [--time 1.0] [--slopes-only]
-//! [--steps 1e-2,1e-3,1e-4]`
+//! [--steps 1e-2,1e-3,1e-4] [--read-outputs]`
 //!
 //! CPU seconds are the process's CPU time (the machine is shared: compare
 //! the ratios within one run).
 
+mod common;
+use common::cpu_seconds;
 use origami_fmu::benchmarks::{fold_by_ramp_with, miura_scene};
 use origami_fmu::model::Model;
-
-fn cpu_seconds() -> f64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: a valid out pointer for clock_gettime.
-    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -46,6 +38,8 @@ fn main() {
         "| sheet | inputs | communication step (s) | CPU s per simulated s | vs 1e-2 | internal steps | rejected | Newton its | factorizations |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    // --read-outputs: read every output after each step (simulate_fmu).
+    let read = args.iter().any(|a| a == "--read-outputs");
     let modes: &[bool] = if args.iter().any(|a| a == "--slopes-only") {
         &[true]
     } else {
@@ -58,7 +52,7 @@ fn main() {
             m.initialize().expect("initialize");
             let steps = (time / dt).round() as usize;
             let c0 = cpu_seconds();
-            let r = fold_by_ramp_with(&mut m, steps, dt, 0.6 * time, with_slopes);
+            let r = fold_by_ramp_with(&mut m, steps, dt, 0.6 * time, with_slopes, read);
             let cpu = (cpu_seconds() - c0) / time;
             let b = *base.get_or_insert(cpu);
             println!(

@@ -687,6 +687,21 @@ impl Assembler {
         true
     }
 
+    /// Strain energy (membrane + bending) and crease spring energy at `q`,
+    /// the crease ends at the angles `theta` with rest angles `theta0`: the
+    /// energies of [`Assembler::evaluate`] without its forces.
+    pub fn energies(&self, q: &[f64], theta: &[f64], theta0: &[f64]) -> (f64, f64) {
+        let strain = self.facet_strain_energies(q).iter().sum();
+        let k = self.physics.crease_k_per_length;
+        let crease = self
+            .creases
+            .iter()
+            .zip(theta.iter().zip(theta0))
+            .map(|(ce, (&th, &th0))| 0.5 * k * ce.length * (th - th0).powi(2))
+            .sum();
+        (strain, crease)
+    }
+
     /// Membrane + bending energy of each facet (J) at slot vector `q`, in
     /// triangle order: the per-facet split of `Evaluation::strain_energy`.
     pub fn facet_strain_energies(&self, q: &[f64]) -> Vec<f64> {

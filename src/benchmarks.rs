@@ -639,13 +639,16 @@ pub fn miura_scene(n: usize) -> crate::scene::Scene {
 /// the step reports: the fold the throughput, terms and co-simulation
 /// benches time. Each step gets the ramp's value at its start and its
 /// slope (`with_slopes`, as a master with input derivatives does: the
-/// continuous ramp), or only the value (sample and hold).
+/// continuous ramp), or only the value (sample and hold). With
+/// `read_outputs` every output is read after each step, as `simulate_fmu`
+/// does (outputs are evaluated where they are read).
 pub fn fold_by_ramp_with(
     m: &mut crate::model::Model,
     steps: usize,
     dt: f64,
     ramp_time: f64,
     with_slopes: bool,
+    read_outputs: bool,
 ) -> crate::model::StepReport {
     let fold = m
         .inputs()
@@ -663,6 +666,9 @@ pub fn fold_by_ramp_with(
                 .expect("held inputs take slopes");
         }
         total.accumulate(&m.advance(dt).expect("advance"));
+        if read_outputs {
+            std::hint::black_box(m.output_values());
+        }
     }
     total
 }
@@ -674,7 +680,7 @@ pub fn fold_by_ramp(
     dt: f64,
     ramp_time: f64,
 ) -> crate::model::StepReport {
-    fold_by_ramp_with(m, steps, dt, ramp_time, true)
+    fold_by_ramp_with(m, steps, dt, ramp_time, true, false)
 }
 
 /// A square grid of `n x n` unit quads (2 n^2 facets) as a FOLD file
@@ -715,4 +721,51 @@ pub fn best_us(repeats: usize, mut f: impl FnMut()) -> f64 {
         best = best.min(t.elapsed().as_secs_f64() * 1e6);
     }
     best
+}
+
+/// Largest distance between matching points of `p` and `q` after the
+/// best-fit proper rigid motion of `p` onto `q` (Kabsch): the error of a
+/// computed shape against an exact one, whatever rigid motion it drifted by.
+pub fn aligned_max_distance(p: &[nalgebra::Vector3<f64>], q: &[nalgebra::Vector3<f64>]) -> f64 {
+    use nalgebra::{Matrix3, Vector3};
+    let n = p.len() as f64;
+    let pc = p.iter().sum::<Vector3<f64>>() / n;
+    let qc = q.iter().sum::<Vector3<f64>>() / n;
+    let mut h = Matrix3::zeros();
+    for (a, b) in p.iter().zip(q) {
+        h += (a - pc) * (b - qc).transpose();
+    }
+    let svd = h.svd(true, true);
+    let (u, vt) = (svd.u.expect("u"), svd.v_t.expect("v_t"));
+    let d = (u * vt).determinant().signum();
+    let r = vt.transpose() * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
+    p.iter()
+        .zip(q)
+        .map(|(a, b)| (r * (a - pc) + qc - b).norm())
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Rotation3, Vector3};
+
+    /// A rotated and shifted copy is at distance 0; one moved point sets
+    /// the distance (up to the share of the fit it pulls).
+    #[test]
+    fn aligned_distance_ignores_rigid_motion() {
+        let p: Vec<Vector3<f64>> = (0..12)
+            .map(|i| {
+                let t = i as f64;
+                Vector3::new(t.cos(), (1.3 * t).sin(), 0.1 * t)
+            })
+            .collect();
+        let r = Rotation3::from_euler_angles(0.3, -1.1, 2.0);
+        let shift = Vector3::new(0.5, -2.0, 3.0);
+        let mut q: Vec<Vector3<f64>> = p.iter().map(|x| r * x + shift).collect();
+        assert!(super::aligned_max_distance(&p, &q) < 1e-12);
+        q[4] += r * Vector3::new(0.0, 0.0, 1e-3);
+        let d = super::aligned_max_distance(&p, &q);
+        // At most 1e-3 (the fit minimises the sum of squares, 1e-6 unaligned).
+        assert!((0.7e-3..=1e-3).contains(&d), "{d}");
+    }
 }

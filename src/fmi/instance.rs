@@ -13,7 +13,7 @@
 //! solver cannot complete moves it to [`InstancePhase::StepFailed`] (state rolled
 //! back, `fmi2Terminated` true), from which `fmi2SetFMUstate` retries. Only a
 //! failure inside the model that leaves no consistent state (initialization
-//! failed, non-finite outputs) moves it to [`InstancePhase::Error`], from which
+//! failed) moves it to [`InstancePhase::Error`], from which
 //! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
 
 use super::ptr;
@@ -269,7 +269,6 @@ pub struct Instance {
     phase: InstancePhase,
     start_time: f64,
     stop_time: Option<f64>,
-    outputs: Option<Vec<f64>>,
     n_par: usize,
     n_in: usize,
     n_out: usize,
@@ -310,7 +309,6 @@ impl Instance {
                     phase: InstancePhase::Instantiated,
                     start_time: 0.0,
                     stop_time: None,
-                    outputs: None,
                     n_par,
                     n_in,
                     n_out,
@@ -484,7 +482,6 @@ impl Instance {
         }
         let r =
             set_model_time(&mut self.model, self.start_time).and_then(|_| self.model.initialize());
-        self.outputs = None;
         match r {
             Ok(()) => {
                 self.phase = InstancePhase::StepComplete;
@@ -525,7 +522,6 @@ impl Instance {
                 self.phase = InstancePhase::Instantiated;
                 self.start_time = 0.0;
                 self.stop_time = None;
-                self.outputs = None;
                 fmi2OK
             }
             Err(e) => {
@@ -533,21 +529,6 @@ impl Instance {
                 self.error(format!("fmi2Reset: {e}"))
             }
         }
-    }
-
-    fn output_values(&mut self) -> Result<&[f64], fmi2Status> {
-        if self.outputs.is_none() {
-            let v = self.model.output_values();
-            if v.len() != self.n_out {
-                return Err(self.error(format!(
-                    "internal error: the model gave {} output values for {} outputs",
-                    v.len(),
-                    self.n_out
-                )));
-            }
-            self.outputs = Some(v);
-        }
-        Ok(self.outputs.as_deref().expect("just set"))
     }
 
     /// `fmi2GetReal`: parameters and inputs as set, outputs at the current
@@ -568,10 +549,7 @@ impl Instance {
             let v = match r {
                 VarRef::Parameter(i) => self.model.parameter(i).map_err(|e| e.to_string()),
                 VarRef::Input(i) => self.model.input(i).map_err(|e| e.to_string()),
-                VarRef::Output(i) => match self.output_values() {
-                    Ok(o) => Ok(o[i]),
-                    Err(s) => return s,
-                },
+                VarRef::Output(i) => Ok(self.model.output(i)),
             };
             match v {
                 Ok(x) if x.is_finite() => values[k] = x,
@@ -655,9 +633,6 @@ impl Instance {
                 return self.error(format!("fmi2SetReal: {e}; nothing was changed"));
             }
             undo.push((*r, old));
-        }
-        if !refs.is_empty() {
-            self.outputs = None;
         }
         fmi2OK
     }
@@ -753,22 +728,6 @@ impl Instance {
                     self.phase = InstancePhase::Error;
                     return self.error(format!("fmi2DoStep: {e}"));
                 }
-                self.outputs = None;
-                let bad = match self.output_values() {
-                    Ok(o) => o.iter().position(|x| !x.is_finite()),
-                    Err(s) => {
-                        self.phase = InstancePhase::Error;
-                        return s;
-                    }
-                };
-                if let Some(k) = bad {
-                    self.phase = InstancePhase::Error;
-                    return self.error(format!(
-                        "fmi2DoStep: output {} is not finite at t = {target}; the instance is in the \
-                         error state (restore a saved state with fmi2SetFMUstate, or fmi2Reset)",
-                        self.model.outputs()[k].name
-                    ));
-                }
                 if self.log.debug_enabled() {
                     self.log.log(
                     fmi2OK,
@@ -781,7 +740,6 @@ impl Instance {
                 fmi2OK
             }
             Err(ModelError::StepFailed { time, reason }) => {
-                self.outputs = None;
                 self.phase = InstancePhase::StepFailed;
                 self.log.log(
                     fmi2Discard,
@@ -795,10 +753,7 @@ impl Instance {
                 );
                 fmi2Discard
             }
-            Err(e) => {
-                self.outputs = None;
-                self.error(format!("fmi2DoStep: {e}"))
-            }
+            Err(e) => self.error(format!("fmi2DoStep: {e}")),
         }
     }
 
@@ -869,7 +824,6 @@ impl Instance {
         self.phase = s.phase;
         self.start_time = s.start_time;
         self.stop_time = s.stop_time;
-        self.outputs = None;
         fmi2OK
     }
 

@@ -117,9 +117,9 @@ pub struct Model {
     built_with: Option<Vec<f64>>,
     /// Whether the scene asked for automatic damping.
     auto_damping: bool,
-    /// The outputs evaluated from the state when `state.outputs` is None
-    /// (filled on the first read, emptied whenever the state changes).
-    outputs_cache: std::sync::OnceLock<Vec<f64>>,
+    /// The energy outputs evaluated from the state when `state.outputs` is
+    /// None (filled on their first read, emptied whenever the state changes).
+    energies_cache: std::sync::OnceLock<[f64; 3]>,
 }
 
 impl Model {
@@ -163,7 +163,7 @@ impl Model {
             state,
             sys: None,
             built_with: None,
-            outputs_cache: Default::default(),
+            energies_cache: Default::default(),
         };
         m.build()?;
         Ok(m)

@@ -121,7 +121,7 @@ impl Model {
             sys.rebuild_solver().map_err(Error::State)?;
         }
         self.state = s;
-        self.outputs_cache = Default::default();
+        self.energies_cache = Default::default();
         Ok(())
     }
 
@@ -239,7 +239,7 @@ impl Model {
         let u = self.state.inputs_now.clone();
         if let Err(e) = self.consistent_accelerations(&u, &theta) {
             self.state = saved;
-            self.outputs_cache = Default::default();
+            self.energies_cache = Default::default();
             return Err(e);
         }
         Ok(())
@@ -298,7 +298,7 @@ impl Model {
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
         self.state.outputs = Some(self.compute_outputs(&ev));
-        self.outputs_cache = Default::default();
+        self.energies_cache = Default::default();
         Ok(())
     }
 }

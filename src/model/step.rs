@@ -101,7 +101,7 @@ impl Model {
             Ok(r) => Ok(r),
             Err(e) => {
                 self.state = saved;
-                self.outputs_cache = Default::default();
+                self.energies_cache = Default::default();
                 Err(e)
             }
         }
@@ -293,7 +293,7 @@ impl Model {
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
         self.state.outputs = ev.map(|ev| self.compute_outputs(&ev));
-        self.outputs_cache = Default::default();
+        self.energies_cache = Default::default();
         let d = &self.state.dynamics;
         let finite = match &self.state.outputs {
             Some(o) => o.iter().all(|x| x.is_finite()),

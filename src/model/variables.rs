@@ -204,6 +204,8 @@ impl Model {
         self.state.inputs_next[i] = value;
         if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
             self.state.inputs_now[i] = value;
+            // The crease energy is read under the rest angles now in force.
+            self.energies_cache = Default::default();
         }
         self.state.input_slopes[i] = 0.0;
         Ok(())
@@ -236,29 +238,73 @@ impl Model {
     }
 
     /// Current values of all outputs, in the order of [`Model::outputs`].
-    /// Evaluated from the state on the first read after a step where the
-    /// step did not evaluate them (scenes without contact): a master that
-    /// reads no outputs pays for none.
     pub fn output_values(&self) -> Vec<f64> {
         match &self.state.outputs {
             Some(o) => o.clone(),
-            None => self
-                .outputs_cache
-                .get_or_init(|| self.evaluate_outputs())
-                .clone(),
+            None => (0..self.outputs.len()).map(|k| self.output(k)).collect(),
         }
     }
 
-    /// The outputs of the current state, from a full evaluation of it under
+    /// Current value of output `k` (in the order of [`Model::outputs`]).
+    /// Where the last step did not evaluate the outputs (scenes without
+    /// contact), positions and fold angles are read from the state and the
+    /// energies evaluated from it on their first read: a master pays only
+    /// for the outputs it reads. The energies are then those under the
+    /// inputs in force (a rest angle set since the step changes the crease
+    /// energy); where the step evaluated the outputs, those of its end.
+    pub fn output(&self, k: usize) -> f64 {
+        if let Some(o) = &self.state.outputs {
+            return o[k];
+        }
+        let sys = match &self.sys {
+            Some(sys) if self.state.phase == Phase::Running => sys,
+            _ => return self.outputs[k].start,
+        };
+        let o = self.scene.outputs;
+        let mut i = k;
+        if o.positions {
+            let n = 3 * self.scene.fold_vertex_count;
+            if i < n {
+                return self.vertex_position(i / 3)[i % 3];
+            }
+            i -= n;
+        }
+        if o.fold_angles {
+            if let Some(ends) = sys.angle_ends.get(i) {
+                return fold_angle(ends, &self.state.crease_theta);
+            }
+            i -= sys.angle_ends.len();
+        }
+        if o.energies && i < 3 {
+            return self.energies_cache.get_or_init(|| self.evaluate_energies())[i];
+        }
+        // Contact outputs: a scene with contact evaluates its outputs in
+        // every step, so this is not reached; evaluate in full all the same.
+        self.evaluate_outputs()[k]
+    }
+
+    /// Kinetic, strain and crease energy of the current state.
+    fn evaluate_energies(&self) -> [f64; 3] {
+        let sys = self.sys.as_ref().expect("running");
+        let d = sys.inputs.drive(&self.state.inputs_now);
+        let q = &self.state.dynamics.q;
+        let (strain, crease) = sys.asm.energies(q, &self.state.crease_theta, &d.theta0);
+        [self.kinetic_energy(), strain, crease]
+    }
+
+    /// Kinetic energy v^T M v / 2 now.
+    fn kinetic_energy(&self) -> f64 {
+        let sys = self.sys.as_ref().expect("running");
+        let v = &self.state.dynamics.v;
+        let mut mv = vec![0.0; v.len()];
+        sys.asm.mass_mul(v, &mut mv);
+        0.5 * v.iter().zip(&mv).map(|(a, b)| a * b).sum::<f64>()
+    }
+
+    /// All outputs of the current state from a full evaluation of it under
     /// the inputs in force.
     fn evaluate_outputs(&self) -> Vec<f64> {
-        let Some(sys) = self
-            .sys
-            .as_ref()
-            .filter(|_| self.state.phase == Phase::Running)
-        else {
-            return self.outputs.iter().map(|v| v.start).collect();
-        };
+        let sys = self.sys.as_ref().expect("running");
         let d = sys.inputs.drive(&self.state.inputs_now);
         let dynm = &self.state.dynamics;
         let mut ev = Evaluation::default();
@@ -270,7 +316,7 @@ impl Model {
             theta_prev: &self.state.crease_theta,
         };
         if sys.asm.evaluate(&st, &mut ev, None).is_err() {
-            // Not reached in practice: the step checked these crease angles,
+            // Not reached in practice: the step checked these crease angles
             // and evaluated forces within Newton's tolerance of this state.
             // Outputs stay finite: angles as tracked, energies zero.
             ev = Evaluation {
@@ -328,20 +374,14 @@ impl Model {
             }
         }
         if o.fold_angles {
-            for ends in &sys.angle_ends {
-                let sum: f64 = ends
+            out.extend(
+                sys.angle_ends
                     .iter()
-                    .map(|&i| ev.theta[i] - std::f64::consts::PI)
-                    .sum();
-                out.push(sum / ends.len().max(1) as f64);
-            }
+                    .map(|ends| fold_angle(ends, &ev.theta)),
+            );
         }
         if o.energies {
-            let v = &self.state.dynamics.v;
-            let mut mv = vec![0.0; v.len()];
-            sys.asm.mass_mul(v, &mut mv);
-            let ke = 0.5 * v.iter().zip(&mv).map(|(a, b)| a * b).sum::<f64>();
-            out.extend([ke, ev.strain_energy, ev.crease_energy]);
+            out.extend([self.kinetic_energy(), ev.strain_energy, ev.crease_energy]);
         }
         if let Some(r) = self.contact() {
             out.extend([
@@ -353,5 +393,53 @@ impl Model {
             ]);
         }
         out
+    }
+}
+
+/// The fold angle output of one crease: the mean of its ends' angles
+/// `theta - pi` (radians, valley positive).
+fn fold_angle(ends: &[usize], theta: &[f64]) -> f64 {
+    let sum: f64 = ends.iter().map(|&i| theta[i] - std::f64::consts::PI).sum();
+    sum / ends.len().max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Outputs read from the state (positions, angles) and the energy-only
+    /// evaluation agree with a full evaluation of the same state, value by
+    /// value and through `output_values`.
+    #[test]
+    fn outputs_read_from_the_state_equal_a_full_evaluation() {
+        let mut m = Model::new(crate::benchmarks::miura_scene(1)).unwrap();
+        m.initialize().unwrap();
+        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        m.set_input(fold, 0.5).unwrap();
+        for _ in 0..3 {
+            m.advance(0.01).unwrap();
+        }
+        assert!(
+            m.state.outputs.is_none(),
+            "no contact: evaluated where read"
+        );
+        let full = m.evaluate_outputs();
+        let read = m.output_values();
+        assert_eq!(full.len(), read.len());
+        let mut energy_seen = false;
+        for (k, (a, b)) in full.iter().zip(&read).enumerate() {
+            let name = &m.outputs()[k].name;
+            energy_seen |= name.starts_with("energy.") && *a > 0.0;
+            assert!(
+                (a - b).abs() <= 1e-12 * a.abs().max(1e-12),
+                "{name}: full {a}, read {b}"
+            );
+            assert_eq!(
+                m.output(k),
+                *b,
+                "{name}: output(k) and output_values differ"
+            );
+        }
+        assert!(energy_seen, "the fold has strain or crease energy");
     }
 }

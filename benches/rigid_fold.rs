@@ -1,0 +1,136 @@
+//! Issue 12's measure: Miura-ori sheets of m x m panels (20 mm, 60 degree
+//! sectors) driven at default settings to their full rigid fold (Schenk &
+//! Guest theta = 60 degrees: the fold input ramps 0 -> 1 over 0.5 s, then
+//! holds, 10 ms communication steps with the ramp's slope, as the peer
+//! comparison's `fmu_drive.py` does), and the CPU time from which the
+//! largest vertex distance to the exact rigid state (after the best-fit
+//! rigid motion, in panel edges) stays below 1e-3 and 1e-4 until the end.
+//!
+//! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0]
+//! [--tolerance T] [--max-step H]` (the last two to compare with the defaults)
+//!
+//! Also: the exponent p of total CPU ~ DOFs^p from the first sheet, steps,
+//! Newton iterations, factorizations and where the CPU went (assembly,
+//! factorization, solves, the rest). CPU is the process's CPU
+//! time (the machine is shared: compare within one run).
+
+use nalgebra::Vector3;
+mod common;
+use common::cpu_seconds;
+use origami_fmu::benchmarks::aligned_max_distance;
+use origami_fmu::model::{Model, StepReport};
+use origami_fmu::scene::patterns::Miura;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let value = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let panels: Vec<usize> = value("--panels")
+        .map(|v| v.split(',').map(|x| x.parse().expect("panels")).collect())
+        .unwrap_or_else(|| vec![4, 8, 10, 16]);
+    let stop: f64 = value("--stop").map_or(2.0, |v| v.parse().expect("stop time"));
+    // Settings other than the defaults, to compare (the table is for defaults).
+    let tolerance: Option<f64> = value("--tolerance").map(|v| v.parse().expect("tolerance"));
+    let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
+    let (ramp, dt) = (0.5, 0.01);
+    println!(
+        "Miura full fold at default settings: ramp 0 -> 1 over {ramp} s, {dt} s communication steps, {stop} s simulated"
+    );
+    println!(
+        "| panels | DOFs | CPU s to stay below 1e-3 | below 1e-4 | final error | CPU s total | growth exponent | steps (rejected) | Newton its | factorizations | assembly % | factorization % | solves % | other % |"
+    );
+    println!(
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    );
+    // (DOFs, CPU s) of the first sheet: total CPU grows as DOFs^p from it.
+    let mut first: Option<(f64, f64)> = None;
+    for &p in &panels {
+        assert!(
+            p % 2 == 0,
+            "--panels takes even numbers (the generator's unit cell is 2 x 2 panels)"
+        );
+        let miura = Miura {
+            nx: p / 2,
+            ny: p / 2,
+            ..Default::default()
+        };
+        let exact: Vec<Vector3<f64>> = miura.folded();
+        let fold = miura.generate().expect("Miura pattern");
+        let mut scene = origami_fmu::scene::from_fold(&fold, None)
+            .expect("Miura scene")
+            .0;
+        if let Some(t) = tolerance {
+            scene.solver.tolerance = t;
+        }
+        if let Some(h) = max_step {
+            scene.solver.max_step = h;
+        }
+        let mut m = Model::new(scene).expect("model");
+        m.initialize().expect("initialize");
+        let input = m
+            .inputs()
+            .iter()
+            .position(|v| v.name == "fold")
+            .expect("a fold input");
+        let n_vertices = exact.len();
+        let steps = (stop / dt).round() as usize;
+        // (CPU s at the end of the step, error in panel edges, internal steps so far).
+        let mut trace = Vec::with_capacity(steps);
+        let mut total = StepReport::default();
+        let c0 = cpu_seconds();
+        for k in 0..steps {
+            let t = k as f64 * dt;
+            m.set_input(input, (t / ramp).min(1.0)).expect("fold input");
+            m.set_input_derivative(input, 1, if t < ramp { 1.0 / ramp } else { 0.0 })
+                .expect("input slope");
+            total.accumulate(&m.advance(dt).expect("advance"));
+            let cpu = cpu_seconds() - c0;
+            let x: Vec<Vector3<f64>> = (0..n_vertices)
+                .map(|v| Vector3::from(m.vertex_position(v)))
+                .collect();
+            trace.push((cpu, aligned_max_distance(&x, &exact) / miura.a, total.steps));
+        }
+        let cpu = cpu_seconds() - c0;
+        // (CPU s, simulated s, internal steps) at the end of the step after
+        // the last one at or above `limit`.
+        let stays_below = |limit: f64| match trace.iter().rposition(|&(_, e, _)| e >= limit) {
+            None => Some((0.0, 0.0, 0)),
+            Some(i) if i + 1 < trace.len() => Some((trace[i].0, (i + 1) as f64 * dt, trace[i].2)),
+            Some(_) => None,
+        };
+        let show = |x: Option<(f64, f64, usize)>| {
+            x.map_or("never".to_string(), |(c, t, n)| {
+                format!("{c:.2} (at {t:.2} s, {n} steps)")
+            })
+        };
+        let pct = |x: f64| 100.0 * x / cpu;
+        let other = cpu - total.assembly_time - total.factor_time - total.solve_time;
+        let dofs = m.n_dofs() as f64;
+        let growth = match first {
+            Some((d0, c0)) => format!("{:.2}", (cpu / c0).ln() / (dofs / d0).ln()),
+            None => {
+                first = Some((dofs, cpu));
+                "-".into()
+            }
+        };
+        println!(
+            "| {p}x{p} | {} | {} | {} | {:.1e} | {cpu:.2} | {growth} | {} ({}) | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} |",
+            m.n_dofs(),
+            show(stays_below(1e-3)),
+            show(stays_below(1e-4)),
+            trace.last().map_or(f64::NAN, |t| t.1),
+            total.steps,
+            total.rejected,
+            total.newton_iterations,
+            total.factorizations,
+            pct(total.assembly_time),
+            pct(total.factor_time),
+            pct(total.solve_time),
+            pct(other),
+        );
+    }
+}
