@@ -7,7 +7,8 @@
 //! rigid motion, in panel edges) stays below 1e-3 and 1e-4 until the end.
 //!
 //! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0]
-//! [--tolerance T] [--max-step H]` (the last two to compare with the defaults)
+//! [--tolerance T] [--max-step H] [--rho-inf R]` (the last three to compare
+//! with the defaults)
 //!
 //! Also: the exponent p of total CPU ~ DOFs^p from the first sheet, steps,
 //! Newton iterations, factorizations and where the CPU went (assembly,
@@ -36,6 +37,7 @@ fn main() {
     // Settings other than the defaults, to compare (the table is for defaults).
     let tolerance: Option<f64> = value("--tolerance").map(|v| v.parse().expect("tolerance"));
     let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
+    let rho_inf: Option<f64> = value("--rho-inf").map(|v| v.parse().expect("rho_inf"));
     let (ramp, dt) = (0.5, 0.01);
     println!(
         "Miura full fold at default settings: ramp 0 -> 1 over {ramp} s, {dt} s communication steps, {stop} s simulated"
@@ -68,6 +70,9 @@ fn main() {
         }
         if let Some(h) = max_step {
             scene.solver.max_step = h;
+        }
+        if let Some(r) = rho_inf {
+            scene.solver.rho_inf = r;
         }
         let mut m = Model::new(scene).expect("model");
         m.initialize().expect("initialize");
