@@ -6,7 +6,12 @@
 //! largest vertex distance to the exact rigid state (after the best-fit
 //! rigid motion, in panel edges) stays below 1e-3 and 1e-4 until the end.
 //!
-//! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0]
+//! Then Origami Simulator's BoxPleatPyramid (tests/data/origami-simulator,
+//! 5202 facets) at default settings, its fold input ramped 0 -> 1 over
+//! 0.5 s: CPU for the first `--pyramid` seconds (0 skips it) and the CPU per
+//! simulated second that makes.
+//!
+//! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0] [--pyramid 0.01]
 //! [--tolerance T] [--max-step H] [--rho-inf R]` (the last three to compare
 //! with the defaults)
 //!
@@ -34,6 +39,7 @@ fn main() {
         .map(|v| v.split(',').map(|x| x.parse().expect("panels")).collect())
         .unwrap_or_else(|| vec![4, 8, 10, 16]);
     let stop: f64 = value("--stop").map_or(2.0, |v| v.parse().expect("stop time"));
+    let pyramid: f64 = value("--pyramid").map_or(0.01, |v| v.parse().expect("pyramid time"));
     // Settings other than the defaults, to compare (the table is for defaults).
     let tolerance: Option<f64> = value("--tolerance").map(|v| v.parse().expect("tolerance"));
     let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
@@ -138,4 +144,54 @@ fn main() {
             pct(other),
         );
     }
+    if pyramid > 0.0 {
+        pyramid_row(pyramid, dt, ramp);
+    }
+}
+
+/// The BoxPleatPyramid row: CPU for the first `time` seconds of its fold.
+fn pyramid_row(time: f64, dt: f64, ramp: f64) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/origami-simulator/BoxPleatPyramid.fold"
+    );
+    let (scene, _) = origami_fmu::scene::load(path).expect("BoxPleatPyramid loads");
+    let facets = scene.mesh.triangles.len();
+    let mut m = Model::new(scene).expect("model");
+    m.initialize().expect("initialize");
+    let input = m
+        .inputs()
+        .iter()
+        .position(|v| v.name == "fold")
+        .expect("a fold input");
+    let mut total = StepReport::default();
+    let c0 = cpu_seconds();
+    let steps = (time / dt).round().max(1.0) as usize;
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        m.set_input(input, (t / ramp).min(1.0)).expect("fold input");
+        m.set_input_derivative(input, 1, 1.0 / ramp)
+            .expect("input slope");
+        total.accumulate(&m.advance(dt).expect("advance"));
+    }
+    let cpu = cpu_seconds() - c0;
+    let sim = steps as f64 * dt;
+    println!();
+    println!(
+        "| pattern | facets | DOFs | simulated s | CPU s | CPU s per simulated s | steps (rejected) | Newton its | factorizations | assembly % | factorization % | solves % |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let pct = |x: f64| 100.0 * x / cpu;
+    println!(
+        "| BoxPleatPyramid | {facets} | {} | {sim} | {cpu:.1} | {:.0} | {} ({}) | {} | {} | {:.0} | {:.0} | {:.0} |",
+        m.n_dofs(),
+        cpu / sim,
+        total.steps,
+        total.rejected,
+        total.newton_iterations,
+        total.factorizations,
+        pct(total.assembly_time),
+        pct(total.factor_time),
+        pct(total.solve_time),
+    );
 }

@@ -187,3 +187,34 @@ fn folded_states_are_refused_with_what_to_do() {
     let (s, _) = scene::from_str_with(&text, &o).unwrap();
     assert_eq!(s.mesh.triangles.len(), 2);
 }
+
+/// Origami Simulator's BoxPleatPyramid (the speed bench's large real
+/// pattern): it loads with defaults as docs/fold_files.md says (5202 facets,
+/// 3264 creases, unitless read as a 0.1 m sheet, F edges smooth), builds a
+/// model and initializes; folding it is the bench's job (minutes).
+#[test]
+fn box_pleat_pyramid_loads_and_initializes() {
+    let l = scene::load_report(
+        data("origami-simulator/BoxPleatPyramid.fold"),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(l.scene.mesh.triangles.len(), 5202);
+    assert!(
+        l.notes.iter().any(|n| n.starts_with("size: 0.1 m x 0.1 m")),
+        "{:?}",
+        l.notes
+    );
+    // The size is the bounding box's diagonal.
+    let size = l.scene.mesh.size();
+    assert!((size - 0.1 * 2f64.sqrt()).abs() < 1e-6, "size {size}");
+    let mut m = Model::new(l.scene).unwrap();
+    let creases = m
+        .outputs()
+        .iter()
+        .filter(|v| v.name.starts_with("crease["))
+        .count();
+    assert_eq!(creases, 3264);
+    m.initialize().unwrap();
+    assert!(m.output_values().iter().all(|x| x.is_finite()));
+}

@@ -72,6 +72,11 @@ fn accd(
     let at = |t: f64| std::array::from_fn(|k| x[k] + p[k] * t);
     let mut t = 0.0;
     let mut t_l = (1.0 - s) * gap(d_sq) / lp;
+    if t_l > t_max {
+        // The first step is safe and already passes t_max (as the loop
+        // would find, one distance later).
+        return None;
+    }
     for it in 0..MAX_ITERATIONS {
         d_sq = dist_sq(at(t + t_l));
         // The first step is safe by construction (it spends (1 - s) of the gap).

@@ -91,6 +91,48 @@ impl Pair {
     }
 }
 
+/// The candidate pairs of the step start, found with boxes padded by
+/// `pad + 2 margin`: a superset of the pairs any search with pad up to `pad`
+/// finds while every contact vertex (and its swept end) stays within
+/// `margin` of its step-start position `x0`. A step's many evaluations and
+/// collision checks then filter this list by distance instead of searching
+/// again (the pairs' final test is their distance in both cases).
+#[derive(Clone, Debug, Default)]
+struct CandidateCache {
+    x0: Vec<Vector3<f64>>,
+    pad: f64,
+    margin: f64,
+    pairs: Vec<Pair>,
+}
+
+impl CandidateCache {
+    /// Whether positions `x` (and `x + dx`) are within `margin` (at most
+    /// the cache's) of `x0`.
+    fn covers(
+        &self,
+        x: &[Vector3<f64>],
+        dx: Option<&[Vector3<f64>]>,
+        pad: f64,
+        margin: f64,
+    ) -> bool {
+        let m = margin.min(self.margin);
+        let m2 = m * m;
+        pad <= self.pad
+            && x.len() == self.x0.len()
+            && x.iter().zip(&self.x0).enumerate().all(|(i, (y, y0))| {
+                (y - y0).norm_squared() <= m2
+                    && dx.is_none_or(|d| (y + d[i] - y0).norm_squared() <= m2)
+            })
+    }
+}
+
+/// The candidate cache's margin for facets of mean side `edge`: a tenth of
+/// a side (a step rarely moves a vertex that far, and a sheet has few pairs
+/// that near), at least the barrier's reach.
+fn cache_margin(settings: &ContactSettings, edge: f64) -> f64 {
+    (settings.thickness * (1.0 + settings.width)).max(0.1 * edge)
+}
+
 /// Friction data of one pair, lagged from the start of the step.
 #[derive(Clone, Debug)]
 struct Lagged {
@@ -131,12 +173,17 @@ pub struct ContactTerm {
     lagged: Vec<Lagged>,
     /// Mean facet side (m): the default search of [`ContactTerm::report`].
     mean_side: f64,
+    /// How far contact vertices may move from where candidates were last
+    /// searched before they are searched again (m).
+    cache_margin: f64,
     /// Facets within this distance join the matrix pattern (m).
     pattern_pad: f64,
     /// Project each pair's Hessian to positive semi-definite (for Newton).
     project: bool,
     /// Whether pairs were within the barrier at the step start.
     touching: bool,
+    /// The step start's candidate pairs.
+    cache: CandidateCache,
 }
 
 impl ContactTerm {
@@ -181,9 +228,15 @@ impl ContactTerm {
             mass_coarse: areal_mass * area / 3.0,
             lagged: Vec::new(),
             mean_side: edge,
-            pattern_pad: 0.5 * edge,
+            // Every pair a step can activate from its cached candidates (a
+            // block outside the pattern would only leave the iteration
+            // matrix; the next step adds it).
+            pattern_pad: settings.thickness * (1.0 + settings.width)
+                + 2.0 * cache_margin(settings, edge),
+            cache_margin: cache_margin(settings, edge),
             project: true,
             touching: false,
+            cache: CandidateCache::default(),
         })
     }
 
@@ -314,7 +367,43 @@ impl ContactTerm {
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
         out.retain(|p| self.rest_distance(p) >= rest_min);
+        // A canonical order: sums over pairs do not depend on the search.
+        out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
         out
+    }
+
+    /// The candidate pairs at `x` (swept by `dx`) with pad `pad`, or a
+    /// superset of them: the step start's cache where it covers them.
+    fn near_pairs(
+        &self,
+        x: &[Vector3<f64>],
+        dx: Option<&[Vector3<f64>]>,
+        pad: f64,
+    ) -> std::borrow::Cow<'_, [Pair]> {
+        if self.cache.covers(x, dx, pad, self.cache.margin) {
+            std::borrow::Cow::Borrowed(&self.cache.pairs)
+        } else {
+            std::borrow::Cow::Owned(self.candidates(x, dx, pad))
+        }
+    }
+
+    /// Search at the step start `x` for every pair the step's evaluations
+    /// and collision checks may need (pads up to the barrier's reach,
+    /// motions up to the margin), unless the last search covers `x`
+    /// with half its margin to spare. (Pairs are in a canonical order, so
+    /// which search found them does not change a result.)
+    fn cache_at(&mut self, x: &[Vector3<f64>]) {
+        let pad = self.xi + self.s_hat;
+        let margin = self.cache_margin;
+        if self.cache.margin == margin && self.cache.covers(x, None, pad, 0.5 * margin) {
+            return;
+        }
+        self.cache = CandidateCache {
+            pairs: self.candidates(x, None, pad + 2.0 * margin),
+            x0: x.to_vec(),
+            pad,
+            margin,
+        };
     }
 
     fn edge_pair(&self, a: [usize; 2], b: [usize; 2], mass: f64) -> Pair {
@@ -338,14 +427,11 @@ impl ContactTerm {
     /// always joins with all its slot pairs).
     fn pattern_pairs(&self, asm: &Assembler, x: &[Vector3<f64>]) -> Vec<(usize, usize)> {
         let s = &self.surf;
-        let facet_boxes: Vec<Aabb> = (0..self.mesh.triangles.len())
-            .map(|f| {
-                let pts: Vec<Vector3<f64>> = s
-                    .fine_tris
-                    .iter()
-                    .filter(|(_, g)| *g == f)
-                    .flat_map(|(t, _)| t.iter().map(|&i| x[i]))
-                    .collect();
+        let facet_boxes: Vec<Aabb> = s
+            .facet_vertices
+            .iter()
+            .map(|vs| {
+                let pts: Vec<Vector3<f64>> = vs.iter().map(|&i| x[i]).collect();
                 Aabb::around(&pts, 0.5 * (self.pattern_pad + self.xi))
             })
             .collect();
@@ -374,8 +460,8 @@ impl ContactTerm {
         self.surf.positions(q, &mut x);
         self.surf.positions(dq, &mut d);
         let mut t: f64 = 1.0;
-        for p in self.candidates(&x, Some(&d), self.xi) {
-            let (xs, ds) = (self.points(&x, &p), self.points(&d, &p));
+        for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
+            let (xs, ds) = (self.points(&x, p), self.points(&d, p));
             let toi = match p.kind {
                 Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, self.xi, t),
                 Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, self.xi, t),
@@ -444,7 +530,7 @@ impl ContactTerm {
     /// Fails when a pair is already closer than the thickness.
     fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, String> {
         let mut out = Vec::new();
-        for p in self.candidates(x, None, self.xi + self.s_hat) {
+        for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
             let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - self.xi;
             if s >= self.s_hat {
@@ -627,6 +713,7 @@ impl ForceTerm for ContactTerm {
     fn before_step(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
+        self.cache_at(&x);
         self.lag_at(&x);
         self.pattern_pairs(asm, &x)
     }
@@ -634,6 +721,7 @@ impl ForceTerm for ContactTerm {
     fn lag(&mut self, _asm: &Assembler, q: &[f64], _v: &[f64]) {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
+        self.cache_at(&x);
         self.lag_at(&x);
     }
 
