@@ -163,8 +163,10 @@ pub struct Assembler {
     is_fixed: Vec<bool>,
     /// Slot pairs force terms asked for (sorted, a <= b).
     extra_pairs: Vec<(usize, usize)>,
-    /// Mass matrix by slots: for each slot, (other slot, coefficient of I3).
-    pub mass_rows: Vec<Vec<(usize, f64)>>,
+    /// Mass matrix by slots, compressed rows: slot `a`'s entries (other
+    /// slot, coefficient of I3) are `mass_entries[mass_ptr[a]..mass_ptr[a + 1]]`.
+    mass_ptr: Vec<usize>,
+    mass_entries: Vec<(usize, f64)>,
     mass_values: Vec<f64>,
     /// The sheet's rigid-body modes (what mass damping leaves alone).
     pub rigid: RigidModes,
@@ -281,7 +283,8 @@ impl Assembler {
             slot_idx: Vec::new(),
             is_fixed,
             extra_pairs: pairs,
-            mass_rows: Vec::new(),
+            mass_ptr: vec![0],
+            mass_entries: Vec::new(),
             mass_values: Vec::new(),
             rigid: RigidModes::default(),
             physics,
@@ -470,15 +473,17 @@ impl Assembler {
                 }
             }
         }
-        let mut rows = vec![Vec::new(); n_slots];
-        for (a, row) in rows.iter_mut().enumerate() {
+        self.mass_ptr = Vec::with_capacity(n_slots + 1);
+        self.mass_ptr.push(0);
+        self.mass_entries.clear();
+        for a in 0..n_slots {
             for p in self.slot_ptr[a]..self.slot_ptr[a + 1] {
                 if touched[p] {
-                    row.push((self.slot_idx[p], mass[p]));
+                    self.mass_entries.push((self.slot_idx[p], mass[p]));
                 }
             }
+            self.mass_ptr.push(self.mass_entries.len());
         }
-        self.mass_rows = rows;
         self.mass_values = vals;
         let positions: Vec<usize> = self.layout.position_slot.clone();
         self.rigid = RigidModes::new(n_slots, positions, |x, y| self.mass_mul(x, y));
@@ -496,9 +501,9 @@ impl Assembler {
 
     /// `y = M x` over all slots.
     pub fn mass_mul(&self, x: &[f64], y: &mut [f64]) {
-        for (a, row) in self.mass_rows.iter().enumerate() {
+        for (a, w) in self.mass_ptr.windows(2).enumerate() {
             let mut acc = [0.0; 3];
-            for &(b, m) in row {
+            for &(b, m) in &self.mass_entries[w[0]..w[1]] {
                 for c in 0..3 {
                     acc[c] += m * x[3 * b + c];
                 }
