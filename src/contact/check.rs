@@ -31,16 +31,9 @@ pub fn sample_facets(asm: &Assembler, q: &[f64], m: usize) -> Vec<Vec<[Vector3<f
             let at = |i: usize, j: usize| {
                 shape.position(&e, [(m - i - j) as f64 / mf, i as f64 / mf, j as f64 / mf])
             };
-            let mut tris = Vec::new();
-            for i in 0..m {
-                for j in 0..(m - i) {
-                    tris.push([at(i, j), at(i + 1, j), at(i, j + 1)]);
-                    if i + j + 1 < m {
-                        tris.push([at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
-                    }
-                }
-            }
-            tris
+            super::surface::lattice_triangles(m)
+                .map(|t| t.map(|(i, j)| at(i, j)))
+                .collect()
         })
         .collect()
 }

@@ -126,13 +126,8 @@ impl ContactSurface {
                     id[i][j] = v;
                 }
             }
-            for i in 0..n {
-                for j in 0..(n - i) {
-                    fine_tris.push(([id[i][j], id[i + 1][j], id[i][j + 1]], f));
-                    if i + j + 1 < n {
-                        fine_tris.push(([id[i + 1][j], id[i + 1][j + 1], id[i][j + 1]], f));
-                    }
-                }
+            for t in lattice_triangles(n) {
+                fine_tris.push((t.map(|(i, j)| id[i][j]), f));
             }
         }
         for vf in vertex_facets.iter_mut() {
@@ -245,4 +240,17 @@ pub fn eval_map(m: &VertexMap, q: &[f64]) -> Vector3<f64> {
         x += c * Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
     }
     x
+}
+
+/// The sub-triangles of a facet's lattice of `n` subdivisions, as lattice
+/// points `(i, j)` (area coordinates `((n - i - j) / n, i / n, j / n)`),
+/// counter-clockwise like the facet: `n^2` of them.
+pub fn lattice_triangles(n: usize) -> impl Iterator<Item = [(usize, usize); 3]> {
+    (0..n).flat_map(move |i| {
+        (0..n - i).flat_map(move |j| {
+            let up = [(i, j), (i + 1, j), (i, j + 1)];
+            let down = [(i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            std::iter::once(up).chain((i + j + 1 < n).then_some(down))
+        })
+    })
 }
