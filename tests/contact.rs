@@ -414,8 +414,9 @@ fn output(model: &Model, name: &str) -> f64 {
 /// energy + friction work stays what it was after the release within 1 %,
 /// with and without friction, and the friction work is reported.
 #[test]
-#[ignore = "open: the first output after the release shows 2.95 J, the later ones 4.84 J \
-            (then constant within 0.15 %); to be understood before this counts"]
+#[ignore = "open: Newton fails at every step size shortly after the release (mu = 0 at \
+            0.4065 s with equal steps to each communication point; with the greedy split mu = 0 \
+            closes its balance within 2.5e-3 and mu = 0.5 fails at 0.4002 s)"]
 fn deployable_closes_its_energy_balance() {
     for mu in [0.0, 0.5] {
         let mut scene = Scene::with_defaults("deploy", square_with_diagonal(0.1, true, PI));

@@ -189,7 +189,11 @@ impl Model {
             // steps of one advance then share one step size, and modified
             // Newton one iteration matrix, where a long step and a short
             // rest would each form their own.
+            // A proposal at the minimum step counts as at the minimum after
+            // the split too (which may stretch it by up to JOIN_FRACTION,
+            // where a large error would otherwise be rejected for ever).
             let remaining = big_h - s;
+            let proposal_at_min = h <= sys.settings.min_step * AT_MIN_STEP;
             let pieces = (remaining / h * (1.0 - JOIN_FRACTION)).ceil().max(1.0);
             h = remaining / pieces;
             inputs_at(s + h, &mut u);
@@ -226,7 +230,7 @@ impl Model {
                     report.factorizations += out.factorizations;
                     report.assembly_time += out.assembly_time.as_secs_f64();
                     report.limited_steps += out.limited_steps;
-                    let at_min = h <= sys.settings.min_step * AT_MIN_STEP;
+                    let at_min = proposal_at_min || h <= sys.settings.min_step * AT_MIN_STEP;
                     if out.error <= 1.0 || at_min {
                         self.state.dynamics = next;
                         if let Some(ev) = sys.ws.evaluation() {
