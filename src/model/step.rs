@@ -184,18 +184,25 @@ impl Model {
             if report.steps + report.rejected >= cap {
                 return Err(too_many());
             }
-            // Land on the communication point in equal steps no longer than
-            // the proposed one (a rest within JOIN_FRACTION joins): the
-            // steps of one advance then share one step size, and modified
-            // Newton one iteration matrix, where a long step and a short
-            // rest would each form their own.
+            // Land on the communication point with the last two steps equal
+            // halves of what is left once less than two proposed steps
+            // remain (a rest within JOIN_FRACTION joins the step before):
+            // they then share one step size, and modified Newton one
+            // iteration matrix, where a long step and a short rest would
+            // each form their own. Earlier steps keep the proposed size, so
+            // a last-bit difference in the master's step reaches only these
+            // two.
             // A proposal at the minimum step counts as at the minimum after
-            // the split too (which may stretch it by up to JOIN_FRACTION,
+            // a join too (which may stretch it by up to JOIN_FRACTION,
             // where a large error would otherwise be rejected for ever).
             let remaining = big_h - s;
             let proposal_at_min = h <= sys.settings.min_step * AT_MIN_STEP;
-            let pieces = (remaining / h * (1.0 - JOIN_FRACTION)).ceil().max(1.0);
-            h = remaining / pieces;
+            let ratio = remaining / h;
+            if ratio <= 1.0 + JOIN_FRACTION {
+                h = remaining;
+            } else if ratio <= 2.0 {
+                h = 0.5 * remaining;
+            }
             inputs_at(s + h, &mut u);
             sys.inputs.drive_into(&u, &mut d);
             let gd = d.stepper_drive(&self.state.crease_theta);
