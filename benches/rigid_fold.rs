@@ -23,8 +23,8 @@
 use nalgebra::Vector3;
 mod common;
 use common::cpu_seconds;
-use origami_fmu::benchmarks::aligned_max_distance;
-use origami_fmu::model::{Model, StepReport};
+use origami_fmu::benchmarks::{aligned_max_distance, fold_by_ramp, fold_by_ramp_with};
+use origami_fmu::model::Model;
 use origami_fmu::scene::patterns::Miura;
 
 fn main() {
@@ -82,29 +82,17 @@ fn main() {
         }
         let mut m = Model::new(scene).expect("model");
         m.initialize().expect("initialize");
-        let input = m
-            .inputs()
-            .iter()
-            .position(|v| v.name == "fold")
-            .expect("a fold input");
-        let n_vertices = exact.len();
         let steps = (stop / dt).round() as usize;
         // (CPU s at the end of the step, error in panel edges, internal steps so far).
         let mut trace = Vec::with_capacity(steps);
-        let mut total = StepReport::default();
         let c0 = cpu_seconds();
-        for k in 0..steps {
-            let t = k as f64 * dt;
-            m.set_input(input, (t / ramp).min(1.0)).expect("fold input");
-            m.set_input_derivative(input, 1, if t < ramp { 1.0 / ramp } else { 0.0 })
-                .expect("input slope");
-            total.accumulate(&m.advance(dt).expect("advance"));
+        let total = fold_by_ramp_with(&mut m, steps, dt, ramp, true, |m, total| {
             let cpu = cpu_seconds() - c0;
-            let x: Vec<Vector3<f64>> = (0..n_vertices)
+            let x: Vec<Vector3<f64>> = (0..exact.len())
                 .map(|v| Vector3::from(m.vertex_position(v)))
                 .collect();
             trace.push((cpu, aligned_max_distance(&x, &exact) / miura.a, total.steps));
-        }
+        });
         let cpu = cpu_seconds() - c0;
         // (CPU s, simulated s, internal steps) at the end of the step after
         // the last one at or above `limit`.
@@ -159,21 +147,9 @@ fn pyramid_row(time: f64, dt: f64, ramp: f64) {
     let facets = scene.mesh.triangles.len();
     let mut m = Model::new(scene).expect("model");
     m.initialize().expect("initialize");
-    let input = m
-        .inputs()
-        .iter()
-        .position(|v| v.name == "fold")
-        .expect("a fold input");
-    let mut total = StepReport::default();
-    let c0 = cpu_seconds();
     let steps = (time / dt).round().max(1.0) as usize;
-    for k in 0..steps {
-        let t = k as f64 * dt;
-        m.set_input(input, (t / ramp).min(1.0)).expect("fold input");
-        m.set_input_derivative(input, 1, 1.0 / ramp)
-            .expect("input slope");
-        total.accumulate(&m.advance(dt).expect("advance"));
-    }
+    let c0 = cpu_seconds();
+    let total = fold_by_ramp(&mut m, steps, dt, ramp);
     let cpu = cpu_seconds() - c0;
     let sim = steps as f64 * dt;
     println!();

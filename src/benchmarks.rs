@@ -639,16 +639,16 @@ pub fn miura_scene(n: usize) -> crate::scene::Scene {
 /// the step reports: the fold the throughput, terms and co-simulation
 /// benches time. Each step gets the ramp's value at its start and its
 /// slope (`with_slopes`, as a master with input derivatives does: the
-/// continuous ramp), or only the value (sample and hold). With
-/// `read_outputs` every output is read after each step, as `simulate_fmu`
-/// does (outputs are evaluated where they are read).
+/// continuous ramp), or only the value (sample and hold). After each step
+/// `after_step` sees the model and the reports so far (to read outputs, as
+/// `simulate_fmu` does, or to trace the state).
 pub fn fold_by_ramp_with(
     m: &mut crate::model::Model,
     steps: usize,
     dt: f64,
     ramp_time: f64,
     with_slopes: bool,
-    read_outputs: bool,
+    mut after_step: impl FnMut(&crate::model::Model, &crate::model::StepReport),
 ) -> crate::model::StepReport {
     let fold = m
         .inputs()
@@ -666,9 +666,7 @@ pub fn fold_by_ramp_with(
                 .expect("held inputs take slopes");
         }
         total.accumulate(&m.advance(dt).expect("advance"));
-        if read_outputs {
-            std::hint::black_box(m.output_values());
-        }
+        after_step(m, &total);
     }
     total
 }
@@ -680,7 +678,7 @@ pub fn fold_by_ramp(
     dt: f64,
     ramp_time: f64,
 ) -> crate::model::StepReport {
-    fold_by_ramp_with(m, steps, dt, ramp_time, true, false)
+    fold_by_ramp_with(m, steps, dt, ramp_time, true, |_, _| {})
 }
 
 /// A square grid of `n x n` unit quads (2 n^2 facets) as a FOLD file
