@@ -101,13 +101,12 @@ impl Pair {
 struct CandidateCache {
     x0: Vec<Vector3<f64>>,
     pad: f64,
-    margin: f64,
     pairs: Vec<Pair>,
 }
 
 impl CandidateCache {
-    /// Whether positions `x` (and `x + dx`) are within `margin` (at most
-    /// the cache's) of `x0`.
+    /// Whether positions `x` (and `x + dx`) are within `margin` of `x0`
+    /// (the margin the cache was searched with, or less).
     fn covers(
         &self,
         x: &[Vector3<f64>],
@@ -115,8 +114,7 @@ impl CandidateCache {
         pad: f64,
         margin: f64,
     ) -> bool {
-        let m = margin.min(self.margin);
-        let m2 = m * m;
+        let m2 = margin * margin;
         pad <= self.pad
             && x.len() == self.x0.len()
             && x.iter().zip(&self.x0).enumerate().all(|(i, (y, y0))| {
@@ -124,13 +122,6 @@ impl CandidateCache {
                     && dx.is_none_or(|d| (y + d[i] - y0).norm_squared() <= m2)
             })
     }
-}
-
-/// The candidate cache's margin for facets of mean side `edge`: a tenth of
-/// a side (a step rarely moves a vertex that far, and a sheet has few pairs
-/// that near), at least the barrier's reach.
-fn cache_margin(settings: &ContactSettings, edge: f64) -> f64 {
-    (settings.thickness * (1.0 + settings.width)).max(0.1 * edge)
 }
 
 /// Friction data of one pair, lagged from the start of the step.
@@ -215,6 +206,11 @@ impl ContactTerm {
         let kappa = settings
             .stiffness
             .unwrap_or(membrane * settings.thickness / edge);
+        // The barrier's reach, and the candidate cache's margin: a tenth of
+        // a side (a step rarely moves a vertex that far, and a sheet has few
+        // pairs that near), at least the reach.
+        let reach = settings.thickness * (1.0 + settings.width);
+        let cache_margin = reach.max(0.1 * edge);
         Ok(ContactTerm {
             surf,
             mesh: mesh.clone(),
@@ -231,9 +227,8 @@ impl ContactTerm {
             // Every pair a step can activate from its cached candidates (a
             // block outside the pattern would only leave the iteration
             // matrix; the next step adds it).
-            pattern_pad: settings.thickness * (1.0 + settings.width)
-                + 2.0 * cache_margin(settings, edge),
-            cache_margin: cache_margin(settings, edge),
+            pattern_pad: reach + 2.0 * cache_margin,
+            cache_margin,
             project: true,
             touching: false,
             cache: CandidateCache::default(),
@@ -380,7 +375,7 @@ impl ContactTerm {
         dx: Option<&[Vector3<f64>]>,
         pad: f64,
     ) -> std::borrow::Cow<'_, [Pair]> {
-        if self.cache.covers(x, dx, pad, self.cache.margin) {
+        if self.cache.covers(x, dx, pad, self.cache_margin) {
             std::borrow::Cow::Borrowed(&self.cache.pairs)
         } else {
             std::borrow::Cow::Owned(self.candidates(x, dx, pad))
@@ -395,14 +390,13 @@ impl ContactTerm {
     fn cache_at(&mut self, x: &[Vector3<f64>]) {
         let pad = self.xi + self.s_hat;
         let margin = self.cache_margin;
-        if self.cache.margin == margin && self.cache.covers(x, None, pad, 0.5 * margin) {
+        if self.cache.covers(x, None, pad, 0.5 * margin) {
             return;
         }
         self.cache = CandidateCache {
             pairs: self.candidates(x, None, pad + 2.0 * margin),
             x0: x.to_vec(),
             pad,
-            margin,
         };
     }
 

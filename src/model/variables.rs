@@ -329,9 +329,8 @@ impl Model {
 
     /// Kinetic, strain and crease energy now (J).
     pub fn energies(&self) -> [f64; 3] {
-        let o = &self.output_values();
         if let Some(k) = self.outputs.iter().position(|v| v.name == "energy.kinetic") {
-            [o[k], o[k + 1], o[k + 2]]
+            [self.output(k), self.output(k + 1), self.output(k + 2)]
         } else {
             [f64::NAN; 3]
         }
