@@ -704,6 +704,7 @@ fn the_library_exports_exactly_the_fmi2_functions() {
 fn capped_scene() -> Scene {
     let mut s = scene();
     s.solver.max_internal_steps = 2;
+    s.solver.max_step = 1e-3;
     s
 }
 

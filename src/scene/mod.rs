@@ -387,9 +387,9 @@ impl Default for SolverSettings {
         SolverSettings {
             integrator: Integrator::GeneralizedAlpha,
             rho_inf: 0.8,
-            max_step: 1e-3,
+            max_step: 1e-2,
             min_step: 1e-9,
-            tolerance: 1e-6,
+            tolerance: 1e-4,
             max_newton: 20,
             newton: NewtonMode::Modified,
             stop_time: 1.0,

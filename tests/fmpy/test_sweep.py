@@ -156,8 +156,10 @@ def test_failing_runs_are_rows_with_their_reason(tmp_path, fmu, client):
     # A scene the generator refuses: its row says why; the other scene runs.
     bad_scene = make_study(tmp_path, {"pattern": "single-crease"}, {"scene.angle": [60.0, 200.0]})
     s = execute.plan(bad_scene, tmp_path / "out")
-    # A step the FMU cannot finish (one internal step allowed, ten needed).
-    cut_short = make_study(tmp_path, {"fmu": str(fmu("square"))}, {"solver.max_internal_steps": [1.0]})
+    # A step the FMU cannot finish (one internal step allowed, ten of at
+    # most 1 ms needed).
+    cut_short = make_study(tmp_path, {"fmu": str(fmu("square"))}, {"solver.max_internal_steps": [1.0]},
+                           parameters={"solver.max_step": 1e-3})
     d = execute.plan(cut_short, tmp_path / "out")
     rows = [r["row"] for plan in (p, q, s, d) for r in execute.run_dask(plan, client)]
     assert [r["status"] for r in rows[:6]] == ["ok", "error", "ok", "error", "ok", "error"]
