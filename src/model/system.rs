@@ -191,7 +191,7 @@ impl Model {
             coeffs: ga::Coefficients::new(sc.solver.rho_inf),
             newton: ga::Settings {
                 tolerance: sc.solver.tolerance,
-                newton_tolerance: sc.solver.newton_tolerance(),
+                newton_tolerance: sc.solver.newton_tolerance(sc.material.thickness / length),
                 max_newton: sc.solver.max_newton,
                 newton: sc.solver.newton,
             },
