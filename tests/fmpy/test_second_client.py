@@ -37,6 +37,24 @@ def ramp_fmu(scene, tmp_path):
     return out
 
 
+def fold_ramp_with_fmi_sim(path, tmp_path, stop, dt):
+    """fmi-sim runs the FMU at `path` with the input table fold = 0 at t = 0
+    to 1 at t = 0.1 (linear), outputs every `dt` to `stop`: (CSV header,
+    rows as an array)."""
+    table = tmp_path / "input.csv"
+    table.write_text("time,fold\n0.0,0.0\n0.1,1.0\n")
+    result = tmp_path / "fmi_sim.csv"
+    r = subprocess.run(
+        [fmi_sim(), "--model", str(path), "-i", str(table), "-o", str(result),
+         "co-simulation", "-s", "0", "-f", str(stop), "--output-interval", str(dt)],
+        capture_output=True, text=True,
+    )
+    assert r.returncode == 0, r.stderr
+    with open(result, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
 @pytest.mark.skipif(fmi_sim() is None, reason="fmi-sim is not installed: run scripts/setup_fmi_sim.sh")
 @pytest.mark.parametrize("scene", ["square", "strip"])
 def test_fmi_sim_agrees_with_fmpy(fmu, tmp_path, scene):
@@ -55,18 +73,7 @@ def test_fmi_sim_agrees_with_fmpy(fmu, tmp_path, scene):
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     stop, dt = 0.1, 0.01
 
-    table = tmp_path / "input.csv"
-    table.write_text("time,fold\n0.0,0.0\n0.1,1.0\n")
-    result = tmp_path / "fmi_sim.csv"
-    r = subprocess.run(
-        [fmi_sim(), "--model", str(path), "-i", str(table), "-o", str(result),
-         "co-simulation", "-s", "0", "-f", str(stop), "--output-interval", str(dt)],
-        capture_output=True, text=True,
-    )
-    assert r.returncode == 0, r.stderr
-    with open(result, newline="") as f:
-        rows = list(csv.reader(f))
-    header, data = rows[0], np.array(rows[1:], dtype=float)
+    header, data = fold_ramp_with_fmi_sim(path, tmp_path, stop, dt)
     assert set(outputs) <= set(header)
 
     signal = np.array([(0.0, 0.0), (0.1, 1.0)], dtype=[("time", float), ("fold", float)])
@@ -94,18 +101,7 @@ def test_the_same_calls_from_fmi_sim_and_fmpy_give_bit_identical_outputs(fmu, tm
     md = read_model_description(str(path))
     outputs = [v for v in md.modelVariables if v.causality == "output"]
     stop, dt = 0.1, 0.01
-    table = tmp_path / "input.csv"
-    table.write_text("time,fold\n0.0,0.0\n0.1,1.0\n")
-    result = tmp_path / "fmi_sim.csv"
-    r = subprocess.run(
-        [fmi_sim(), "--model", str(path), "-i", str(table), "-o", str(result),
-         "co-simulation", "-s", "0", "-f", str(stop), "--output-interval", str(dt)],
-        capture_output=True, text=True,
-    )
-    assert r.returncode == 0, r.stderr
-    with open(result, newline="") as f:
-        rows = list(csv.reader(f))
-    header, data = rows[0], np.array(rows[1:], dtype=float)
+    header, data = fold_ramp_with_fmi_sim(path, tmp_path, stop, dt)
 
     unzipdir = extract(str(path), str(tmp_path / "unzipped"))
     slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
