@@ -74,26 +74,24 @@ mod tests {
         assert_eq!(m, m.transpose());
         let ev = m.symmetric_eigenvalues();
         assert!(ev.min() > 1e-6, "eigenvalues {ev}");
-        let mat = Material {
-            youngs_modulus: 1.0,
-            poisson_ratio: 0.3,
-            thickness: 0.5,
-            density: 3.0,
-        };
-        let m27 = element_mass(&mat, 2.0, &Shape::BCIZ);
+        let m27 = element_mass(&sheet(0.5, 3.0), 2.0, &Shape::BCIZ);
         assert_eq!(m27, m27.transpose());
         assert!(m27.cholesky().is_some());
     }
 
-    #[test]
-    fn unit_right_triangle_diagonal() {
-        let mat = Material {
+    /// A sheet of thickness `h` and density `rho` (the mass ignores E and nu).
+    fn sheet(h: f64, rho: f64) -> Material {
+        Material {
             youngs_modulus: 1.0,
             poisson_ratio: 0.3,
-            thickness: 0.25,
-            density: 4.0,
-        };
-        let m = element_mass(&mat, 0.5, &Shape::BCIZ);
+            thickness: h,
+            density: rho,
+        }
+    }
+
+    #[test]
+    fn unit_right_triangle_diagonal() {
+        let m = element_mass(&sheet(0.25, 4.0), 0.5, &Shape::BCIZ);
         for k in 0..9 {
             let want = if k % 3 == 0 { 0.0960317 } else { 0.0015377 };
             for c in 0..3 {
