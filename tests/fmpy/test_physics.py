@@ -45,8 +45,12 @@ def test_undamped_run_conserves_energy(unzipped):
     numerical dissipation): fold input ramps 0 -> 0.3 over 50 ms, then holds,
     so the system is autonomous from 50 ms on. Total energy (kinetic +
     strain + crease) from 50 ms to 1 s must stay within 1 % of its value at
-    50 ms, which must be positive (the ramp put energy in)."""
-    inst = Instance(unzipped("square"), "energy").initialize({"solver.rho_inf": 1.0})
+    50 ms, which must be positive (the ramp put energy in). At tolerance
+    1e-6: the energy is constant to the integrator's accuracy, and the
+    default 1e-4 lets it drift 1.6-1.8 % over those 950 ms (measured
+    2026-12-02)."""
+    inst = Instance(unzipped("square"), "energy").initialize(
+        {"solver.rho_inf": 1.0, "solver.tolerance": 1e-6})
     try:
         totals = []
         for n in range(1000):
