@@ -175,8 +175,33 @@ impl fmt::Display for MeshError {
 impl std::error::Error for MeshError {}
 
 /// Relative area below which a triangle counts as degenerate (against the
-/// square of the mean edge length of the whole mesh).
+/// square of the mean edge length of the whole mesh). The FOLD loader tests
+/// its polygons against the same threshold ([`is_degenerate`]) before they
+/// are triangulated, so that such a face is named in the file's terms.
 const DEGENERATE_AREA: f64 = 1e-12;
+
+/// The mean squared side length of `polygons` (closed, by vertex index into
+/// `coords`), 1 when there is no side: the scale of [`is_degenerate`].
+pub(crate) fn mean_side_length2<'a>(
+    polygons: impl IntoIterator<Item = &'a [usize]>,
+    coords: &[Vector2<f64>],
+) -> f64 {
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    for p in polygons {
+        for k in 0..p.len() {
+            sum += (coords[p[(k + 1) % p.len()]] - coords[p[k]]).norm_squared();
+            count += 1;
+        }
+    }
+    if count > 0 { sum / count as f64 } else { 1.0 }
+}
+
+/// True for a triangle or polygon of (signed) `area` that is degenerate
+/// against `mean_len2` ([`mean_side_length2`] of the whole mesh or pattern).
+pub(crate) fn is_degenerate(area: f64, mean_len2: f64) -> bool {
+    area.abs() <= DEGENERATE_AREA * mean_len2
+}
 
 impl Mesh {
     /// Validate the pattern and build its topology. `edges` lists labelled
@@ -195,8 +220,6 @@ impl Mesh {
                 });
             }
         }
-        let mut scale2 = 0.0;
-        let mut nscale = 0usize;
         for (t, tri) in triangles.iter().enumerate() {
             for &v in tri {
                 if v >= nv {
@@ -211,21 +234,13 @@ impl Mesh {
             if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
                 return Err(MeshError::RepeatedVertex { triangle: t });
             }
-            for k in 0..3 {
-                scale2 += (coords[tri[(k + 1) % 3]] - coords[tri[k]]).norm_squared();
-                nscale += 1;
-            }
         }
-        let mean_len2 = if nscale > 0 {
-            scale2 / nscale as f64
-        } else {
-            1.0
-        };
+        let mean_len2 = mean_side_length2(triangles.iter().map(|t| &t[..]), &coords);
         for (t, tri) in triangles.iter().enumerate() {
             let a = coords[tri[1]] - coords[tri[0]];
             let b = coords[tri[2]] - coords[tri[0]];
             let area = 0.5 * (a.x * b.y - a.y * b.x);
-            if area.abs() <= DEGENERATE_AREA * mean_len2 {
+            if is_degenerate(area, mean_len2) {
                 return Err(MeshError::Degenerate { triangle: t, area });
             }
             if area < 0.0 {
