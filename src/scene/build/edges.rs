@@ -3,7 +3,7 @@
 //! or derived from the faces, and their mechanical kinds and target angles
 //! ([`fold_edges`]).
 
-use super::invalid;
+use super::{invalid, vertex_exists};
 use crate::mesh::EdgeKind;
 use crate::scene::FlatEdges;
 use crate::scene::error::SceneError;
@@ -111,12 +111,7 @@ pub(super) fn read_edges(
     let mut seen: HashMap<(usize, usize), usize> = HashMap::with_capacity(ne);
     for (e, &[a, b]) in ev.iter().enumerate() {
         for (j, x) in [a, b].into_iter().enumerate() {
-            if x >= nv {
-                return Err(invalid(
-                    format!("edges_vertices[{e}][{j}]"),
-                    format!("vertex {x} does not exist (there are {nv} vertices)"),
-                ));
-            }
+            vertex_exists(x, nv, || format!("edges_vertices[{e}][{j}]"))?;
         }
         if a == b {
             return Err(invalid(

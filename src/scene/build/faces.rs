@@ -3,7 +3,7 @@
 //! orientation (a sheet drawn clockwise is mirrored; a mix of orientations
 //! is a folded state).
 
-use super::{FOLDED_STATE, invalid};
+use super::{FOLDED_STATE, invalid, vertex_exists};
 use crate::mesh::{is_degenerate, mean_side_length2};
 use crate::scene::error::SceneError;
 use crate::scene::fold::FoldFile;
@@ -26,12 +26,7 @@ pub(super) fn check_faces(faces: &[Vec<usize>], nv: usize) -> Result<(), SceneEr
             ));
         }
         for (j, &v) in face.iter().enumerate() {
-            if v >= nv {
-                return Err(invalid(
-                    format!("{key}[{j}]"),
-                    format!("vertex {v} does not exist (there are {nv} vertices)"),
-                ));
-            }
+            vertex_exists(v, nv, || format!("{key}[{j}]"))?;
         }
         let mut sorted = face.clone();
         sorted.sort_unstable();

@@ -97,6 +97,18 @@ fn invalid(key: impl Into<String>, message: impl Into<String>) -> SceneError {
     SceneError::invalid(key, message)
 }
 
+/// FOLD vertex `v` exists (of `nv`), else the error at `key()`.
+fn vertex_exists(v: usize, nv: usize, key: impl FnOnce() -> String) -> Result<(), SceneError> {
+    if v < nv {
+        Ok(())
+    } else {
+        Err(invalid(
+            key(),
+            format!("vertex {v} does not exist (there are {nv} vertices)"),
+        ))
+    }
+}
+
 /// Build the scene of a FOLD frame. `name` is the fallback model name (a
 /// file stem) used when `ancf:name` is absent; then `file_title`,
 /// `frame_title`, and `origami`. Returns the scene and the warnings.

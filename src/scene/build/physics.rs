@@ -2,7 +2,7 @@
 //! solver, outputs) checked against the mesh and set on the scene.
 
 use super::edges::FoldEdges;
-use super::invalid;
+use super::{invalid, vertex_exists};
 use crate::mesh::EdgeKind;
 use crate::scene::error::SceneError;
 use crate::scene::keys::{self, EdgeSelection};
@@ -156,12 +156,7 @@ pub(super) fn apply_physics(
     for s in p.supports {
         for (i, &v) in s.vertices.iter().enumerate() {
             let k = format!("{}.vertices[{i}]", s.key);
-            if v >= nv {
-                return Err(invalid(
-                    k,
-                    format!("vertex {v} does not exist (there are {nv} vertices)"),
-                ));
-            }
+            vertex_exists(v, nv, || k.clone())?;
             if let Some(first) = supported.get(&v) {
                 return Err(invalid(
                     k,
@@ -190,15 +185,7 @@ pub(super) fn apply_physics(
 
     for (vi, key) in &p.vertex_forces {
         let k = format!("{key}.vertex");
-        if vi.vertex >= nv {
-            return Err(invalid(
-                k,
-                format!(
-                    "vertex {} does not exist (there are {nv} vertices)",
-                    vi.vertex
-                ),
-            ));
-        }
+        vertex_exists(vi.vertex, nv, || k.clone())?;
         if let Some(s) = supported.get(&vi.vertex) {
             warnings.push(format!(
                 "{k}: vertex {} is fixed by {s}; the force '{}' acts on a support",
@@ -209,15 +196,7 @@ pub(super) fn apply_physics(
     let mut driven: HashMap<usize, String> = HashMap::new();
     for (vi, key) in &p.vertex_motions {
         let k = format!("{key}.vertex");
-        if vi.vertex >= nv {
-            return Err(invalid(
-                k,
-                format!(
-                    "vertex {} does not exist (there are {nv} vertices)",
-                    vi.vertex
-                ),
-            ));
-        }
+        vertex_exists(vi.vertex, nv, || k.clone())?;
         if let Some(s) = supported.get(&vi.vertex) {
             return Err(invalid(
                 k,
