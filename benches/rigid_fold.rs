@@ -144,7 +144,7 @@ fn pyramid_row(time: f64, dt: f64, ramp: f64) {
         "/tests/data/origami-simulator/BoxPleatPyramid.fold"
     );
     let (scene, _) = origami_fmu::scene::load(path).expect("BoxPleatPyramid loads");
-    let facets = scene.mesh.triangles.len();
+    let facets = scene.mesh.triangles().len();
     let mut m = Model::new(scene).expect("model");
     m.initialize().expect("initialize");
     let steps = (time / dt).round().max(1.0) as usize;

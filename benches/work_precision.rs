@@ -150,7 +150,7 @@ fn strip_frequency() -> f64 {
 }
 
 fn is_tip(sc: &Scene, v: usize) -> bool {
-    let c = sc.mesh.coords[v];
+    let c = sc.mesh.coords()[v];
     (c.x - STRIP_L).abs() < 1e-12 && c.y.abs() < 1e-12
 }
 
@@ -161,10 +161,10 @@ fn cantilever_scene() -> Scene {
     sc.auto_damping = false;
     sc.actuators.clear();
     let left: Vec<usize> = (0..sc.mesh.n_vertices())
-        .filter(|&v| sc.mesh.coords[v].x.abs() < 1e-12)
+        .filter(|&v| sc.mesh.coords()[v].x.abs() < 1e-12)
         .collect();
     let tips: Vec<usize> = (0..sc.mesh.n_vertices())
-        .filter(|&v| (sc.mesh.coords[v].x - STRIP_L).abs() < 1e-12)
+        .filter(|&v| (sc.mesh.coords()[v].x - STRIP_L).abs() < 1e-12)
         .collect();
     sc.supports.push(Support {
         vertices: left,

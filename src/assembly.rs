@@ -200,12 +200,12 @@ impl Assembler {
     ) -> Result<Assembler, String> {
         let layout = DofLayout::new(mesh);
         let elements = mesh
-            .triangles
+            .triangles()
             .iter()
             .enumerate()
             .map(|(f, &[a, b, c])| {
                 ShellElement::with_sides(
-                    [mesh.coords[a], mesh.coords[b], mesh.coords[c]],
+                    [mesh.coords()[a], mesh.coords()[b], mesh.coords()[c]],
                     layout.side_vectors(mesh, f),
                     element.rule,
                     element.interpolation,
@@ -783,7 +783,7 @@ fn scatter_matrix<const N: usize>(bm: &BlockMap, k: &SMatrix<f64, N, N>, w: f64,
 /// facet convention of [`crate::crease`].
 fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
     let mut out = Vec::new();
-    for (e, edge) in mesh.edges.iter().enumerate() {
+    for (e, edge) in mesh.edges().iter().enumerate() {
         if edge.kind != EdgeKind::Crease {
             continue;
         }
@@ -793,15 +793,15 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
             let d: Vector2<f64> = layout.curves.direction(mesh, e, v, w);
             // Which side of the edge a facet is on: by its chord (robust on
             // curved sides).
-            let chord = mesh.coords[w] - mesh.coords[v];
+            let chord = mesh.coords()[w] - mesh.coords()[v];
             let mut right = None;
             let mut left = None;
-            for &f in &mesh.edge_faces[e] {
-                let third = *mesh.triangles[f]
+            for &f in &mesh.edge_faces()[e] {
+                let third = *mesh.triangles()[f]
                     .iter()
                     .find(|&&x| x != v && x != w)
                     .expect("triangle");
-                let x = mesh.coords[third] - mesh.coords[v];
+                let x = mesh.coords()[third] - mesh.coords()[v];
                 let side = chord.x * x.y - chord.y * x.x;
                 let g = layout.gradient_along(v, f, x);
                 if side < 0.0 {
@@ -810,7 +810,7 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
                     left = Some(g);
                 }
             }
-            let t = layout.gradient_along(v, mesh.edge_faces[e][0], d);
+            let t = layout.gradient_along(v, mesh.edge_faces()[e][0], d);
             out.push(CreaseEnd {
                 edge: e,
                 length: 0.5 * len,

@@ -213,7 +213,9 @@ impl RollUp {
         let physics = roll_up_physics();
         let layout = DofLayout::new(&mesh);
         let nv = mesh.n_vertices();
-        let tip: Vec<usize> = (0..nv).filter(|&v| mesh.coords[v].x == ROLL_UP_L).collect();
+        let tip: Vec<usize> = (0..nv)
+            .filter(|&v| mesh.coords()[v].x == ROLL_UP_L)
+            .collect();
         // Gradient slot of vertex v along the reference direction `dir`
         // (0 = x, 1 = y): the slot whose sector coefficient is that unit vector.
         let gradient_slot = |v: usize, dir: usize| {
@@ -230,7 +232,7 @@ impl RollUp {
         };
         let mut fixed = Vec::new();
         for v in 0..nv {
-            if mesh.coords[v].x == 0.0 {
+            if mesh.coords()[v].x == 0.0 {
                 fixed.extend(layout.vertex_slots(v));
             } else if self.planar {
                 fixed.push(gradient_slot(v, 1)?);
@@ -246,7 +248,7 @@ impl RollUp {
         let slots = tip
             .iter()
             .map(|&v| {
-                let y = mesh.coords[v].y;
+                let y = mesh.coords()[v].y;
                 let share = if y == 0.0 || y == 1.0 { 0.5 } else { 1.0 };
                 Ok((gradient_slot(v, 0)?, m_top * share / self.ny as f64))
             })
@@ -271,7 +273,7 @@ impl RollUp {
                 let x = tip.iter().map(|&v| pos(v)[0]).sum::<f64>() / n;
                 let z = tip.iter().map(|&v| pos(v)[2]).sum::<f64>() / n;
                 let lateral = (0..nv)
-                    .map(|v| (pos(v)[1] - mesh.coords[v].y).abs())
+                    .map(|v| (pos(v)[1] - mesh.coords()[v].y).abs())
                     .fold(0.0, f64::max);
                 points.push(RollUpPoint {
                     ratio: ratios.get(points.len()).copied().unwrap_or(lambda * top),
@@ -425,7 +427,7 @@ impl PlateCase {
         let mesh = self.family.grid(a, a, n, n);
         let on_edge = |x: f64| x.abs() < 1e-12 || (x - a).abs() < 1e-12;
         let boundary: Vec<usize> = (0..mesh.n_vertices())
-            .filter(|&v| on_edge(mesh.coords[v].x) || on_edge(mesh.coords[v].y))
+            .filter(|&v| on_edge(mesh.coords()[v].x) || on_edge(mesh.coords()[v].y))
             .collect();
         let centre = (n / 2) * (n + 1) + n / 2;
         let q = 1e-2 * d / a.powi(4);
@@ -497,7 +499,7 @@ impl TipForce {
         let mesh = self.family.grid(l, b, self.nx, self.ny);
         let at = |x: f64| -> Vec<usize> {
             (0..mesh.n_vertices())
-                .filter(|&v| (mesh.coords[v].x - x).abs() < 1e-12)
+                .filter(|&v| (mesh.coords()[v].x - x).abs() < 1e-12)
                 .collect()
         };
         let (root, tips) = (at(0.0), at(l));

@@ -47,7 +47,7 @@ impl CreaseCurves {
         let nv = mesh.n_vertices();
         let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nv];
         let mut boundary = vec![false; nv];
-        for (e, faces) in mesh.edges.iter().zip(&mesh.edge_faces) {
+        for (e, faces) in mesh.edges().iter().zip(mesh.edge_faces()) {
             if e.kind == EdgeKind::Crease {
                 nbrs[e.v[0]].push(e.v[1]);
                 nbrs[e.v[1]].push(e.v[0]);
@@ -65,8 +65,8 @@ impl CreaseCurves {
                 if boundary[v] {
                     return None;
                 }
-                let x = mesh.coords[v];
-                let (da, db) = (x - mesh.coords[a], mesh.coords[b] - x);
+                let x = mesh.coords()[v];
+                let (da, db) = (x - mesh.coords()[a], mesh.coords()[b] - x);
                 let cos_turn = da.normalize().dot(&db.normalize());
                 let collinear = 1.0 - cos_turn < PARALLEL_TOL;
                 if collinear || cos_turn < MAX_CURVE_TURN.cos() {
@@ -94,9 +94,9 @@ impl CreaseCurves {
     /// the curve tangent (oriented towards `w`) on a crease edge at a curved
     /// vertex, the chord direction otherwise.
     pub fn direction(&self, mesh: &Mesh, e: usize, v: usize, w: usize) -> Vector2<f64> {
-        let chord = mesh.coords[w] - mesh.coords[v];
+        let chord = mesh.coords()[w] - mesh.coords()[v];
         match self.tangent[v] {
-            Some(t) if mesh.edges[e].kind == EdgeKind::Crease => {
+            Some(t) if mesh.edges()[e].kind == EdgeKind::Crease => {
                 if t.dot(&chord) >= 0.0 {
                     t
                 } else {
@@ -109,7 +109,7 @@ impl CreaseCurves {
 
     /// Whether edge `e` is curved in the reference.
     pub fn is_curved_edge(&self, mesh: &Mesh, e: usize) -> bool {
-        let edge = &mesh.edges[e];
+        let edge = &mesh.edges()[e];
         edge.kind == EdgeKind::Crease && (self.is_curved(edge.v[0]) || self.is_curved(edge.v[1]))
     }
 
@@ -117,7 +117,7 @@ impl CreaseCurves {
     /// facet's gradient DOF there means (`G_s` times it). The chord
     /// `X_w - X_v` on a straight side, the Hermite end tangent on a curved one.
     pub fn side(&self, mesh: &Mesh, e: usize, v: usize, w: usize) -> Vector2<f64> {
-        let chord = mesh.coords[w] - mesh.coords[v];
+        let chord = mesh.coords()[w] - mesh.coords()[v];
         if !self.is_curved_edge(mesh, e) {
             return chord;
         }
@@ -177,11 +177,11 @@ mod tests {
         assert!((t - Vector2::new(0.0, 1.0)).norm() < 1e-12, "{t}");
         // The side vector: along the tangent, longer than the chord.
         let s = c.side(&m, e, 1, 2);
-        let chord = (m.coords[2] - m.coords[1]).norm();
+        let chord = (m.coords()[2] - m.coords()[1]).norm();
         assert!(s.normalize().dot(&t) > 1.0 - 1e-12 && s.norm() > chord);
         // A smooth edge at the curve vertex stays straight.
         let e3 = m.find_edge(1, 3).unwrap();
-        assert_eq!(c.side(&m, e3, 1, 3), m.coords[3] - m.coords[1]);
+        assert_eq!(c.side(&m, e3, 1, 3), m.coords()[3] - m.coords()[1]);
     }
 
     #[test]

@@ -118,20 +118,20 @@ fn gradient_in(sectors: &[Sector], face: usize, x: Vector2<f64>) -> Combo {
 /// The six sides of facet `f` in element order `[1->2, 1->3, 2->3, 2->1,
 /// 3->1, 3->2]`: (corner, towards, reference side vector).
 fn facet_sides(mesh: &Mesh, curves: &CreaseCurves, f: usize) -> [(usize, usize, Vector2<f64>); 6] {
-    let [a, b, c] = mesh.triangles[f];
+    let [a, b, c] = mesh.triangles()[f];
     [(a, b), (a, c), (b, c), (b, a), (c, a), (c, b)]
         .map(|(v, w)| (v, w, curves.side(mesh, side_edge(mesh, f, v, w), v, w)))
 }
 
 /// The edge of facet `f` between its corners `v` and `w`.
 fn side_edge(mesh: &Mesh, f: usize, v: usize, w: usize) -> usize {
-    let t = mesh.triangles[f];
+    let t = mesh.triangles()[f];
     (0..3)
         .find(|&k| {
             let (p, q) = (t[k], t[(k + 1) % 3]);
             (p == v && q == w) || (p == w && q == v)
         })
-        .map(|k| mesh.face_edges[f][k])
+        .map(|k| mesh.face_edges()[f][k])
         .expect("v and w are corners of f")
 }
 
@@ -162,11 +162,11 @@ impl DofLayout {
             // Unit tangent at v along edge e: the chord, or the crease
             // curve's tangent where two non-collinear creases meet.
             let dir = |e: usize| {
-                let [a, b] = mesh.edges[e].v;
+                let [a, b] = mesh.edges()[e].v;
                 let w = if a == v { b } else { a };
                 curves.direction(mesh, e, v, w)
             };
-            let is_crease = |e: usize| mesh.edges[e].kind == EdgeKind::Crease;
+            let is_crease = |e: usize| mesh.edges()[e].kind == EdgeKind::Crease;
             // Split the fan into sectors at creases: list of (first edge, faces, last edge).
             let nf = fan.faces.len();
             let crease_pos: Vec<usize> = (0..fan.edges.len())
@@ -276,9 +276,9 @@ impl DofLayout {
             }
         }
 
-        let local = (0..mesh.triangles.len())
+        let local = (0..mesh.triangles().len())
             .map(|f| {
-                let [a, b, c] = mesh.triangles[f];
+                let [a, b, c] = mesh.triangles()[f];
                 let sides = facet_sides(mesh, &curves, f);
                 let grad = |k: usize| {
                     let (v, _, x) = sides[k];
@@ -356,7 +356,7 @@ impl DofLayout {
         F: Fn(Vector2<f64>) -> (Vector3<f64>, Matrix3x2<f64>),
     {
         let mut q = vec![0.0; self.n_dofs()];
-        for (v, x) in mesh.coords.iter().enumerate() {
+        for (v, x) in mesh.coords().iter().enumerate() {
             let (r, g) = field(*x);
             let s = self.position_slot[v];
             q[3 * s..3 * s + 3].copy_from_slice(r.as_slice());
@@ -435,8 +435,8 @@ mod tests {
     }
 
     fn check_reference(m: &Mesh, layout: &DofLayout, q: &[f64]) {
-        for (f, &[a, b, c]) in m.triangles.iter().enumerate() {
-            let x = |v: usize| nalgebra::Vector3::new(m.coords[v].x, m.coords[v].y, 0.0);
+        for (f, &[a, b, c]) in m.triangles().iter().enumerate() {
+            let x = |v: usize| nalgebra::Vector3::new(m.coords()[v].x, m.coords()[v].y, 0.0);
             let expect = [
                 x(a),
                 x(b) - x(a),
@@ -481,13 +481,13 @@ mod tests {
             let layout = DofLayout::new(&mesh);
             let axis = Unit::new_normalize(Vector3::new(1.0, 1.0, 0.0));
             let rot = Rotation3::from_axis_angle(&axis, 0.7);
-            let x3 = |v: usize| Vector3::new(mesh.coords[v].x, mesh.coords[v].y, 0.0);
+            let x3 = |v: usize| Vector3::new(mesh.coords()[v].x, mesh.coords()[v].y, 0.0);
             // facet 0 = (0,1,2) stays, facet 1 = (0,2,3) rotates about the 0-2 line
             let pos = |f: usize, v: usize| if f == 1 { rot * x3(v) } else { x3(v) };
             // Least squares: find q with local[f][k](q) = target for all f, k.
             let n = layout.n_dofs();
             let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
-            for (f, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+            for (f, &[a, b, c]) in mesh.triangles().iter().enumerate() {
                 let t = [
                     pos(f, a),
                     pos(f, b) - pos(f, a),

@@ -73,17 +73,11 @@ impl Edge {
 /// A validated crease pattern with its topology.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Mesh {
-    /// Reference (stress-free, flat) vertex coordinates in metres.
-    pub coords: Vec<Vector2<f64>>,
-    /// Triangles, counter-clockwise in the reference coordinates.
-    pub triangles: Vec<[usize; 3]>,
-    /// All edges: the listed ones first, in the given order, then the
-    /// unlisted triangle edges.
-    pub edges: Vec<Edge>,
-    /// For each edge, the one or two triangles that contain it.
-    pub edge_faces: Vec<Vec<usize>>,
-    /// For each triangle, the edge index of its sides (v0v1, v1v2, v2v0).
-    pub face_edges: Vec<[usize; 3]>,
+    coords: Vec<Vector2<f64>>,
+    triangles: Vec<[usize; 3]>,
+    edges: Vec<Edge>,
+    edge_faces: Vec<Vec<usize>>,
+    face_edges: Vec<[usize; 3]>,
 }
 
 /// What is wrong with a mesh, naming the index.
@@ -347,6 +341,62 @@ impl Mesh {
         // quadratic in the mesh size).
         mesh.fans()?;
         Ok(mesh)
+    }
+
+    /// Reference (stress-free, flat) vertex coordinates in metres.
+    pub fn coords(&self) -> &[Vector2<f64>] {
+        &self.coords
+    }
+
+    /// Triangles, counter-clockwise in the reference coordinates.
+    pub fn triangles(&self) -> &[[usize; 3]] {
+        &self.triangles
+    }
+
+    /// All edges: the listed ones first, in the given order, then the
+    /// unlisted triangle edges.
+    pub fn edges(&self) -> &[Edge] {
+        &self.edges
+    }
+
+    /// For each edge, the one or two triangles that contain it.
+    pub fn edge_faces(&self) -> &[Vec<usize>] {
+        &self.edge_faces
+    }
+
+    /// For each triangle, the edge index of its sides (v0v1, v1v2, v2v0).
+    pub fn face_edges(&self) -> &[[usize; 3]] {
+        &self.face_edges
+    }
+
+    /// Tag every crease without a FOLD edge with the FOLD edge of its own
+    /// index: for a mesh built in code, with no FOLD file behind it, whose
+    /// edge indices are the FOLD edge indices. (The tag is not checked by
+    /// [`Mesh::new`]: this changes nothing that it validated.)
+    pub fn tag_creases_as_fold_edges(&mut self) {
+        for (e, edge) in self.edges.iter_mut().enumerate() {
+            if edge.fold_edge.is_none() && edge.kind == EdgeKind::Crease {
+                edge.fold_edge = Some(e);
+            }
+        }
+    }
+
+    /// Tag edge `e` with the FOLD edge it lies on (`None`: none).
+    pub fn set_fold_edge(&mut self, e: usize, fold_edge: Option<usize>) {
+        self.edges[e].fold_edge = fold_edge;
+    }
+
+    /// Set the target fold angle (radians, FOLD sign) of edge `e`; an error
+    /// (and no change) for a number that is not finite, as in [`Mesh::new`].
+    pub fn set_fold_target(&mut self, e: usize, fold_target: f64) -> Result<(), MeshError> {
+        if !fold_target.is_finite() {
+            return Err(MeshError::NotFinite {
+                what: "fold angle of edge".into(),
+                index: e,
+            });
+        }
+        self.edges[e].fold_target = fold_target;
+        Ok(())
     }
 
     /// Number of vertices.

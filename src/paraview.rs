@@ -269,8 +269,8 @@ impl Series {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         let mesh = &model.scene().mesh;
-        let reference = mesh.coords.iter().map(|x| [x.x, x.y, 0.0]).collect();
-        let areas = (0..mesh.triangles.len()).map(|t| mesh.area(t)).collect();
+        let reference = mesh.coords().iter().map(|x| [x.x, x.y, 0.0]).collect();
+        let areas = (0..mesh.triangles().len()).map(|t| mesh.area(t)).collect();
         let outputs: std::collections::HashMap<&str, usize> = model
             .outputs()
             .iter()
@@ -279,7 +279,7 @@ impl Series {
             .collect();
         let mut lines = Vec::new();
         let mut line_output = Vec::new();
-        for edge in &mesh.edges {
+        for edge in mesh.edges() {
             if let (EdgeKind::Crease, Some(f)) = (edge.kind, edge.fold_edge) {
                 lines.push((edge.v, f));
                 line_output.push(outputs.get(format!("crease[{f}].angle").as_str()).copied());
@@ -313,7 +313,7 @@ impl Series {
             points: &points,
             reference: &self.reference,
             fold_vertex_count: model.scene().fold_vertex_count,
-            triangles: &mesh.triangles,
+            triangles: mesh.triangles(),
             facet_energy: &energy,
             facet_area: &self.areas,
             lines: &self.lines,

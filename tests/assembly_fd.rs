@@ -203,10 +203,10 @@ fn folded_miura() -> (Assembler, Vec<f64>) {
     // G = sum_k q_k c_k^T, i.e. [q0 q1] = G C^-1 with the c_k as rows of C.
     for sectors in &layout.sectors {
         for sec in sectors {
-            let [a, b, c] = mesh.triangles[sec.faces[0]];
+            let [a, b, c] = mesh.triangles()[sec.faces[0]];
             let flat = Matrix2::from_columns(&[
-                mesh.coords[b] - mesh.coords[a],
-                mesh.coords[c] - mesh.coords[a],
+                mesh.coords()[b] - mesh.coords()[a],
+                mesh.coords()[c] - mesh.coords()[a],
             ]);
             let bent = Matrix3x2::from_columns(&[folded[b] - folded[a], folded[c] - folded[a]]);
             let g = bent * flat.try_inverse().unwrap();

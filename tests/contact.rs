@@ -350,9 +350,11 @@ fn fit_acceleration(pts: &[(f64, f64)]) -> f64 {
 /// two facets intersect and the smallest gap is not negative.
 fn fold_flat(path: &str, t_fold: f64, t_end: f64) -> Model {
     let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
-    for e in scene.mesh.edges.iter_mut() {
-        if e.kind == origami_fmu::mesh::EdgeKind::Crease {
-            e.fold_target = PI * e.fold_target.signum();
+    for e in 0..scene.mesh.edges().len() {
+        let edge = &scene.mesh.edges()[e];
+        if edge.kind == origami_fmu::mesh::EdgeKind::Crease {
+            let target = PI * edge.fold_target.signum();
+            scene.mesh.set_fold_target(e, target).unwrap();
         }
     }
     contact_on(&mut scene, 0.3);

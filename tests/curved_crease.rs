@@ -26,17 +26,17 @@ fn fold(scene: Scene) -> Model {
 fn crease_chain(m: &Model) -> (Vec<usize>, Vec<f64>) {
     let mesh = &m.scene().mesh;
     let mut edges: Vec<(usize, [usize; 2])> = mesh
-        .edges
+        .edges()
         .iter()
         .enumerate()
         .filter(|(_, e)| e.kind == EdgeKind::Crease)
         .map(|(i, e)| {
             let mut v = e.v;
-            v.sort_by(|a, b| mesh.coords[*a].y.total_cmp(&mesh.coords[*b].y));
+            v.sort_by(|a, b| mesh.coords()[*a].y.total_cmp(&mesh.coords()[*b].y));
             (i, v)
         })
         .collect();
-    edges.sort_by(|a, b| mesh.coords[a.1[0]].y.total_cmp(&mesh.coords[b.1[0]].y));
+    edges.sort_by(|a, b| mesh.coords()[a.1[0]].y.total_cmp(&mesh.coords()[b.1[0]].y));
     let mut verts = vec![edges[0].1[0]];
     verts.extend(edges.iter().map(|e| e.1[1]));
     let names: Vec<String> = m.outputs().iter().map(|v| v.name.clone()).collect();
@@ -83,8 +83,8 @@ fn shipped_curved_crease_scene_folds() {
     let k = origami_fmu::model::physics(&scene).crease_k_per_length;
     let mesh = scene.mesh.clone();
     let target = std::f64::consts::FRAC_PI_2;
-    let unfolded: f64 = (0..mesh.edges.len())
-        .filter(|&e| mesh.edges[e].kind == EdgeKind::Crease)
+    let unfolded: f64 = (0..mesh.edges().len())
+        .filter(|&e| mesh.edges()[e].kind == EdgeKind::Crease)
         .map(|e| 0.5 * k * mesh.edge_length(e) * target * target)
         .sum();
     let m = fold(scene);
@@ -209,13 +209,13 @@ fn both_sides_take_different_planes_at_every_crease_vertex() {
     let mut worst: f64 = 0.0;
     for &v in &verts {
         // The shared direction at v: the crease tangent of any crease edge.
-        let e = (0..mesh.edges.len())
-            .find(|&e| mesh.edges[e].kind == EdgeKind::Crease && mesh.edges[e].v.contains(&v))
+        let e = (0..mesh.edges().len())
+            .find(|&e| mesh.edges()[e].kind == EdgeKind::Crease && mesh.edges()[e].v.contains(&v))
             .unwrap();
-        let w = if mesh.edges[e].v[0] == v {
-            mesh.edges[e].v[1]
+        let w = if mesh.edges()[e].v[0] == v {
+            mesh.edges()[e].v[1]
         } else {
-            mesh.edges[e].v[0]
+            mesh.edges()[e].v[0]
         };
         let t = layout.curves.direction(&mesh, e, v, w);
         let rot =
@@ -224,12 +224,12 @@ fn both_sides_take_different_planes_at_every_crease_vertex() {
         for sec in &layout.sectors[v] {
             // Side by the centroid of the sector's first facet (crease along y, bulging to +x).
             let f = sec.faces[0];
-            let c = mesh.triangles[f]
+            let c = mesh.triangles()[f]
                 .iter()
-                .map(|&x| mesh.coords[x])
+                .map(|&x| mesh.coords()[x])
                 .sum::<nalgebra::Vector2<f64>>()
                 / 3.0;
-            let g = if c.x > mesh.coords[v].x {
+            let g = if c.x > mesh.coords()[v].x {
                 rot.matrix() * identity
             } else {
                 identity

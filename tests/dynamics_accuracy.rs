@@ -188,7 +188,7 @@ fn cantilever_first_frequency() {
         let mesh = grid_with(l, b, n, 1, &[], false);
         let at = |x: f64| -> Vec<usize> {
             (0..mesh.n_vertices())
-                .filter(|&v| mesh.coords[v].x == x)
+                .filter(|&v| mesh.coords()[v].x == x)
                 .collect()
         };
         let (root, tips) = (at(0.0), at(l));

@@ -76,7 +76,7 @@ fn panel_error(m: &Model, w: f64, phi: f64) -> f64 {
     [2, 5]
         .iter()
         .map(|&v| {
-            let y = m.scene().mesh.coords[v].y;
+            let y = m.scene().mesh.coords()[v].y;
             let want = Vector3::new(w + w * phi.cos(), y, w * phi.sin());
             (Vector3::from(m.vertex_position(v)) - want).norm() / w
         })
@@ -284,8 +284,8 @@ fn near_degenerate_triangle() {
     ];
     let mesh = Mesh::new(coords, tris, vec![Edge::crease(1, 4, target)]).unwrap();
     let (a, b) = (
-        mesh.coords[5] - mesh.coords[2],
-        mesh.coords[6] - mesh.coords[2],
+        mesh.coords()[5] - mesh.coords()[2],
+        mesh.coords()[6] - mesh.coords()[2],
     );
     let aspect = a.norm().powi(2) / (a.x * b.y - a.y * b.x).abs();
     assert!((aspect - 1e3).abs() < 1.0, "aspect ratio {aspect}");

@@ -23,10 +23,10 @@ use std::path::Path;
 /// Tag every mesh edge with its own index as FOLD edge (the examples are
 /// built without a FOLD file), so creases get `crease[e].angle` outputs.
 fn tag_fold_edges(mut s: Scene) -> Scene {
-    for (e, edge) in s.mesh.edges.iter_mut().enumerate() {
-        edge.fold_edge = Some(e);
+    for e in 0..s.mesh.edges().len() {
+        s.mesh.set_fold_edge(e, Some(e));
     }
-    s.fold_edge_count = s.mesh.edges.len();
+    s.fold_edge_count = s.mesh.edges().len();
     s
 }
 

@@ -94,7 +94,7 @@ fn residual_and_energy(mesh: &Mesh, interp: Interpolation, u: &[f64], h: f64) ->
     }
     let energy = 0.5 * u.iter().zip(&ku).map(|(a, b)| a * b).sum::<f64>();
     let interior = |v: usize| {
-        let x = mesh.coords[v];
+        let x = mesh.coords()[v];
         let e = 1e-12;
         x.x > e && x.y > e && x.x < 1.0 - e && x.y < 1.0 - e
     };
@@ -125,7 +125,7 @@ fn plane_c(nu: f64) -> Matrix3<f64> {
 }
 
 fn area(mesh: &Mesh) -> f64 {
-    (0..mesh.triangles.len()).map(|t| mesh.area(t)).sum()
+    (0..mesh.triangles().len()).map(|t| mesh.area(t)).sum()
 }
 
 #[test]

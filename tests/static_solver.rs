@@ -69,14 +69,14 @@ fn plate() -> (Assembler, Vec<f64>, Vec<f64>) {
     };
     let layout = origami_fmu::dofs::DofLayout::new(&mesh);
     let fixed: Vec<usize> = (0..mesh.n_vertices())
-        .filter(|&v| mesh.coords[v].x == 0.0)
+        .filter(|&v| mesh.coords()[v].x == 0.0)
         .flat_map(|v| layout.vertex_slots(v))
         .collect();
     let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &fixed).unwrap();
     let q = asm.layout.reference_state(&mesh);
     let mut f = vec![0.0; q.len()];
     for v in 0..mesh.n_vertices() {
-        if mesh.coords[v].x == 1.0 {
+        if mesh.coords()[v].x == 1.0 {
             f[3 * asm.layout.position_slot[v] + 2] = 1e-3;
         }
     }

@@ -212,7 +212,7 @@ pub fn run(args: PatternArgs) -> Result<(), String> {
     let text = file.to_json();
     let creases = scene
         .mesh
-        .edges
+        .edges()
         .iter()
         .filter(|e| e.kind == crate::mesh::EdgeKind::Crease)
         .count();

@@ -69,8 +69,8 @@ impl ContactSurface {
         let mut maps: Vec<VertexMap> = Vec::new();
         let mut vertex_facets: Vec<Vec<usize>> = Vec::new();
         let mut fine_tris = Vec::new();
-        let mut facet_slots = Vec::with_capacity(mesh.triangles.len());
-        for (f, tri) in mesh.triangles.iter().enumerate() {
+        let mut facet_slots = Vec::with_capacity(mesh.triangles().len());
+        for (f, tri) in mesh.triangles().iter().enumerate() {
             let shape = elements[f].shape();
             let local = &layout.local[f];
             let mut slots: Vec<usize> = local
@@ -133,7 +133,7 @@ impl ContactSurface {
         for vf in vertex_facets.iter_mut() {
             vf.sort_unstable();
         }
-        let mut facet_vertices = vec![Vec::new(); mesh.triangles.len()];
+        let mut facet_vertices = vec![Vec::new(); mesh.triangles().len()];
         for (v, fs) in vertex_facets.iter().enumerate() {
             for &f in fs {
                 facet_vertices[f].push(v);
@@ -161,9 +161,9 @@ impl ContactSurface {
             }
         }
         let coarse_edges = mesh
-            .edges
+            .edges()
             .iter()
-            .zip(&mesh.edge_faces)
+            .zip(mesh.edge_faces())
             .map(|(e, faces)| {
                 let mut fs = faces.clone();
                 fs.sort_unstable();
@@ -171,13 +171,13 @@ impl ContactSurface {
             })
             .collect();
         let mut vertex_faces = vec![Vec::new(); mesh.n_vertices()];
-        for (f, tri) in mesh.triangles.iter().enumerate() {
+        for (f, tri) in mesh.triangles().iter().enumerate() {
             for &v in tri {
                 vertex_faces[v].push(f);
             }
         }
         let neighbours = mesh
-            .triangles
+            .triangles()
             .iter()
             .map(|tri| {
                 let mut nb: Vec<usize> = tri
@@ -228,7 +228,7 @@ impl ContactSurface {
 
     /// The corner triangle of facet `f` (contact vertices).
     pub fn coarse_tri(&self, mesh: &Mesh, f: usize) -> [usize; 3] {
-        let t = mesh.triangles[f];
+        let t = mesh.triangles()[f];
         [self.corner[t[0]], self.corner[t[1]], self.corner[t[2]]]
     }
 }

@@ -75,8 +75,12 @@ pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
     // The derived Deserialize does not check the mesh: rebuild it through
     // the validating constructor (all edges listed, so nothing is added).
     let m = &scene.mesh;
-    scene.mesh = crate::mesh::Mesh::new(m.coords.clone(), m.triangles.clone(), m.edges.clone())
-        .map_err(|e| format!("mesh: {e}"))?;
+    scene.mesh = crate::mesh::Mesh::new(
+        m.coords().to_vec(),
+        m.triangles().to_vec(),
+        m.edges().to_vec(),
+    )
+    .map_err(|e| format!("mesh: {e}"))?;
     validate_scene(&scene)?;
     Ok(scene)
 }
@@ -90,7 +94,7 @@ fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), String> {
 /// validation until the FOLD reader lands.
 fn validate_scene(s: &Scene) -> Result<(), String> {
     let nv = s.mesh.n_vertices();
-    let ne = s.mesh.edges.len();
+    let ne = s.mesh.edges().len();
     check(!s.name.trim().is_empty(), || "name: empty".into())?;
     check(s.fold_vertex_count <= nv, || {
         format!(
@@ -98,7 +102,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             s.fold_vertex_count
         )
     })?;
-    for (e, edge) in s.mesh.edges.iter().enumerate() {
+    for (e, edge) in s.mesh.edges().iter().enumerate() {
         if let Some(f) = edge.fold_edge {
             check(f < s.fold_edge_count, || {
                 format!(
@@ -121,7 +125,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
                 )
             })?;
             check(
-                s.mesh.edges[e].kind == crate::mesh::EdgeKind::Crease,
+                s.mesh.edges()[e].kind == crate::mesh::EdgeKind::Crease,
                 || format!("actuators[{i}] ({}): edge {e} is not a crease", a.name),
             )?;
         }

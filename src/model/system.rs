@@ -134,7 +134,7 @@ impl Model {
         let mut rest = vec![Vec::new(); nends];
         let mut torque = vec![Vec::new(); nends];
         // The actuators of each mesh edge, in actuator order.
-        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges.len()];
+        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges().len()];
         for (a, act) in sc.actuators.iter().enumerate() {
             for &e in &act.edges {
                 if driven_by[e].last() != Some(&a) {
@@ -145,7 +145,7 @@ impl Model {
         for (i, ce) in asm.creases.iter().enumerate() {
             for &a in &driven_by[ce.edge] {
                 match sc.actuators[a].mode {
-                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edges[ce.edge].fold_target)),
+                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edges()[ce.edge].fold_target)),
                     ActuatorMode::Torque => torque[i].push(a),
                 }
             }
@@ -168,7 +168,7 @@ impl Model {
         }
         let mut angle_ends: Vec<Vec<usize>> = vec![Vec::new(); outputs.len()];
         for (i, ce) in asm.creases.iter().enumerate() {
-            if let Some(&k) = mesh.edges[ce.edge]
+            if let Some(&k) = mesh.edges()[ce.edge]
                 .fold_edge
                 .and_then(|fe| output_of.get(&fe))
             {

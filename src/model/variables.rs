@@ -56,7 +56,7 @@ pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
         }
     }
     for m in &scene.vertex_motions {
-        let x = scene.mesh.coords[m.vertex];
+        let x = scene.mesh.coords()[m.vertex];
         for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
             v.push(spec(
                 format!("{}.{c}", m.name),
@@ -76,7 +76,7 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
     let o = scene.outputs;
     if o.positions {
         for i in 0..scene.fold_vertex_count {
-            let x = scene.mesh.coords[i];
+            let x = scene.mesh.coords()[i];
             for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
                 v.push(spec(
                     format!("vertex[{i}].{c}"),
@@ -147,7 +147,7 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
 pub fn fold_edges(scene: &Scene) -> Vec<usize> {
     let mut es: Vec<usize> = scene
         .mesh
-        .edges
+        .edges()
         .iter()
         .filter(|e| e.kind == crate::mesh::EdgeKind::Crease)
         .filter_map(|e| e.fold_edge)
@@ -345,21 +345,21 @@ impl Model {
                 [q[3 * s], q[3 * s + 1], q[3 * s + 2]]
             }
             _ => {
-                let x = self.scene.mesh.coords[v];
+                let x = self.scene.mesh.coords()[v];
                 [x.x, x.y, 0.0]
             }
         }
     }
 
     /// Strain energy (membrane + bending, J) of each mesh triangle now, in
-    /// the order of `scene().mesh.triangles`; zeros before initialization
+    /// the order of `scene().mesh.triangles()`; zeros before initialization
     /// (the flat reference state is stress-free).
     pub fn facet_strain_energies(&self) -> Vec<f64> {
         match &self.sys {
             Some(sys) if self.state.phase == Phase::Running => {
                 sys.asm.facet_strain_energies(&self.state.dynamics.q)
             }
-            _ => vec![0.0; self.scene.mesh.triangles.len()],
+            _ => vec![0.0; self.scene.mesh.triangles().len()],
         }
     }
 

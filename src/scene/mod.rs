@@ -16,7 +16,7 @@
 //! }"#;
 //! let (scene, warnings) = origami_fmu::scene::from_str(text).unwrap();
 //! assert_eq!(scene.fold_vertex_count, 6);
-//! assert_eq!(scene.mesh.triangles.len(), 4);
+//! assert_eq!(scene.mesh.triangles().len(), 4);
 //! assert_eq!(scene.actuators[0].name, "fold");
 //! // Every face side is listed, so nothing is guessed and nothing warned.
 //! assert!(warnings.is_empty());
@@ -481,16 +481,12 @@ impl Scene {
     pub fn with_defaults(name: &str, mut mesh: Mesh) -> Scene {
         // A mesh built in code has no FOLD file behind it: its edge indices
         // are the FOLD edge indices.
-        for (e, edge) in mesh.edges.iter_mut().enumerate() {
-            if edge.fold_edge.is_none() && edge.kind == crate::mesh::EdgeKind::Crease {
-                edge.fold_edge = Some(e);
-            }
-        }
-        let creases: Vec<usize> = (0..mesh.edges.len())
-            .filter(|&e| mesh.edges[e].kind == crate::mesh::EdgeKind::Crease)
+        mesh.tag_creases_as_fold_edges();
+        let creases: Vec<usize> = (0..mesh.edges().len())
+            .filter(|&e| mesh.edges()[e].kind == crate::mesh::EdgeKind::Crease)
             .collect();
         let fold_vertex_count = mesh.n_vertices();
-        let fold_edge_count = mesh.edges.len();
+        let fold_edge_count = mesh.edges().len();
         Scene {
             name: name.to_string(),
             mesh,

@@ -139,7 +139,7 @@ pub fn set_velocity(
         old.copy_from_slice(x.as_slice());
     };
     for vx in 0..mesh.n_vertices() {
-        let x = mesh.coords[vx];
+        let x = mesh.coords()[vx];
         let all: Vec<usize> = layout.sectors[vx]
             .iter()
             .flat_map(|s| s.faces.clone())
@@ -177,9 +177,9 @@ pub fn rigid_rotation(
 pub fn hinge_velocity(model: &mut Model, w: f64, rate: f64) {
     let mesh = &model.scene().mesh;
     let free: Vec<bool> = mesh
-        .triangles
+        .triangles()
         .iter()
-        .map(|t| t.iter().map(|&v| mesh.coords[v].x).sum::<f64>() / 3.0 > w)
+        .map(|t| t.iter().map(|&v| mesh.coords()[v].x).sum::<f64>() / 3.0 > w)
         .collect();
     let axis = Vector3::new(0.0, rate, 0.0);
     let centre = Vector3::new(w, 0.0, 0.0);

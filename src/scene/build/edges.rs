@@ -364,17 +364,17 @@ mod tests {
         let mut v = Value::Object(v);
         v.as_object_mut().unwrap().remove("edges_foldAngle");
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.edges[6].fold_target, PI);
+        assert_eq!(s.mesh.edges()[6].fold_target, PI);
         let v = with(
             v,
             "edges_assignment",
             json!(["B", "B", "B", "B", "B", "B", "M"]),
         );
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.edges[6].fold_target, -PI);
+        assert_eq!(s.mesh.edges()[6].fold_target, -PI);
         let v = with(v, "edges_foldAngle", json!([0, 0, 0, 0, 0, 0, 45]));
         let (s, w) = load(&v).unwrap();
-        assert!((s.mesh.edges[6].fold_target - PI / 4.0).abs() < 1e-15);
+        assert!((s.mesh.edges()[6].fold_target - PI / 4.0).abs() < 1e-15);
         assert_eq!(w.len(), 1);
         assert!(
             w[0].starts_with("edges_foldAngle[6]: mountain crease"),
@@ -388,8 +388,8 @@ mod tests {
         );
         let v = with(v, "edges_foldAngle", json!([0, 0, 0, 0, 0, 0, null]));
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Crease);
-        assert_eq!(s.mesh.edges[6].fold_target, 0.0);
+        assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Crease);
+        assert_eq!(s.mesh.edges()[6].fold_target, 0.0);
     }
 
     #[test]
@@ -456,7 +456,7 @@ mod tests {
             json!(["V", "B", "B", "B", "B", "B", "V"]),
         );
         let (s, w) = load(&v).unwrap();
-        assert_eq!(s.mesh.edges[0].kind, EdgeKind::Boundary);
+        assert_eq!(s.mesh.edges()[0].kind, EdgeKind::Boundary);
         assert!(
             w[0].starts_with("edges_assignment[0]: 1 crease(s) on the boundary"),
             "{w:?}"
@@ -492,9 +492,9 @@ mod tests {
         let mut v = v;
         v.as_object_mut().unwrap().remove("edges_foldAngle");
         let (s, w) = load(&v).unwrap();
-        assert_eq!(s.mesh.edges[0].kind, EdgeKind::Boundary);
-        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Crease);
-        assert_eq!(s.mesh.edges[6].fold_target, 0.0);
+        assert_eq!(s.mesh.edges()[0].kind, EdgeKind::Boundary);
+        assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Crease);
+        assert_eq!(s.mesh.edges()[6].fold_target, 0.0);
         assert_eq!(s.actuators[0].edges, vec![6]);
         assert!(w.iter().any(|w| w.contains("drives nothing")), "{w:?}");
         let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
@@ -503,7 +503,7 @@ mod tests {
             ..Default::default()
         };
         let l = from_fold_with(&parsed, &smooth).unwrap();
-        assert_eq!(l.scene.mesh.edges[6].kind, EdgeKind::Smooth);
+        assert_eq!(l.scene.mesh.edges()[6].kind, EdgeKind::Smooth);
         assert!(
             l.notes
                 .iter()
@@ -517,16 +517,19 @@ mod tests {
             json!("Origami Simulator: http://git.amandaghassaei.com/OrigamiSimulator/"),
         );
         let (s, _) = load(&os).unwrap();
-        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Smooth);
+        assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Smooth);
         let keyed = with(v.clone(), "ancf:import", json!({"f_edges": "smooth"}));
-        assert_eq!(load(&keyed).unwrap().0.mesh.edges[6].kind, EdgeKind::Smooth);
+        assert_eq!(
+            load(&keyed).unwrap().0.mesh.edges()[6].kind,
+            EdgeKind::Smooth
+        );
         let j = with(
             base(),
             "edges_assignment",
             json!(["B", "B", "B", "B", "B", "B", "J"]),
         );
         let (s, _) = load(&j).unwrap();
-        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Smooth);
+        assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Smooth);
         assert!(s.actuators[0].edges.is_empty());
     }
 
@@ -541,7 +544,7 @@ mod tests {
         assert!(w[0].contains("derived from faces_vertices"), "{w:?}");
         let creases: Vec<_> = s
             .mesh
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.kind == EdgeKind::Crease)
             .collect();
@@ -554,8 +557,8 @@ mod tests {
             w.iter().any(|w| w.contains("edges_assignment is missing")),
             "{w:?}"
         );
-        assert!((s.mesh.edges[6].fold_target - PI / 2.0).abs() < 1e-15);
-        assert_eq!(s.mesh.edges[0].kind, EdgeKind::Boundary);
+        assert!((s.mesh.edges()[6].fold_target - PI / 2.0).abs() < 1e-15);
+        assert_eq!(s.mesh.edges()[0].kind, EdgeKind::Boundary);
         // FOLD's own converters write null for interior edges
         let v = with(
             base(),
@@ -563,7 +566,7 @@ mod tests {
             json!(["B", "B", "B", "B", "B", "B", null]),
         );
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Crease);
+        assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Crease);
         // sides not listed: a warning, no crease output
         let mut v = base();
         v["edges_vertices"] = json!([[1, 4]]);

@@ -353,9 +353,9 @@ mod tests {
             l.notes
         );
         let m = &l.scene.mesh;
-        assert_eq!(m.edges[4].kind, EdgeKind::Crease);
-        assert_eq!(m.edge_faces[4].len(), 2);
-        assert_eq!(m.triangles.len(), 4);
+        assert_eq!(m.edges()[4].kind, EdgeKind::Crease);
+        assert_eq!(m.edge_faces()[4].len(), 2);
+        assert_eq!(m.triangles().len(), 4);
         let mut model = crate::model::Model::new(l.scene.clone()).unwrap();
         model.initialize().unwrap();
         let e = err(
@@ -381,8 +381,8 @@ mod tests {
         ))
         .unwrap();
         assert!(w[0].contains("every face is clockwise"), "{w:?}");
-        assert_eq!(s.mesh.coords[3], Vector2::new(2.0, -1.0));
-        assert!((s.mesh.edges[6].fold_target - PI / 2.0).abs() < 1e-15);
+        assert_eq!(s.mesh.coords()[3], Vector2::new(2.0, -1.0));
+        assert!((s.mesh.edges()[6].fold_target - PI / 2.0).abs() < 1e-15);
         // clockwise and counter-clockwise faces: a flat-folded state
         let v = json!({
             "frame_unit": "m",
@@ -432,7 +432,7 @@ mod tests {
             ]),
         );
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.coords[3], Vector2::new(2.0, 1.0));
+        assert_eq!(s.mesh.coords()[3], Vector2::new(2.0, 1.0));
         // Origami Simulator style: the pattern in the xz plane
         let v = with(
             base(),
@@ -451,7 +451,7 @@ mod tests {
         for t in 0..4 {
             assert!((s.mesh.area(t) - flat.mesh.area(t)).abs() < 1e-15);
         }
-        for e in 0..s.mesh.edges.len() {
+        for e in 0..s.mesh.edges().len() {
             assert!((s.mesh.edge_length(e) - flat.mesh.edge_length(e)).abs() < 1e-15);
         }
         // a tilted plane
@@ -461,7 +461,7 @@ mod tests {
             .map(|p| json!([p[0], c * p[1], sn * p[1]]))
             .collect();
         let (s, _) = load(&with(base(), "vertices_coords", Value::from(pts.clone()))).unwrap();
-        for e in 0..s.mesh.edges.len() {
+        for e in 0..s.mesh.edges().len() {
             assert!((s.mesh.edge_length(e) - flat.mesh.edge_length(e)).abs() < 1e-14);
         }
         // folded: not flat

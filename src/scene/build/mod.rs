@@ -300,7 +300,7 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     apply_physics(&mut scene, physics.clone(), &edges, &copies, &mut warnings)?;
 
     // Thin-shell sanity: thickness against the shortest edge.
-    let shortest = (0..scene.mesh.edges.len())
+    let shortest = (0..scene.mesh.edges().len())
         .map(|e| scene.mesh.edge_length(e))
         .fold(f64::INFINITY, f64::min);
     if scene.material.thickness > 0.1 * shortest {
@@ -360,19 +360,19 @@ mod tests {
         assert!(w.is_empty(), "{w:?}");
         assert_eq!(s.name, "origami");
         assert_eq!((s.fold_vertex_count, s.fold_edge_count), (6, 7));
-        assert_eq!(s.mesh.triangles.len(), 4);
+        assert_eq!(s.mesh.triangles().len(), 4);
         // FOLD edges first, in order, tagged; diagonals after, untagged.
         for e in 0..7 {
-            assert_eq!(s.mesh.edges[e].fold_edge, Some(e));
+            assert_eq!(s.mesh.edges()[e].fold_edge, Some(e));
         }
-        assert_eq!(s.mesh.edges.len(), 9);
+        assert_eq!(s.mesh.edges().len(), 9);
         assert!(
-            s.mesh.edges[7..]
+            s.mesh.edges()[7..]
                 .iter()
                 .all(|e| e.fold_edge.is_none() && e.kind == EdgeKind::Smooth)
         );
-        assert_eq!(s.mesh.edges[6].kind, EdgeKind::Crease);
-        assert!((s.mesh.edges[6].fold_target - PI / 2.0).abs() < 1e-15);
+        assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Crease);
+        assert!((s.mesh.edges()[6].fold_target - PI / 2.0).abs() < 1e-15);
         assert_eq!(s.actuators.len(), 1);
         assert_eq!(s.actuators[0].name, "fold");
         assert_eq!(s.actuators[0].edges, vec![6]);
@@ -402,7 +402,7 @@ mod tests {
             "faces_vertices": [[0,1,2,3,4,5]]
         });
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.triangles.len(), 4);
+        assert_eq!(s.mesh.triangles().len(), 4);
         let total: f64 = (0..4).map(|t| s.mesh.area(t)).sum();
         assert!((total - 3.0).abs() < 1e-14);
     }
@@ -412,15 +412,15 @@ mod tests {
         let v = with(base(), "ancf:refine", json!(2));
         let v = with(v, "ancf:actuators", json!([{"name": "f", "edges": [6]}]));
         let (s, _) = load(&v).unwrap();
-        assert_eq!(s.mesh.triangles.len(), 64);
+        assert_eq!(s.mesh.triangles().len(), 64);
         assert_eq!((s.fold_vertex_count, s.fold_edge_count), (6, 7));
         let (flat, _) = load(&base()).unwrap();
-        assert_eq!(&s.mesh.coords[..6], &flat.mesh.coords[..]);
+        assert_eq!(&s.mesh.coords()[..6], flat.mesh.coords());
         // crease 6 is now 4 mesh creases, all driven, all tagged 6
         assert_eq!(s.actuators[0].edges.len(), 4);
         for &e in &s.actuators[0].edges {
-            assert_eq!(s.mesh.edges[e].kind, EdgeKind::Crease);
-            assert_eq!(s.mesh.edges[e].fold_edge, Some(6));
+            assert_eq!(s.mesh.edges()[e].kind, EdgeKind::Crease);
+            assert_eq!(s.mesh.edges()[e].fold_edge, Some(6));
         }
         let m = crate::model::Model::new(s).unwrap();
         assert_eq!(m.outputs().len(), 6 * 3 + 1 + 3);

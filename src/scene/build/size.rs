@@ -31,7 +31,7 @@ pub(super) fn bbox(coords: &[Vector2<f64>]) -> (Vector2<f64>, Vector2<f64>) {
 /// The sheet (in metres) within [`MIN_EXTENT`] and [`MAX_EXTENT`] across,
 /// and no farther than [`MAX_EXTENT`] from the origin.
 pub(super) fn check_extent(coords: &[Vector2<f64>]) -> Result<(), SceneError> {
-    let (lo, hi) = bbox(&coords);
+    let (lo, hi) = bbox(coords);
     let extent = (hi - lo).norm();
     let far = coords.iter().map(|c| c.amax()).fold(0.0, f64::max);
     if !((MIN_EXTENT..=MAX_EXTENT).contains(&extent) && far <= MAX_EXTENT) {
@@ -170,9 +170,9 @@ mod tests {
     #[test]
     fn units() {
         let (mm, _) = load(&with(base(), "frame_unit", json!("mm"))).unwrap();
-        assert_eq!(mm.mesh.coords[2].x, 2e-3);
+        assert_eq!(mm.mesh.coords()[2].x, 2e-3);
         let (inch, _) = load(&with(base(), "frame_unit", json!("in"))).unwrap();
-        assert!((inch.mesh.coords[2].x - 0.0508).abs() < 1e-15);
+        assert!((inch.mesh.coords()[2].x - 0.0508).abs() < 1e-15);
         let e = err(&with(base(), "frame_unit", json!("mn")), "frame_unit");
         assert!(e.contains("did you mean"), "{e}");
         // a unitless sheet is scaled to DEFAULT_SIZE on its longest side,
@@ -192,8 +192,8 @@ mod tests {
             let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
             let l = from_fold_with(&parsed, &LoadOptions::default()).unwrap();
             assert!(l.warnings.is_empty(), "{:?}", l.warnings);
-            assert_eq!(l.scene.mesh.coords[2].x, DEFAULT_SIZE);
-            assert!((l.scene.mesh.coords[3].y - 0.5 * DEFAULT_SIZE).abs() < 1e-15);
+            assert_eq!(l.scene.mesh.coords()[2].x, DEFAULT_SIZE);
+            assert!((l.scene.mesh.coords()[3].y - 0.5 * DEFAULT_SIZE).abs() < 1e-15);
             assert!(
                 l.notes[0].starts_with("size: 0.1 m x 0.05 m:") && l.notes[0].contains("default"),
                 "{:?}",
@@ -205,13 +205,13 @@ mod tests {
                 ..Default::default()
             };
             let l = from_fold_with(&parsed, &o).unwrap();
-            assert!((l.scene.mesh.coords[2].x - 0.3).abs() < 1e-15);
+            assert!((l.scene.mesh.coords()[2].x - 0.3).abs() < 1e-15);
             let o = LoadOptions {
                 unit: Some("mm".into()),
                 ..Default::default()
             };
             let l = from_fold_with(&parsed, &o).unwrap();
-            assert!((l.scene.mesh.coords[2].x - 0.2).abs() < 1e-15);
+            assert!((l.scene.mesh.coords()[2].x - 0.2).abs() < 1e-15);
             assert!(l.notes[0].contains("--unit mm"), "{:?}", l.notes);
             let o = LoadOptions {
                 unit: Some("mn".into()),
@@ -223,22 +223,22 @@ mod tests {
                 "{e}"
             );
             let (s, _) = load(&with(v.clone(), "ancf:import", json!({"size": 0.5}))).unwrap();
-            assert!((s.mesh.coords[2].x - 0.5).abs() < 1e-15);
+            assert!((s.mesh.coords()[2].x - 0.5).abs() < 1e-15);
             let (s, _) = load(&with(v.clone(), "ancf:import", json!({"unit": "cm"}))).unwrap();
-            assert!((s.mesh.coords[2].x - 2.0).abs() < 1e-15);
+            assert!((s.mesh.coords()[2].x - 2.0).abs() < 1e-15);
         }
         // a real unit is kept; --size rescales it anyway
         let v = with(base(), "frame_unit", json!("cm"));
         let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
         let l = from_fold_with(&parsed, &LoadOptions::default()).unwrap();
-        assert_eq!(l.scene.mesh.coords[2].x, 0.02);
+        assert_eq!(l.scene.mesh.coords()[2].x, 0.02);
         assert!(l.notes[0].contains("frame_unit \"cm\""), "{:?}", l.notes);
         let o = LoadOptions {
             size: Some(1.0),
             ..Default::default()
         };
         assert_eq!(
-            from_fold_with(&parsed, &o).unwrap().scene.mesh.coords[2].x,
+            from_fold_with(&parsed, &o).unwrap().scene.mesh.coords()[2].x,
             1.0
         );
         // absurd sizes

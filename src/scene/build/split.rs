@@ -145,8 +145,8 @@ mod tests {
         let s = &l.scene;
         assert_eq!(s.mesh.n_vertices(), 8);
         assert_eq!(s.fold_vertex_count, 6);
-        assert_eq!(s.mesh.coords[6], s.mesh.coords[1]);
-        assert_eq!(s.mesh.coords[7], s.mesh.coords[4]);
+        assert_eq!(s.mesh.coords()[6], s.mesh.coords()[1]);
+        assert_eq!(s.mesh.coords()[7], s.mesh.coords()[4]);
         assert!(
             l.notes.iter().any(|n| n.starts_with("cuts: 1 cut edge")),
             "{:?}",
@@ -160,7 +160,7 @@ mod tests {
         // both sides of the cut are boundary edges on FOLD edge 6
         let cut: Vec<&Edge> = s
             .mesh
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.fold_edge == Some(6))
             .collect();

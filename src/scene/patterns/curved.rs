@@ -124,7 +124,7 @@ mod tests {
         let s = round_trip(&f);
         let creases: Vec<_> = s
             .mesh
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.kind == EdgeKind::Crease)
             .collect();
@@ -135,7 +135,7 @@ mod tests {
         let centre = nalgebra::Vector2::new(0.5 * (w - sag) + sag - cc.radius, 0.5 * cc.length);
         for e in &creases {
             for v in e.v {
-                let d = (s.mesh.coords[v] - centre).norm();
+                let d = (s.mesh.coords()[v] - centre).norm();
                 assert!((d - cc.radius).abs() < 1e-12, "{d}");
             }
         }

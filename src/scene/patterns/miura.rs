@@ -151,7 +151,7 @@ mod tests {
         assert_isometric(&m.draft(), &m.folded(), 1e-15);
         let scene = round_trip(&f);
         assert_eq!(scene.fold_vertex_count, 81);
-        assert_eq!(scene.mesh.triangles.len(), 128);
+        assert_eq!(scene.mesh.triangles().len(), 128);
         assert_closure(&scene, 1e-12);
         // Zig-zag lines: whole lines of one kind, alternating line to line.
         let ev = f.edges_vertices.as_ref().unwrap();
@@ -180,7 +180,7 @@ mod tests {
         }
         let n_creases = scene
             .mesh
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.kind == EdgeKind::Crease)
             .count();

@@ -76,7 +76,7 @@ mod tests {
         let s = super::super::tests::round_trip(&f);
         let creases: Vec<_> = s
             .mesh
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.kind == EdgeKind::Crease)
             .collect();

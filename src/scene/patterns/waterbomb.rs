@@ -252,7 +252,7 @@ mod tests {
         let s = round_trip(&WaterbombBase::default().generate().unwrap());
         assert_eq!(
             s.mesh
-                .edges
+                .edges()
                 .iter()
                 .filter(|e| e.kind == EdgeKind::Crease)
                 .count(),
@@ -278,7 +278,7 @@ mod tests {
                 let c = fan
                     .edges
                     .iter()
-                    .filter(|&&e| s.mesh.edges[e].kind == EdgeKind::Crease)
+                    .filter(|&&e| s.mesh.edges()[e].kind == EdgeKind::Crease)
                     .count();
                 assert_eq!(c, 6);
             }
