@@ -8,6 +8,7 @@
 
 use origami_fmu::benchmarks::{arg, best_us, fold_by_ramp, miura_scene};
 use origami_fmu::contact::{ContactSettings, ContactTerm};
+use origami_fmu::ids::EdgeId;
 use origami_fmu::model::Model;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -97,7 +98,7 @@ fn main() {
                     let edge = &scene.mesh.edges()[e];
                     if edge.kind == origami_fmu::mesh::EdgeKind::Crease {
                         let target = PI * edge.fold_target.signum();
-                        scene.mesh.set_fold_target(e, target).unwrap();
+                        scene.mesh.set_fold_target(EdgeId(e), target).unwrap();
                     }
                 }
             }

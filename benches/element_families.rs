@@ -30,7 +30,7 @@ fn cost_table() {
     let corners: Vec<_> = mesh
         .triangles()
         .iter()
-        .map(|t| t.map(|v| mesh.coords()[v]))
+        .map(|t| t.map(|v| mesh.coord(v)))
         .collect();
     let deformed: Vec<ElemVec> = corners
         .iter()

@@ -5,6 +5,7 @@
 //! input without overshooting; folded states are refused with what to do.
 
 use origami_fmu::fmi;
+use origami_fmu::ids::FoldEdgeId;
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{self, FrameSelector, LoadOptions};
@@ -83,7 +84,10 @@ fn load_build_fold(name: &str) -> scene::Loaded {
     assert!(out.iter().all(|x| x.is_finite()), "{name}");
     let mut moved = 0;
     for (e, edge) in s.mesh.edges().iter().enumerate() {
-        if edge.kind != EdgeKind::Crease || edge.fold_target == 0.0 || edge.fold_edge != Some(e) {
+        if edge.kind != EdgeKind::Crease
+            || edge.fold_target == 0.0
+            || edge.fold_edge != Some(FoldEdgeId(e))
+        {
             continue;
         }
         let a = out[output(&m, &format!("crease[{e}].angle"))];

@@ -9,6 +9,7 @@
 //!   instead of comparing them.
 //! - `ORIGAMI_FUZZ_CASES=N` runs N fuzz cases (default 3000).
 
+use origami_fmu::ids::{EdgeId, FacetId};
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{self, patterns, refine};
@@ -124,11 +125,11 @@ fn origami_simulator_export_loads() {
     assert_eq!(s.mesh.edges()[8].kind, EdgeKind::Crease);
     assert!((s.mesh.edges()[8].fold_target - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
     assert!((s.mesh.edges()[9].fold_target + std::f64::consts::PI).abs() < 1e-15);
-    assert!((s.mesh.edge_length(0) - 0.1).abs() < 1e-15);
-    assert!((s.mesh.edge_length(2) - 0.1).abs() < 1e-15);
-    let area: f64 = (0..6).map(|t| s.mesh.area(t)).sum();
+    assert!((s.mesh.edge_length(EdgeId(0)) - 0.1).abs() < 1e-15);
+    assert!((s.mesh.edge_length(EdgeId(2)) - 0.1).abs() < 1e-15);
+    let area: f64 = (0..6).map(|t| s.mesh.area(FacetId(t))).sum();
     assert!((area - 0.03).abs() < 1e-15);
-    assert_eq!(s.actuators[0].edges, vec![8, 9]);
+    assert_eq!(s.actuators[0].edges, vec![EdgeId(8), EdgeId(9)]);
     let m = Model::new(s).unwrap();
     assert!(m.outputs().iter().any(|v| v.name == "crease[9].angle"));
 }

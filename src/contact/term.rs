@@ -195,9 +195,7 @@ impl ContactTerm {
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
         let nf = mesh.triangles().len().max(1);
         let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
-        let edge = (0..mesh.edges().len())
-            .map(|e| mesh.edge_length(e))
-            .sum::<f64>()
+        let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
             / mesh.edges().len().max(1) as f64;
         let n = surf.n as f64;
         // The barrier must absorb impacts: kappa s_hat^2 is its energy scale.
@@ -329,16 +327,18 @@ impl ContactTerm {
             for (a, b) in [(f, g), (g, f)] {
                 let tb = bx(&s.coarse_tri(&self.mesh, b));
                 for &v in &self.mesh.triangles()[a] {
-                    if !self.mesh.triangles()[b].contains(&v) && bx(&[s.corner[v]]).overlaps(&tb) {
-                        corner_pairs.push((v, b));
+                    if !self.mesh.triangles()[b].contains(&v)
+                        && bx(&[s.corner[v.index()]]).overlaps(&tb)
+                    {
+                        corner_pairs.push((v.index(), b));
                     }
                 }
             }
             for &i in &self.mesh.face_edges()[f] {
                 for &j in &self.mesh.face_edges()[g] {
-                    let (ea, eb) = (s.coarse_edges[i].0, s.coarse_edges[j].0);
+                    let (ea, eb) = (s.coarse_edges[i.index()].0, s.coarse_edges[j.index()].0);
                     if i != j && !ea.iter().any(|v| eb.contains(v)) && bx(&ea).overlaps(&bx(&eb)) {
-                        edge_pairs.push((i.min(j), i.max(j)));
+                        edge_pairs.push((i.min(j).index(), i.max(j).index()));
                     }
                 }
             }

@@ -104,7 +104,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
     })?;
     for (e, edge) in s.mesh.edges().iter().enumerate() {
         if let Some(f) = edge.fold_edge {
-            check(f < s.fold_edge_count, || {
+            check(f.index() < s.fold_edge_count, || {
                 format!(
                     "mesh edge {e}: fold_edge {f} >= fold_edge_count {}",
                     s.fold_edge_count
@@ -118,21 +118,20 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             format!("actuators[{i}].start: not a finite number")
         })?;
         for &e in &a.edges {
-            check(e < ne, || {
+            check(e.index() < ne, || {
                 format!(
                     "actuators[{i}] ({}): edge {e} out of range (mesh has {ne} edges)",
                     a.name
                 )
             })?;
-            check(
-                s.mesh.edges()[e].kind == crate::mesh::EdgeKind::Crease,
-                || format!("actuators[{i}] ({}): edge {e} is not a crease", a.name),
-            )?;
+            check(s.mesh.edge(e).kind == crate::mesh::EdgeKind::Crease, || {
+                format!("actuators[{i}] ({}): edge {e} is not a crease", a.name)
+            })?;
         }
     }
     for (i, sup) in s.supports.iter().enumerate() {
         for &v in &sup.vertices {
-            check(v < nv, || {
+            check(v.index() < nv, || {
                 format!("supports[{i}]: vertex {v} out of range (mesh has {nv} vertices)")
             })?;
         }
@@ -142,7 +141,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
         ("vertex_motions", &s.vertex_motions),
     ] {
         for (i, vi) in list.iter().enumerate() {
-            check(vi.vertex < nv, || {
+            check(vi.vertex.index() < nv, || {
                 format!(
                     "{what}[{i}] ({}): vertex {} out of range (mesh has {nv} vertices)",
                     vi.name, vi.vertex

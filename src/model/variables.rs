@@ -4,6 +4,7 @@
 
 use super::{Error, Model, Phase};
 use crate::assembly::Evaluation;
+use crate::ids::{FoldEdgeId, VertexId};
 use crate::scene::{ActuatorMode, InputTiming, Scene};
 use serde::{Deserialize, Serialize};
 
@@ -56,7 +57,7 @@ pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
         }
     }
     for m in &scene.vertex_motions {
-        let x = scene.mesh.coords()[m.vertex];
+        let x = scene.mesh.coord(m.vertex);
         for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
             v.push(spec(
                 format!("{}.{c}", m.name),
@@ -144,8 +145,8 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
 
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`
 /// outputs.
-pub fn fold_edges(scene: &Scene) -> Vec<usize> {
-    let mut es: Vec<usize> = scene
+pub fn fold_edges(scene: &Scene) -> Vec<FoldEdgeId> {
+    let mut es: Vec<FoldEdgeId> = scene
         .mesh
         .edges()
         .iter()
@@ -265,7 +266,7 @@ impl Model {
         if o.positions {
             let n = 3 * self.scene.fold_vertex_count;
             if i < n {
-                return self.vertex_position(i / 3)[i % 3];
+                return self.vertex_position(VertexId(i / 3))[i % 3];
             }
             i -= n;
         }
@@ -337,7 +338,7 @@ impl Model {
     }
 
     /// Current position of mesh vertex `v`.
-    pub fn vertex_position(&self, v: usize) -> [f64; 3] {
+    pub fn vertex_position(&self, v: VertexId) -> [f64; 3] {
         match &self.sys {
             Some(sys) if self.state.phase == Phase::Running => {
                 let s = sys.asm.position_slot(v);
@@ -345,7 +346,7 @@ impl Model {
                 [q[3 * s], q[3 * s + 1], q[3 * s + 2]]
             }
             _ => {
-                let x = self.scene.mesh.coords()[v];
+                let x = self.scene.mesh.coord(v);
                 [x.x, x.y, 0.0]
             }
         }
@@ -368,7 +369,8 @@ impl Model {
         let mut out = Vec::with_capacity(self.outputs.len());
         let o = self.scene.outputs;
         if o.positions {
-            for v in 0..self.scene.fold_vertex_count {
+            // FOLD vertex i is mesh vertex i.
+            for v in (0..self.scene.fold_vertex_count).map(VertexId) {
                 out.extend(self.vertex_position(v));
             }
         }

@@ -352,6 +352,7 @@ pub(super) fn fold_edges(
 mod tests {
     use super::super::fixtures::{base, err, load, with};
     use super::*;
+    use crate::ids::{EdgeId, FoldEdgeId};
     use crate::scene::LoadOptions;
     use crate::scene::build::from_fold_with;
     use serde_json::{Value, json};
@@ -495,7 +496,7 @@ mod tests {
         assert_eq!(s.mesh.edges()[0].kind, EdgeKind::Boundary);
         assert_eq!(s.mesh.edges()[6].kind, EdgeKind::Crease);
         assert_eq!(s.mesh.edges()[6].fold_target, 0.0);
-        assert_eq!(s.actuators[0].edges, vec![6]);
+        assert_eq!(s.actuators[0].edges, vec![EdgeId(6)]);
         assert!(w.iter().any(|w| w.contains("drives nothing")), "{w:?}");
         let parsed = crate::scene::fold::parse(&v.to_string(), None).unwrap().0;
         let smooth = LoadOptions {
@@ -579,6 +580,6 @@ mod tests {
                 .any(|w| w.contains("6 face side(s) are not listed")),
             "{w:?}"
         );
-        assert_eq!(crate::model::fold_edges(&s), vec![0]);
+        assert_eq!(crate::model::fold_edges(&s), vec![FoldEdgeId(0)]);
     }
 }

@@ -309,6 +309,7 @@ pub(super) fn triangulate(
 #[cfg(test)]
 mod tests {
     use super::super::fixtures::{base, err, load, with};
+    use crate::ids::FacetId;
     use crate::mesh::EdgeKind;
     use crate::scene::LoadOptions;
     use crate::scene::build::from_fold_with;
@@ -448,10 +449,10 @@ mod tests {
         );
         let (s, _) = load(&v).unwrap();
         let (flat, _) = load(&base()).unwrap();
-        for t in 0..4 {
+        for t in (0..4).map(FacetId) {
             assert!((s.mesh.area(t) - flat.mesh.area(t)).abs() < 1e-15);
         }
-        for e in 0..s.mesh.edges().len() {
+        for e in s.mesh.edge_ids() {
             assert!((s.mesh.edge_length(e) - flat.mesh.edge_length(e)).abs() < 1e-15);
         }
         // a tilted plane
@@ -461,7 +462,7 @@ mod tests {
             .map(|p| json!([p[0], c * p[1], sn * p[1]]))
             .collect();
         let (s, _) = load(&with(base(), "vertices_coords", Value::from(pts.clone()))).unwrap();
-        for e in 0..s.mesh.edges().len() {
+        for e in s.mesh.edge_ids() {
             assert!((s.mesh.edge_length(e) - flat.mesh.edge_length(e)).abs() < 1e-14);
         }
         // folded: not flat

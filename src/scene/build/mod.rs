@@ -52,6 +52,7 @@ use super::fold::{Assignment, FoldFile};
 use super::keys;
 use super::planar;
 use super::{FlatEdges, LoadOptions, Loaded, Scene, refine};
+use crate::ids::{FacetId, FoldEdgeId, VertexId, vertex_ids};
 use crate::mesh::{Edge, EdgeKind, Mesh, MeshError};
 use edges::{Sides, fold_edges, read_edges};
 use faces::{
@@ -246,12 +247,14 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     check_used(&faces, nv)?;
 
     // Cuts and vertices where sheets touch: split into copies.
+    // The FOLD edges first, in order: FOLD edge e is mesh edge e
+    // (`EdgeId::of_fold_edge`) until refinement.
     let mut mesh_edges: Vec<Edge> = (0..edges.v.len())
         .map(|e| Edge {
-            v: edges.v[e],
+            v: edges.v[e].map(VertexId::of_fold_vertex),
             kind: edges.kind[e],
             fold_target: edges.target[e],
-            fold_edge: Some(e),
+            fold_edge: Some(FoldEdgeId(e)),
         })
         .collect();
     let copies = split(
@@ -283,6 +286,8 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
         ));
     }
 
+    // The faces hold mesh vertices now (split copies after the FOLD ones).
+    let triangles = triangles.into_iter().map(vertex_ids).collect();
     let mesh = Mesh::new(coords, triangles, mesh_edges).map_err(|e| translate(e, &tri_face))?;
 
     let scene_name = physics
@@ -300,7 +305,9 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     apply_physics(&mut scene, physics.clone(), &edges, &copies, &mut warnings)?;
 
     // Thin-shell sanity: thickness against the shortest edge.
-    let shortest = (0..scene.mesh.edges().len())
+    let shortest = scene
+        .mesh
+        .edge_ids()
         .map(|e| scene.mesh.edge_length(e))
         .fold(f64::INFINITY, f64::min);
     if scene.material.thickness > 0.1 * shortest {
@@ -322,7 +329,10 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
 }
 
 fn translate(e: MeshError, tri_face: &[usize]) -> SceneError {
-    let face = |t: usize| format!("faces_vertices[{}]", tri_face.get(t).copied().unwrap_or(0));
+    let face = |t: FacetId| {
+        let f = tri_face.get(t.index()).copied().unwrap_or(0);
+        format!("faces_vertices[{f}]")
+    };
     match e {
         MeshError::Degenerate { triangle, area } => invalid(
             face(triangle),
@@ -349,6 +359,7 @@ fn translate(e: MeshError, tri_face: &[usize]) -> SceneError {
 #[cfg(test)]
 mod tests {
     use super::fixtures::{base, err, load, with};
+    use crate::ids::{EdgeId, FacetId, FoldEdgeId};
     use crate::mesh::EdgeKind;
     use crate::scene::ActuatorMode;
     use serde_json::json;
@@ -363,7 +374,7 @@ mod tests {
         assert_eq!(s.mesh.triangles().len(), 4);
         // FOLD edges first, in order, tagged; diagonals after, untagged.
         for e in 0..7 {
-            assert_eq!(s.mesh.edges()[e].fold_edge, Some(e));
+            assert_eq!(s.mesh.edges()[e].fold_edge, Some(FoldEdgeId(e)));
         }
         assert_eq!(s.mesh.edges().len(), 9);
         assert!(
@@ -375,7 +386,7 @@ mod tests {
         assert!((s.mesh.edges()[6].fold_target - PI / 2.0).abs() < 1e-15);
         assert_eq!(s.actuators.len(), 1);
         assert_eq!(s.actuators[0].name, "fold");
-        assert_eq!(s.actuators[0].edges, vec![6]);
+        assert_eq!(s.actuators[0].edges, vec![EdgeId(6)]);
         assert_eq!(s.actuators[0].mode, ActuatorMode::RestAngle);
         assert!(s.auto_damping);
         assert!(s.supports.is_empty() && s.gravity.is_none());
@@ -403,7 +414,7 @@ mod tests {
         });
         let (s, _) = load(&v).unwrap();
         assert_eq!(s.mesh.triangles().len(), 4);
-        let total: f64 = (0..4).map(|t| s.mesh.area(t)).sum();
+        let total: f64 = (0..4).map(|t| s.mesh.area(FacetId(t))).sum();
         assert!((total - 3.0).abs() < 1e-14);
     }
 
@@ -419,8 +430,8 @@ mod tests {
         // crease 6 is now 4 mesh creases, all driven, all tagged 6
         assert_eq!(s.actuators[0].edges.len(), 4);
         for &e in &s.actuators[0].edges {
-            assert_eq!(s.mesh.edges()[e].kind, EdgeKind::Crease);
-            assert_eq!(s.mesh.edges()[e].fold_edge, Some(6));
+            assert_eq!(s.mesh.edge(e).kind, EdgeKind::Crease);
+            assert_eq!(s.mesh.edge(e).fold_edge, Some(FoldEdgeId(6)));
         }
         let m = crate::model::Model::new(s).unwrap();
         assert_eq!(m.outputs().len(), 6 * 3 + 1 + 3);

@@ -3,6 +3,7 @@
 
 use super::edges::FoldEdges;
 use super::{invalid, vertex_exists};
+use crate::ids::{EdgeId, FoldEdgeId, VertexId};
 use crate::mesh::EdgeKind;
 use crate::scene::error::SceneError;
 use crate::scene::keys::{self, EdgeSelection};
@@ -144,7 +145,10 @@ pub(super) fn apply_physics(
                 }
                 scene.actuators.push(crate::scene::Actuator {
                     name: a.name,
-                    edges: selected, // mesh edge e == FOLD edge e before refinement
+                    edges: selected
+                        .into_iter()
+                        .map(|e| EdgeId::of_fold_edge(FoldEdgeId(e)))
+                        .collect(),
                     mode: a.mode,
                     start: a.start,
                 });
@@ -166,15 +170,19 @@ pub(super) fn apply_physics(
             supported.insert(v, s.key.clone());
         }
         // A support on a split vertex holds all its copies.
-        let mut vertices = s.vertices;
+        let mut vertices: Vec<VertexId> = s
+            .vertices
+            .iter()
+            .map(|&v| VertexId::of_fold_vertex(v))
+            .collect();
         if !copies.is_empty() {
-            let held: std::collections::HashSet<usize> = vertices.iter().copied().collect();
+            let held: std::collections::HashSet<usize> = s.vertices.iter().copied().collect();
             vertices.extend(
                 copies
                     .iter()
                     .enumerate()
                     .filter(|(_, v)| held.contains(v))
-                    .map(|(j, _)| nv + j),
+                    .map(|(j, _)| VertexId(nv + j)),
             );
         }
         scene.supports.push(Support {
@@ -185,19 +193,19 @@ pub(super) fn apply_physics(
 
     for (vi, key) in &p.vertex_forces {
         let k = format!("{key}.vertex");
-        vertex_exists(vi.vertex, nv, || k.clone())?;
-        if let Some(s) = supported.get(&vi.vertex) {
+        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
+        if let Some(s) = supported.get(&vi.vertex.index()) {
             warnings.push(format!(
                 "{k}: vertex {} is fixed by {s}; the force '{}' acts on a support",
                 vi.vertex, vi.name
             ));
         }
     }
-    let mut driven: HashMap<usize, String> = HashMap::new();
+    let mut driven: HashMap<VertexId, String> = HashMap::new();
     for (vi, key) in &p.vertex_motions {
         let k = format!("{key}.vertex");
-        vertex_exists(vi.vertex, nv, || k.clone())?;
-        if let Some(s) = supported.get(&vi.vertex) {
+        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
+        if let Some(s) = supported.get(&vi.vertex.index()) {
             return Err(invalid(
                 k,
                 format!(
@@ -221,6 +229,7 @@ pub(super) fn apply_physics(
 #[cfg(test)]
 mod tests {
     use super::super::fixtures::{base, err, load, with};
+    use crate::ids::{EdgeId, VertexId};
     use crate::scene::Fix;
     use serde_json::json;
 
@@ -257,7 +266,7 @@ mod tests {
         );
         let (s, _) = load(&v).unwrap();
         assert_eq!(s.actuators.len(), 2);
-        assert_eq!(s.actuators[1].edges, vec![6]);
+        assert_eq!(s.actuators[1].edges, vec![EdgeId(6)]);
         let v = with(
             base(),
             "ancf:actuators",
@@ -303,7 +312,7 @@ mod tests {
         let (s, w) = load(&v).unwrap();
         assert!(w[0].contains("acts on a support"), "{w:?}");
         assert_eq!(s.supports[0].fix, Fix::Clamped);
-        assert_eq!(s.vertex_motions[0].vertex, 3);
+        assert_eq!(s.vertex_motions[0].vertex, VertexId(3));
         assert_eq!(s.vertex_forces[0].name, "push");
         assert_eq!(s.gravity, Some([0.0, 0.0, -9.81]));
         let m = crate::model::Model::new(s).unwrap();

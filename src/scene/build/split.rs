@@ -3,6 +3,7 @@
 
 use super::edges::{FoldEdges, Sides, key};
 use super::invalid;
+use crate::ids::{FoldEdgeId, vertex_ids};
 use crate::mesh::{Edge, EdgeKind};
 use crate::scene::error::SceneError;
 use crate::scene::fold::Assignment;
@@ -64,10 +65,11 @@ pub(super) fn split(
     for (e, edge) in mesh_edges.iter_mut().enumerate() {
         let [a, _] = edges.v[e];
         let at = sides.at(edges.v[e][0], edges.v[e][1]);
-        edge.v = now(at[0], a);
+        let v = now(at[0], a);
+        edge.v = vertex_ids(v);
         if edges.assignment[e] == Assignment::Cut && at.len() == 2 {
             let other = now(at[1], a);
-            if key(other[0], other[1]) == key(edge.v[0], edge.v[1]) {
+            if key(other[0], other[1]) == key(v[0], v[1]) {
                 let [a, b] = edges.v[e];
                 return Err(invalid(
                     format!("edges_vertices[{e}]"),
@@ -86,10 +88,10 @@ pub(super) fn split(
             if at.len() == 2 {
                 let v = now(at[1], a);
                 mesh_edges.push(Edge {
-                    v,
+                    v: vertex_ids(v),
                     kind: EdgeKind::Boundary,
                     fold_target: 0.0,
-                    fold_edge: Some(e),
+                    fold_edge: Some(FoldEdgeId(e)),
                 });
             }
         }
@@ -124,6 +126,7 @@ pub(super) fn split(
 #[cfg(test)]
 mod tests {
     use super::super::fixtures::{base, err, load, with};
+    use crate::ids::{FoldEdgeId, VertexId};
     use crate::mesh::{Edge, EdgeKind};
     use crate::scene::LoadOptions;
     use crate::scene::build::from_fold_with;
@@ -162,7 +165,7 @@ mod tests {
             .mesh
             .edges()
             .iter()
-            .filter(|e| e.fold_edge == Some(6))
+            .filter(|e| e.fold_edge == Some(FoldEdgeId(6)))
             .collect();
         assert_eq!(cut.len(), 2);
         assert!(cut.iter().all(|e| e.kind == EdgeKind::Boundary));
@@ -174,7 +177,7 @@ mod tests {
             json!([{"vertices": [1]}]),
         ))
         .unwrap();
-        assert_eq!(s.supports[0].vertices, vec![1, 6]);
+        assert_eq!(s.supports[0].vertices, vec![VertexId(1), VertexId(6)]);
         crate::model::Model::new(s).unwrap();
         // a cut of one edge inside the sheet cannot open
         let v = json!({

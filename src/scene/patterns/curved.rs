@@ -135,7 +135,7 @@ mod tests {
         let centre = nalgebra::Vector2::new(0.5 * (w - sag) + sag - cc.radius, 0.5 * cc.length);
         for e in &creases {
             for v in e.v {
-                let d = (s.mesh.coords()[v] - centre).norm();
+                let d = (s.mesh.coord(v) - centre).norm();
                 assert!((d - cc.radius).abs() < 1e-12, "{d}");
             }
         }

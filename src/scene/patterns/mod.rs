@@ -349,16 +349,16 @@ pub(crate) mod tests {
     /// counter-clockwise order, by the target angles is the identity.
     pub fn assert_closure(scene: &Scene, tol: f64) {
         let m = &scene.mesh;
-        for v in 0..m.n_vertices() {
+        for v in m.vertex_ids() {
             let fan = m.fan(v).unwrap();
             if !fan.closed {
                 continue;
             }
             let mut r = Rotation3::identity();
             for &e in &fan.edges {
-                let edge = &m.edges()[e];
+                let edge = m.edge(e);
                 let other = if edge.v[0] == v { edge.v[1] } else { edge.v[0] };
-                let d = m.coords()[other] - m.coords()[v];
+                let d = m.coord(other) - m.coord(v);
                 let axis = Unit::new_normalize(Vector3::new(d.x, d.y, 0.0));
                 let angle = if edge.kind == EdgeKind::Crease {
                     edge.fold_target

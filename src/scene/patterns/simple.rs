@@ -81,7 +81,7 @@ mod tests {
             .filter(|e| e.kind == EdgeKind::Crease)
             .collect();
         assert_eq!(creases.len(), 1);
-        assert_eq!(creases[0].v, [1, 4]);
+        assert_eq!(creases[0].v, [1, 4].map(crate::ids::VertexId));
         assert!((creases[0].fold_target - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         let m = SingleCrease {
             angle: -45.0,
