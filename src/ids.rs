@@ -16,7 +16,7 @@ macro_rules! id {
     ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*
         #[derive(
-            Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize,
+            Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize,
             Deserialize,
         )]
         #[serde(transparent)]
