@@ -388,6 +388,11 @@ impl Mesh {
         &self.edges[e.index()]
     }
 
+    /// The creases, in edge order.
+    pub fn creases(&self) -> impl Iterator<Item = &Edge> {
+        self.edges.iter().filter(|e| e.kind == EdgeKind::Crease)
+    }
+
     /// For each edge, the one or two triangles that contain it.
     pub fn edge_faces(&self) -> &[Vec<FacetId>] {
         &self.edge_faces

@@ -75,12 +75,7 @@ fn summary_with(
     use std::fmt::Write as _;
     let m = &scene.mesh;
     let count = |k: EdgeKind| m.edges().iter().filter(|e| e.kind == k).count();
-    let creases: Vec<f64> = m
-        .edges()
-        .iter()
-        .filter(|e| e.kind == EdgeKind::Crease)
-        .map(|e| e.fold_target)
-        .collect();
+    let creases: Vec<f64> = m.creases().map(|e| e.fold_target).collect();
     let mountains = creases.iter().filter(|&&t| t < 0.0).count();
     let valleys = creases.iter().filter(|&&t| t > 0.0).count();
     let mut o = String::new();

@@ -146,13 +146,7 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`
 /// outputs.
 pub fn fold_edges(scene: &Scene) -> Vec<FoldEdgeId> {
-    let mut es: Vec<FoldEdgeId> = scene
-        .mesh
-        .edges()
-        .iter()
-        .filter(|e| e.kind == crate::mesh::EdgeKind::Crease)
-        .filter_map(|e| e.fold_edge)
-        .collect();
+    let mut es: Vec<FoldEdgeId> = scene.mesh.creases().filter_map(|e| e.fold_edge).collect();
     es.sort_unstable();
     es.dedup();
     es

@@ -111,11 +111,7 @@ mod tests {
             assert_eq!(r.edge(e).fold_edge, Some(FoldEdgeId(0)));
             assert!((r.edge_length(e) - 0.5 * 2f64.sqrt()).abs() < 1e-14);
         }
-        let creases = r
-            .edges()
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .count();
+        let creases = r.creases().count();
         assert_eq!(creases, 2);
         let boundary = r
             .edges()

@@ -543,12 +543,7 @@ mod tests {
         let (s, w) = load(&v).unwrap();
         assert_eq!(s.fold_edge_count, 7);
         assert!(w[0].contains("derived from faces_vertices"), "{w:?}");
-        let creases: Vec<_> = s
-            .mesh
-            .edges()
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .collect();
+        let creases: Vec<_> = s.mesh.creases().collect();
         assert_eq!(creases.len(), 1);
         assert_eq!(creases[0].fold_target, 0.0);
         let mut v = base();

@@ -115,19 +115,13 @@ impl CurvedCrease {
 mod tests {
     use super::super::tests::round_trip;
     use super::*;
-    use crate::mesh::EdgeKind;
 
     #[test]
     fn arc_of_short_creases() {
         let cc = CurvedCrease::default();
         let f = cc.generate().unwrap();
         let s = round_trip(&f);
-        let creases: Vec<_> = s
-            .mesh
-            .edges()
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .collect();
+        let creases: Vec<_> = s.mesh.creases().collect();
         assert_eq!(creases.len(), 16);
         // all crease vertices on the circle
         let w = cc.width;

@@ -250,14 +250,7 @@ mod tests {
             }
         }
         let s = round_trip(&WaterbombBase::default().generate().unwrap());
-        assert_eq!(
-            s.mesh
-                .edges()
-                .iter()
-                .filter(|e| e.kind == EdgeKind::Crease)
-                .count(),
-            8
-        );
+        assert_eq!(s.mesh.creases().count(), 8);
     }
 
     #[test]
