@@ -8,6 +8,7 @@
 
 use origami_fmu::benchmarks::{arg, best_us, fold_by_ramp, miura_scene};
 use origami_fmu::contact::{ContactSettings, ContactTerm};
+use origami_fmu::ids::EdgeId;
 use origami_fmu::model::Model;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -37,7 +38,7 @@ fn main() {
         let mut model = Model::new(miura_scene(n)).unwrap();
         model.initialize().unwrap();
         fold_by_ramp(&mut model, 20, 0.01, 0.4);
-        let facets = model.scene().mesh.triangles.len();
+        let facets = model.scene().mesh.triangles().len();
         let state = model.save_state();
         let q = state.dynamics.q.clone();
         let scene = with_contact(model.scene().clone());
@@ -93,9 +94,11 @@ fn main() {
                 origami_fmu::scene::load(path).unwrap().0
             };
             if flat {
-                for e in scene.mesh.edges.iter_mut() {
-                    if e.kind == origami_fmu::mesh::EdgeKind::Crease {
-                        e.fold_target = PI * e.fold_target.signum();
+                for e in 0..scene.mesh.edges().len() {
+                    let edge = &scene.mesh.edges()[e];
+                    if edge.kind == origami_fmu::mesh::EdgeKind::Crease {
+                        let target = PI * edge.fold_target.signum();
+                        scene.mesh.set_fold_target(EdgeId(e), target).unwrap();
                     }
                 }
             }

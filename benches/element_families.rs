@@ -28,9 +28,9 @@ fn cost_table() {
     let mesh = MeshFamily::Perturbed.grid(1.0, 1.0, 32, 32);
     let mat = plate_physics(1e7, 0.3, 0.01).material;
     let corners: Vec<_> = mesh
-        .triangles
+        .triangles()
         .iter()
-        .map(|t| t.map(|v| mesh.coords[v]))
+        .map(|t| t.map(|v| mesh.coord(v)))
         .collect();
     let deformed: Vec<ElemVec> = corners
         .iter()

@@ -21,6 +21,7 @@
 //! time (the machine is shared: compare within one run).
 
 use nalgebra::Vector3;
+use origami_fmu::ids::VertexId;
 mod common;
 use common::cpu_seconds;
 use origami_fmu::benchmarks::{aligned_max_distance, fold_by_ramp, fold_by_ramp_with};
@@ -89,7 +90,7 @@ fn main() {
         let total = fold_by_ramp_with(&mut m, steps, dt, ramp, true, |m, total| {
             let cpu = cpu_seconds() - c0;
             let x: Vec<Vector3<f64>> = (0..exact.len())
-                .map(|v| Vector3::from(m.vertex_position(v)))
+                .map(|v| Vector3::from(m.vertex_position(VertexId(v))))
                 .collect();
             trace.push((cpu, aligned_max_distance(&x, &exact) / miura.a, total.steps));
         });
@@ -144,7 +145,7 @@ fn pyramid_row(time: f64, dt: f64, ramp: f64) {
         "/tests/data/origami-simulator/BoxPleatPyramid.fold"
     );
     let (scene, _) = origami_fmu::scene::load(path).expect("BoxPleatPyramid loads");
-    let facets = scene.mesh.triangles.len();
+    let facets = scene.mesh.triangles().len();
     let mut m = Model::new(scene).expect("model");
     m.initialize().expect("initialize");
     let steps = (time / dt).round().max(1.0) as usize;

@@ -35,7 +35,7 @@ fn main() {
         let t = Instant::now();
         let (s, _) = scene::from_str(&text).expect("loads");
         let t_scene = t.elapsed().as_secs_f64();
-        let facets = s.mesh.triangles.len();
+        let facets = s.mesh.triangles().len();
         let t = Instant::now();
         let m = Model::new(s.clone()).expect("model");
         let t_model = t.elapsed().as_secs_f64();

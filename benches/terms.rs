@@ -10,6 +10,7 @@
 use origami_fmu::assembly::{Assembler, Evaluation, MatrixCoeffs, Physics, State};
 use origami_fmu::benchmarks::{fold_by_ramp, miura_scene};
 use origami_fmu::element::ElementOptions;
+use origami_fmu::ids::VertexId;
 use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::VertexInput;
 use std::time::Instant;
@@ -176,7 +177,7 @@ fn main() {
                 sc.vertex_forces = (0..4)
                     .map(|i| VertexInput {
                         name: format!("force{i}"),
-                        vertex: i,
+                        vertex: VertexId(i),
                     })
                     .collect();
             }

@@ -22,6 +22,7 @@
 //! slope of log error against log step between successive fixed-step runs.
 
 use origami_fmu::benchmarks;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::{Fix, Integrator, NewtonMode, Scene, Support, VertexInput};
@@ -125,7 +126,7 @@ fn crease_scene() -> Scene {
     let mesh = grid(0.04, 0.02, 2, 1, &[(1, 1.0)]);
     let mut sc = Scene::with_defaults("crease", mesh);
     sc.supports.push(Support {
-        vertices: vec![0, 3],
+        vertices: vec![VertexId(0), VertexId(3)],
         fix: Fix::Clamped,
     });
     sc.solver.newton = NewtonMode::Full;
@@ -150,7 +151,7 @@ fn strip_frequency() -> f64 {
 }
 
 fn is_tip(sc: &Scene, v: usize) -> bool {
-    let c = sc.mesh.coords[v];
+    let c = sc.mesh.coords()[v];
     (c.x - STRIP_L).abs() < 1e-12 && c.y.abs() < 1e-12
 }
 
@@ -160,11 +161,15 @@ fn cantilever_scene() -> Scene {
     sc.material.poisson_ratio = 0.0;
     sc.auto_damping = false;
     sc.actuators.clear();
-    let left: Vec<usize> = (0..sc.mesh.n_vertices())
-        .filter(|&v| sc.mesh.coords[v].x.abs() < 1e-12)
+    let left: Vec<VertexId> = sc
+        .mesh
+        .vertex_ids()
+        .filter(|&v| sc.mesh.coord(v).x.abs() < 1e-12)
         .collect();
-    let tips: Vec<usize> = (0..sc.mesh.n_vertices())
-        .filter(|&v| (sc.mesh.coords[v].x - STRIP_L).abs() < 1e-12)
+    let tips: Vec<VertexId> = sc
+        .mesh
+        .vertex_ids()
+        .filter(|&v| (sc.mesh.coord(v).x - STRIP_L).abs() < 1e-12)
         .collect();
     sc.supports.push(Support {
         vertices: left,

@@ -15,6 +15,7 @@ pub use terms::ForceTerm;
 
 use crate::dofs::{Combo, DofLayout, SlotKind};
 use crate::element::{ElemVec, ElementOptions, ShellElement};
+use crate::ids::{EdgeId, VertexId};
 use crate::material::Material;
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
@@ -27,7 +28,7 @@ pub const FIXED: usize = usize::MAX;
 #[derive(Clone, Debug)]
 pub struct CreaseEnd {
     /// Mesh edge.
-    pub edge: usize,
+    pub edge: EdgeId,
     /// Crease length share of this end (half the edge length), m.
     pub length: f64,
     /// Gradient into the facet to the right of `t`, into the left facet, and
@@ -200,12 +201,11 @@ impl Assembler {
     ) -> Result<Assembler, String> {
         let layout = DofLayout::new(mesh);
         let elements = mesh
-            .triangles
-            .iter()
-            .enumerate()
+            .facet_ids()
+            .zip(mesh.triangles())
             .map(|(f, &[a, b, c])| {
                 ShellElement::with_sides(
-                    [mesh.coords[a], mesh.coords[b], mesh.coords[c]],
+                    [mesh.coord(a), mesh.coord(b), mesh.coord(c)],
                     layout.side_vectors(mesh, f),
                     element.rule,
                     element.interpolation,
@@ -721,8 +721,8 @@ impl Assembler {
     }
 
     /// Position slots and their vertices.
-    pub fn position_slot(&self, v: usize) -> usize {
-        self.layout.position_slot[v]
+    pub fn position_slot(&self, v: VertexId) -> usize {
+        self.layout.position_slot[v.index()]
     }
 
     /// Characteristic size of each scalar DOF for error norms: `length`
@@ -783,7 +783,7 @@ fn scatter_matrix<const N: usize>(bm: &BlockMap, k: &SMatrix<f64, N, N>, w: f64,
 /// facet convention of [`crate::crease`].
 fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
     let mut out = Vec::new();
-    for (e, edge) in mesh.edges.iter().enumerate() {
+    for (e, edge) in mesh.edge_ids().zip(mesh.edges()) {
         if edge.kind != EdgeKind::Crease {
             continue;
         }
@@ -793,15 +793,16 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
             let d: Vector2<f64> = layout.curves.direction(mesh, e, v, w);
             // Which side of the edge a facet is on: by its chord (robust on
             // curved sides).
-            let chord = mesh.coords[w] - mesh.coords[v];
+            let chord = mesh.coord(w) - mesh.coord(v);
             let mut right = None;
             let mut left = None;
-            for &f in &mesh.edge_faces[e] {
-                let third = *mesh.triangles[f]
+            for &f in mesh.faces_of(e) {
+                let third = *mesh
+                    .triangle(f)
                     .iter()
                     .find(|&&x| x != v && x != w)
                     .expect("triangle");
-                let x = mesh.coords[third] - mesh.coords[v];
+                let x = mesh.coord(third) - mesh.coord(v);
                 let side = chord.x * x.y - chord.y * x.x;
                 let g = layout.gradient_along(v, f, x);
                 if side < 0.0 {
@@ -810,7 +811,7 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
                     left = Some(g);
                 }
             }
-            let t = layout.gradient_along(v, mesh.edge_faces[e][0], d);
+            let t = layout.gradient_along(v, mesh.faces_of(e)[0], d);
             out.push(CreaseEnd {
                 edge: e,
                 length: 0.5 * len,

@@ -8,6 +8,7 @@
 use crate::assembly::{Assembler, Physics};
 use crate::dofs::DofLayout;
 use crate::element::{ElementOptions, Interpolation};
+use crate::ids::VertexId;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::mesh::builders::{Diagonals, grid_family};
@@ -212,12 +213,14 @@ impl RollUp {
         let mesh = self.family.grid(ROLL_UP_L, 1.0, self.nx, self.ny);
         let physics = roll_up_physics();
         let layout = DofLayout::new(&mesh);
-        let nv = mesh.n_vertices();
-        let tip: Vec<usize> = (0..nv).filter(|&v| mesh.coords[v].x == ROLL_UP_L).collect();
+        let tip: Vec<VertexId> = mesh
+            .vertex_ids()
+            .filter(|&v| mesh.coord(v).x == ROLL_UP_L)
+            .collect();
         // Gradient slot of vertex v along the reference direction `dir`
         // (0 = x, 1 = y): the slot whose sector coefficient is that unit vector.
-        let gradient_slot = |v: usize, dir: usize| {
-            let sec = &layout.sectors[v];
+        let gradient_slot = |v: VertexId, dir: usize| {
+            let sec = &layout.sectors[v.index()];
             let found = sec.first().and_then(|s| {
                 s.terms
                     .iter()
@@ -229,8 +232,8 @@ impl RollUp {
             }
         };
         let mut fixed = Vec::new();
-        for v in 0..nv {
-            if mesh.coords[v].x == 0.0 {
+        for v in mesh.vertex_ids() {
+            if mesh.coord(v).x == 0.0 {
                 fixed.extend(layout.vertex_slots(v));
             } else if self.planar {
                 fixed.push(gradient_slot(v, 1)?);
@@ -246,7 +249,7 @@ impl RollUp {
         let slots = tip
             .iter()
             .map(|&v| {
-                let y = mesh.coords[v].y;
+                let y = mesh.coord(v).y;
                 let share = if y == 0.0 || y == 1.0 { 0.5 } else { 1.0 };
                 Ok((gradient_slot(v, 0)?, m_top * share / self.ny as f64))
             })
@@ -263,15 +266,16 @@ impl RollUp {
             self.settings,
             &stops,
             |lambda, q, report| {
-                let pos = |v: usize| {
-                    let s = asm.layout.position_slot[v];
+                let pos = |v: VertexId| {
+                    let s = asm.position_slot(v);
                     [q[3 * s], q[3 * s + 1], q[3 * s + 2]]
                 };
                 let n = tip.len() as f64;
                 let x = tip.iter().map(|&v| pos(v)[0]).sum::<f64>() / n;
                 let z = tip.iter().map(|&v| pos(v)[2]).sum::<f64>() / n;
-                let lateral = (0..nv)
-                    .map(|v| (pos(v)[1] - mesh.coords[v].y).abs())
+                let lateral = mesh
+                    .vertex_ids()
+                    .map(|v| (pos(v)[1] - mesh.coord(v).y).abs())
                     .fold(0.0, f64::max);
                 points.push(RollUpPoint {
                     ratio: ratios.get(points.len()).copied().unwrap_or(lambda * top),
@@ -320,7 +324,7 @@ pub fn plate_physics(e: f64, nu: f64, h: f64) -> Physics {
 #[derive(Clone, Copy, Debug)]
 pub struct Supports<'a> {
     /// The vertices.
-    pub vertices: &'a [usize],
+    pub vertices: &'a [VertexId],
     /// Clamped (every slot held) or pinned (position only).
     pub clamped: bool,
 }
@@ -333,7 +337,7 @@ pub fn static_deflection(
     element: ElementOptions,
     supports: Supports,
     load: impl Fn(&Assembler) -> Vec<f64>,
-    probes: &[usize],
+    probes: &[VertexId],
     settings: StaticSettings,
 ) -> Result<(f64, StaticReport), String> {
     let layout = DofLayout::new(mesh);
@@ -344,7 +348,7 @@ pub fn static_deflection(
             if supports.clamped {
                 layout.vertex_slots(v)
             } else {
-                vec![layout.position_slot[v]]
+                vec![layout.position_slot[v.index()]]
             }
         })
         .collect();
@@ -352,7 +356,7 @@ pub fn static_deflection(
     let mut q = asm.layout.reference_state(mesh);
     let f = load(&asm);
     let report = statics::solve(&asm, &mut q, &[], &ConstantLoad(f), settings)?;
-    let z = |v: usize| q[3 * asm.layout.position_slot[v] + 2];
+    let z = |v: VertexId| q[3 * asm.position_slot(v) + 2];
     let w = probes.iter().map(|&v| z(v)).sum::<f64>() / probes.len() as f64;
     Ok((w, report))
 }
@@ -424,10 +428,11 @@ impl PlateCase {
         let d = e * h * h * h / (12.0 * (1.0 - nu * nu));
         let mesh = self.family.grid(a, a, n, n);
         let on_edge = |x: f64| x.abs() < 1e-12 || (x - a).abs() < 1e-12;
-        let boundary: Vec<usize> = (0..mesh.n_vertices())
-            .filter(|&v| on_edge(mesh.coords[v].x) || on_edge(mesh.coords[v].y))
+        let boundary: Vec<VertexId> = mesh
+            .vertex_ids()
+            .filter(|&v| on_edge(mesh.coord(v).x) || on_edge(mesh.coord(v).y))
             .collect();
-        let centre = (n / 2) * (n + 1) + n / 2;
+        let centre = VertexId((n / 2) * (n + 1) + n / 2);
         let q = 1e-2 * d / a.powi(4);
         let element = ElementOptions {
             interpolation: self.interpolation,
@@ -447,7 +452,7 @@ impl PlateCase {
                     pressure_load(asm, q, h)
                 } else {
                     let mut f = vec![0.0; asm.n_dofs()];
-                    f[3 * asm.layout.position_slot[centre] + 2] = q * a * a;
+                    f[3 * asm.position_slot(centre) + 2] = q * a * a;
                     f
                 }
             },
@@ -495,9 +500,9 @@ impl TipForce {
         let (l, b, h, e) = (1.0, 0.1, 0.01, 1.0e7);
         let ei = e * b * h * h * h / 12.0;
         let mesh = self.family.grid(l, b, self.nx, self.ny);
-        let at = |x: f64| -> Vec<usize> {
-            (0..mesh.n_vertices())
-                .filter(|&v| (mesh.coords[v].x - x).abs() < 1e-12)
+        let at = |x: f64| -> Vec<VertexId> {
+            mesh.vertex_ids()
+                .filter(|&v| (mesh.coord(v).x - x).abs() < 1e-12)
                 .collect()
         };
         let (root, tips) = (at(0.0), at(l));
@@ -524,7 +529,7 @@ impl TipForce {
             |asm| {
                 let mut f = vec![0.0; asm.n_dofs()];
                 for &v in &tips {
-                    f[3 * asm.layout.position_slot[v] + 2] = p / n_tips;
+                    f[3 * asm.position_slot(v) + 2] = p / n_tips;
                 }
                 f
             },

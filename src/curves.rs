@@ -17,6 +17,7 @@
 //! arc). The two facets on the edge take that side as theirs, so they share
 //! it exactly. Every other side stays the straight chord.
 
+use crate::ids::{EdgeId, VertexId};
 use crate::mesh::{EdgeKind, Mesh};
 use nalgebra::Vector2;
 
@@ -45,28 +46,29 @@ impl CreaseCurves {
     /// crease and the boundary are free, so two creases there fold without it.)
     pub fn new(mesh: &Mesh) -> CreaseCurves {
         let nv = mesh.n_vertices();
-        let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        let mut nbrs: Vec<Vec<VertexId>> = vec![Vec::new(); nv];
         let mut boundary = vec![false; nv];
-        for (e, faces) in mesh.edges.iter().zip(&mesh.edge_faces) {
+        for (e, faces) in mesh.edges().iter().zip(mesh.edge_faces()) {
             if e.kind == EdgeKind::Crease {
-                nbrs[e.v[0]].push(e.v[1]);
-                nbrs[e.v[1]].push(e.v[0]);
+                nbrs[e.v[0].index()].push(e.v[1]);
+                nbrs[e.v[1].index()].push(e.v[0]);
             }
             if faces.len() == 1 {
-                boundary[e.v[0]] = true;
-                boundary[e.v[1]] = true;
+                boundary[e.v[0].index()] = true;
+                boundary[e.v[1].index()] = true;
             }
         }
-        let tangent = (0..nv)
+        let tangent = mesh
+            .vertex_ids()
             .map(|v| {
-                let [a, b] = nbrs[v][..] else {
+                let [a, b] = nbrs[v.index()][..] else {
                     return None;
                 };
-                if boundary[v] {
+                if boundary[v.index()] {
                     return None;
                 }
-                let x = mesh.coords[v];
-                let (da, db) = (x - mesh.coords[a], mesh.coords[b] - x);
+                let x = mesh.coord(v);
+                let (da, db) = (x - mesh.coord(a), mesh.coord(b) - x);
                 let cos_turn = da.normalize().dot(&db.normalize());
                 let collinear = 1.0 - cos_turn < PARALLEL_TOL;
                 if collinear || cos_turn < MAX_CURVE_TURN.cos() {
@@ -86,17 +88,17 @@ impl CreaseCurves {
 
     /// Whether two non-collinear creases meet at `v` (its creases share one
     /// tangent slot and each side its own second vector).
-    pub fn is_curved(&self, v: usize) -> bool {
-        self.tangent.get(v).is_some_and(Option::is_some)
+    pub fn is_curved(&self, v: VertexId) -> bool {
+        self.tangent.get(v.index()).is_some_and(Option::is_some)
     }
 
     /// Unit tangent at `v` of the side from `v` towards `w` along edge `e`:
     /// the curve tangent (oriented towards `w`) on a crease edge at a curved
     /// vertex, the chord direction otherwise.
-    pub fn direction(&self, mesh: &Mesh, e: usize, v: usize, w: usize) -> Vector2<f64> {
-        let chord = mesh.coords[w] - mesh.coords[v];
-        match self.tangent[v] {
-            Some(t) if mesh.edges[e].kind == EdgeKind::Crease => {
+    pub fn direction(&self, mesh: &Mesh, e: EdgeId, v: VertexId, w: VertexId) -> Vector2<f64> {
+        let chord = mesh.coord(w) - mesh.coord(v);
+        match self.tangent[v.index()] {
+            Some(t) if mesh.edge(e).kind == EdgeKind::Crease => {
                 if t.dot(&chord) >= 0.0 {
                     t
                 } else {
@@ -108,16 +110,16 @@ impl CreaseCurves {
     }
 
     /// Whether edge `e` is curved in the reference.
-    pub fn is_curved_edge(&self, mesh: &Mesh, e: usize) -> bool {
-        let edge = &mesh.edges[e];
+    pub fn is_curved_edge(&self, mesh: &Mesh, e: EdgeId) -> bool {
+        let edge = mesh.edge(e);
         edge.kind == EdgeKind::Crease && (self.is_curved(edge.v[0]) || self.is_curved(edge.v[1]))
     }
 
     /// The reference side vector at `v` towards `w` along edge `e`: what a
     /// facet's gradient DOF there means (`G_s` times it). The chord
     /// `X_w - X_v` on a straight side, the Hermite end tangent on a curved one.
-    pub fn side(&self, mesh: &Mesh, e: usize, v: usize, w: usize) -> Vector2<f64> {
-        let chord = mesh.coords[w] - mesh.coords[v];
+    pub fn side(&self, mesh: &Mesh, e: EdgeId, v: VertexId, w: VertexId) -> Vector2<f64> {
+        let chord = mesh.coord(w) - mesh.coord(v);
         if !self.is_curved_edge(mesh, e) {
             return chord;
         }
@@ -134,7 +136,10 @@ impl CreaseCurves {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ids::vertex_ids;
     use crate::mesh::Edge;
+
+    const V: fn(usize) -> VertexId = VertexId;
 
     /// A fan of triangles around a crease polyline a - v - b (a kink of
     /// `turn` radians at v), with apexes on both sides.
@@ -145,11 +150,11 @@ mod tests {
         let up = Vector2::new(0.0, 1.5);
         let down = Vector2::new(0.1, -1.5);
         let coords = vec![v, a, b, up, down];
-        let tris = vec![[0, 2, 3], [0, 3, 1], [0, 1, 4], [0, 4, 2]];
+        let tris = [[0, 2, 3], [0, 3, 1], [0, 1, 4], [0, 4, 2]].map(vertex_ids);
         Mesh::new(
             coords,
-            tris,
-            vec![Edge::crease(1, 0, 1.0), Edge::crease(0, 2, 1.0)],
+            tris.to_vec(),
+            vec![Edge::crease(V(1), V(0), 1.0), Edge::crease(V(0), V(2), 1.0)],
         )
         .unwrap()
     }
@@ -166,22 +171,24 @@ mod tests {
                 Vector2::new(0.0, 0.0),
                 Vector2::new(2.0, 0.1),
             ],
-            vec![[0, 1, 3], [1, 2, 3], [1, 0, 4], [2, 1, 4]],
-            vec![Edge::crease(0, 1, 1.0), Edge::crease(1, 2, 1.0)],
+            [[0, 1, 3], [1, 2, 3], [1, 0, 4], [2, 1, 4]]
+                .map(vertex_ids)
+                .to_vec(),
+            vec![Edge::crease(V(0), V(1), 1.0), Edge::crease(V(1), V(2), 1.0)],
         )
         .unwrap();
         let c = CreaseCurves::new(&m);
-        assert!(c.is_curved(1) && !c.is_curved(0) && !c.is_curved(3));
-        let e = m.find_edge(1, 2).unwrap();
-        let t = c.direction(&m, e, 1, 2);
+        assert!(c.is_curved(V(1)) && !c.is_curved(V(0)) && !c.is_curved(V(3)));
+        let e = m.find_edge(V(1), V(2)).unwrap();
+        let t = c.direction(&m, e, V(1), V(2));
         assert!((t - Vector2::new(0.0, 1.0)).norm() < 1e-12, "{t}");
         // The side vector: along the tangent, longer than the chord.
-        let s = c.side(&m, e, 1, 2);
-        let chord = (m.coords[2] - m.coords[1]).norm();
+        let s = c.side(&m, e, V(1), V(2));
+        let chord = (m.coord(V(2)) - m.coord(V(1))).norm();
         assert!(s.normalize().dot(&t) > 1.0 - 1e-12 && s.norm() > chord);
         // A smooth edge at the curve vertex stays straight.
-        let e3 = m.find_edge(1, 3).unwrap();
-        assert_eq!(c.side(&m, e3, 1, 3), m.coords[3] - m.coords[1]);
+        let e3 = m.find_edge(V(1), V(3)).unwrap();
+        assert_eq!(c.side(&m, e3, V(1), V(3)), m.coord(V(3)) - m.coord(V(1)));
     }
 
     #[test]
@@ -190,13 +197,13 @@ mod tests {
         let c = CreaseCurves::new(&m);
         assert!(!c.any());
         let k = kinked(0.4);
-        assert!(CreaseCurves::new(&k).is_curved(0));
+        assert!(CreaseCurves::new(&k).is_curved(V(0)));
         // A 69 degree corner keeps straight sides (curved ones would fold
         // a facet over) and the model builds.
         let corner = kinked(1.2);
         assert!(!CreaseCurves::new(&corner).any());
         let layout = crate::dofs::DofLayout::new(&corner);
-        assert_eq!(layout.vertex_slots(0).len(), 3);
+        assert_eq!(layout.vertex_slots(V(0)).len(), 3);
     }
 
     /// The Hermite side with these end tangents is close to the circular

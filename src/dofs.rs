@@ -20,6 +20,7 @@
 //! 27 local DOFs are a constant linear map of the slots: [`LocalMap`].
 
 use crate::curves::CreaseCurves;
+use crate::ids::{EdgeId, FacetId, VertexId};
 use crate::mesh::{EdgeKind, Mesh};
 use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
 
@@ -81,7 +82,7 @@ pub enum SlotKind {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sector {
     /// Facets in the sector.
-    pub faces: Vec<usize>,
+    pub faces: Vec<FacetId>,
     /// Coefficients: `G = sum_k q[slot_k] c_k^T`.
     pub terms: Vec<(usize, Vector2<f64>)>,
 }
@@ -90,7 +91,7 @@ pub struct Sector {
 #[derive(Clone, Debug)]
 pub struct DofLayout {
     /// Vertex that owns each slot.
-    pub slot_vertex: Vec<usize>,
+    pub slot_vertex: Vec<VertexId>,
     /// Kind of each slot.
     pub slot_kind: Vec<SlotKind>,
     /// Position slot of each vertex.
@@ -105,7 +106,7 @@ pub struct DofLayout {
 
 /// The gradient of the sector (among a vertex's `sectors`) holding `face`,
 /// applied to the reference vector `x`.
-fn gradient_in(sectors: &[Sector], face: usize, x: Vector2<f64>) -> Combo {
+fn gradient_in(sectors: &[Sector], face: FacetId, x: Vector2<f64>) -> Combo {
     let s = sectors
         .iter()
         .find(|s| s.faces.contains(&face))
@@ -117,21 +118,25 @@ fn gradient_in(sectors: &[Sector], face: usize, x: Vector2<f64>) -> Combo {
 
 /// The six sides of facet `f` in element order `[1->2, 1->3, 2->3, 2->1,
 /// 3->1, 3->2]`: (corner, towards, reference side vector).
-fn facet_sides(mesh: &Mesh, curves: &CreaseCurves, f: usize) -> [(usize, usize, Vector2<f64>); 6] {
-    let [a, b, c] = mesh.triangles[f];
+fn facet_sides(
+    mesh: &Mesh,
+    curves: &CreaseCurves,
+    f: FacetId,
+) -> [(VertexId, VertexId, Vector2<f64>); 6] {
+    let [a, b, c] = mesh.triangle(f);
     [(a, b), (a, c), (b, c), (b, a), (c, a), (c, b)]
         .map(|(v, w)| (v, w, curves.side(mesh, side_edge(mesh, f, v, w), v, w)))
 }
 
 /// The edge of facet `f` between its corners `v` and `w`.
-fn side_edge(mesh: &Mesh, f: usize, v: usize, w: usize) -> usize {
-    let t = mesh.triangles[f];
+fn side_edge(mesh: &Mesh, f: FacetId, v: VertexId, w: VertexId) -> EdgeId {
+    let t = mesh.triangle(f);
     (0..3)
         .find(|&k| {
             let (p, q) = (t[k], t[(k + 1) % 3]);
             (p == v && q == w) || (p == w && q == v)
         })
-        .map(|k| mesh.face_edges[f][k])
+        .map(|k| mesh.sides_of(f)[k])
         .expect("v and w are corners of f")
 }
 
@@ -145,7 +150,7 @@ impl DofLayout {
         let nv = mesh.n_vertices();
         let mut slot_vertex = Vec::new();
         let mut slot_kind = Vec::new();
-        let mut new_slot = |v: usize, kind: SlotKind| {
+        let mut new_slot = |v: VertexId, kind: SlotKind| {
             slot_vertex.push(v);
             slot_kind.push(kind);
             slot_vertex.len() - 1
@@ -153,26 +158,26 @@ impl DofLayout {
         let mut position_slot = vec![0; nv];
         let mut sectors = vec![Vec::new(); nv];
         let fans = mesh.fans().expect("mesh validated its fans");
-        for v in 0..nv {
-            position_slot[v] = new_slot(v, SlotKind::Position);
-            let fan = &fans[v];
+        for v in mesh.vertex_ids() {
+            position_slot[v.index()] = new_slot(v, SlotKind::Position);
+            let fan = &fans[v.index()];
             if fan.faces.is_empty() {
                 continue;
             }
             // Unit tangent at v along edge e: the chord, or the crease
             // curve's tangent where two non-collinear creases meet.
-            let dir = |e: usize| {
-                let [a, b] = mesh.edges[e].v;
+            let dir = |e: EdgeId| {
+                let [a, b] = mesh.edge(e).v;
                 let w = if a == v { b } else { a };
                 curves.direction(mesh, e, v, w)
             };
-            let is_crease = |e: usize| mesh.edges[e].kind == EdgeKind::Crease;
+            let is_crease = |e: EdgeId| mesh.edge(e).kind == EdgeKind::Crease;
             // Split the fan into sectors at creases: list of (first edge, faces, last edge).
             let nf = fan.faces.len();
             let crease_pos: Vec<usize> = (0..fan.edges.len())
                 .filter(|&i| is_crease(fan.edges[i]))
                 .collect();
-            let mut raw: Vec<(Option<usize>, Vec<usize>, Option<usize>)> = Vec::new();
+            let mut raw: Vec<(Option<EdgeId>, Vec<FacetId>, Option<EdgeId>)> = Vec::new();
             if fan.closed {
                 if crease_pos.is_empty() {
                     raw.push((None, fan.faces.clone(), None));
@@ -207,8 +212,8 @@ impl DofLayout {
             }
             // Crease tangent slots, shared (with sign) across anti-parallel
             // creases that bound one sector.
-            let mut tangent: Vec<(usize, usize, f64)> = Vec::new(); // (edge, slot, sign)
-            let find = |tangent: &Vec<(usize, usize, f64)>, e: usize| {
+            let mut tangent: Vec<(EdgeId, usize, f64)> = Vec::new(); // (edge, slot, sign)
+            let find = |tangent: &Vec<(EdgeId, usize, f64)>, e: EdgeId| {
                 tangent.iter().find(|t| t.0 == e).map(|t| (t.1, t.2))
             };
             for (first, _, last) in &raw {
@@ -272,26 +277,27 @@ impl DofLayout {
                     (u0.0, u0.1 * dinv.row(0).transpose()),
                     (u1.0, u1.1 * dinv.row(1).transpose()),
                 ];
-                sectors[v].push(Sector { faces, terms });
+                sectors[v.index()].push(Sector { faces, terms });
             }
         }
 
-        let local = (0..mesh.triangles.len())
+        let local = mesh
+            .facet_ids()
             .map(|f| {
-                let [a, b, c] = mesh.triangles[f];
+                let [a, b, c] = mesh.triangle(f);
                 let sides = facet_sides(mesh, &curves, f);
                 let grad = |k: usize| {
                     let (v, _, x) = sides[k];
-                    gradient_in(&sectors[v], f, x)
+                    gradient_in(&sectors[v.index()], f, x)
                 };
                 [
-                    Combo::one(position_slot[a], 1.0),
+                    Combo::one(position_slot[a.index()], 1.0),
                     grad(0),
                     grad(1),
-                    Combo::one(position_slot[b], 1.0),
+                    Combo::one(position_slot[b.index()], 1.0),
                     grad(2),
                     grad(3),
-                    Combo::one(position_slot[c], 1.0),
+                    Combo::one(position_slot[c.index()], 1.0),
                     grad(4),
                     grad(5),
                 ]
@@ -310,7 +316,7 @@ impl DofLayout {
     /// The reference side vectors of facet `f` in element order `[1->2,
     /// 1->3, 2->3, 2->1, 3->1, 3->2]`: chords, or Hermite tangents on curved
     /// crease sides (what the facet's gradient DOFs mean).
-    pub fn side_vectors(&self, mesh: &Mesh, f: usize) -> [Vector2<f64>; 6] {
+    pub fn side_vectors(&self, mesh: &Mesh, f: FacetId) -> [Vector2<f64>; 6] {
         facet_sides(mesh, &self.curves, f).map(|(_, _, x)| x)
     }
 
@@ -326,12 +332,12 @@ impl DofLayout {
 
     /// The gradient of `face` at vertex `v` applied to the reference vector
     /// `x` (a combination of slots).
-    pub fn gradient_along(&self, v: usize, face: usize, x: Vector2<f64>) -> Combo {
-        gradient_in(&self.sectors[v], face, x)
+    pub fn gradient_along(&self, v: VertexId, face: FacetId, x: Vector2<f64>) -> Combo {
+        gradient_in(&self.sectors[v.index()], face, x)
     }
 
     /// Slots owned by vertex `v` (its position first).
-    pub fn vertex_slots(&self, v: usize) -> Vec<usize> {
+    pub fn vertex_slots(&self, v: VertexId) -> Vec<usize> {
         (0..self.n_slots())
             .filter(|&s| self.slot_vertex[s] == v)
             .collect()
@@ -356,7 +362,7 @@ impl DofLayout {
         F: Fn(Vector2<f64>) -> (Vector3<f64>, Matrix3x2<f64>),
     {
         let mut q = vec![0.0; self.n_dofs()];
-        for (v, x) in mesh.coords.iter().enumerate() {
+        for (v, x) in mesh.coords().iter().enumerate() {
             let (r, g) = field(*x);
             let s = self.position_slot[v];
             q[3 * s..3 * s + 3].copy_from_slice(r.as_slice());
@@ -379,6 +385,7 @@ impl DofLayout {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ids::vertex_ids;
     use crate::mesh::builders::{grid, square_with_diagonal};
     use crate::mesh::{Edge, Mesh};
 
@@ -409,16 +416,17 @@ mod tests {
             c(-0.4, -1.0),
             c(0.5, -0.9),
         ];
-        let tris: Vec<[usize; 3]> = (1..=6).map(|i| [0, i, i % 6 + 1]).collect();
+        let tris = (1..=6).map(|i| vertex_ids([0, i, i % 6 + 1])).collect();
+        let v = VertexId;
         let edges = vec![
-            Edge::crease(0, 1, 1.0),
-            Edge::crease(0, 3, -1.0),
-            Edge::crease(0, 4, 1.0),
-            Edge::crease(0, 6, -1.0),
+            Edge::crease(v(0), v(1), 1.0),
+            Edge::crease(v(0), v(3), -1.0),
+            Edge::crease(v(0), v(4), 1.0),
+            Edge::crease(v(0), v(6), -1.0),
         ];
         let mesh = Mesh::new(coords, tris, edges).unwrap();
         let layout = DofLayout::new(&mesh);
-        assert_eq!(layout.vertex_slots(0).len() * 3, 15);
+        assert_eq!(layout.vertex_slots(v(0)).len() * 3, 15);
     }
 
     /// A straight crease line through a vertex with no other crease: the
@@ -427,7 +435,7 @@ mod tests {
     fn straight_crease_through_vertex_shares_tangent() {
         let m = grid(2.0, 2.0, 2, 2, &[(1, 0.5)]);
         let layout = DofLayout::new(&m);
-        let centre = 4;
+        let centre = VertexId(4);
         assert_eq!(layout.vertex_slots(centre).len(), 4);
         // The reference state is consistent: every facet gradient is the edge vector.
         let q = layout.reference_state(&m);
@@ -435,8 +443,8 @@ mod tests {
     }
 
     fn check_reference(m: &Mesh, layout: &DofLayout, q: &[f64]) {
-        for (f, &[a, b, c]) in m.triangles.iter().enumerate() {
-            let x = |v: usize| nalgebra::Vector3::new(m.coords[v].x, m.coords[v].y, 0.0);
+        for (f, &[a, b, c]) in m.triangles().iter().enumerate() {
+            let x = |v: VertexId| nalgebra::Vector3::new(m.coord(v).x, m.coord(v).y, 0.0);
             let expect = [
                 x(a),
                 x(b) - x(a),
@@ -481,13 +489,13 @@ mod tests {
             let layout = DofLayout::new(&mesh);
             let axis = Unit::new_normalize(Vector3::new(1.0, 1.0, 0.0));
             let rot = Rotation3::from_axis_angle(&axis, 0.7);
-            let x3 = |v: usize| Vector3::new(mesh.coords[v].x, mesh.coords[v].y, 0.0);
+            let x3 = |v: VertexId| Vector3::new(mesh.coord(v).x, mesh.coord(v).y, 0.0);
             // facet 0 = (0,1,2) stays, facet 1 = (0,2,3) rotates about the 0-2 line
-            let pos = |f: usize, v: usize| if f == 1 { rot * x3(v) } else { x3(v) };
+            let pos = |f: usize, v: VertexId| if f == 1 { rot * x3(v) } else { x3(v) };
             // Least squares: find q with local[f][k](q) = target for all f, k.
             let n = layout.n_dofs();
             let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
-            for (f, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+            for (f, &[a, b, c]) in mesh.triangles().iter().enumerate() {
                 let t = [
                     pos(f, a),
                     pos(f, b) - pos(f, a),

@@ -52,6 +52,7 @@ pub mod curves;
 pub mod dofs;
 pub mod element;
 pub mod fmi;
+pub mod ids;
 pub mod material;
 pub mod mesh;
 pub mod model;

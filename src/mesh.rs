@@ -7,6 +7,7 @@
 //! triangles, every crease between exactly two triangles. Triangle edges that
 //! are not listed become smooth (interior) or boundary edges.
 
+use crate::ids::{EdgeId, FacetId, FoldEdgeId, VertexId, vertex_ids};
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -29,7 +30,7 @@ pub enum EdgeKind {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Edge {
     /// The two end vertices.
-    pub v: [usize; 2],
+    pub v: [VertexId; 2],
     /// Crease, smooth or boundary.
     pub kind: EdgeKind,
     /// Target fold angle at full actuation in radians, FOLD sign (valley
@@ -37,12 +38,12 @@ pub struct Edge {
     pub fold_target: f64,
     /// The FOLD edge this mesh edge lies on; `None` for diagonals added by
     /// triangulation. Refinement keeps the tag on both halves.
-    pub fold_edge: Option<usize>,
+    pub fold_edge: Option<FoldEdgeId>,
 }
 
 impl Edge {
     /// A crease between `a` and `b` folding to `fold_target` radians.
-    pub fn crease(a: usize, b: usize, fold_target: f64) -> Self {
+    pub fn crease(a: VertexId, b: VertexId, fold_target: f64) -> Self {
         Edge {
             v: [a, b],
             kind: EdgeKind::Crease,
@@ -51,7 +52,7 @@ impl Edge {
         }
     }
     /// A smooth edge between `a` and `b`.
-    pub fn smooth(a: usize, b: usize) -> Self {
+    pub fn smooth(a: VertexId, b: VertexId) -> Self {
         Edge {
             v: [a, b],
             kind: EdgeKind::Smooth,
@@ -60,7 +61,7 @@ impl Edge {
         }
     }
     /// A boundary edge between `a` and `b`.
-    pub fn boundary(a: usize, b: usize) -> Self {
+    pub fn boundary(a: VertexId, b: VertexId) -> Self {
         Edge {
             v: [a, b],
             kind: EdgeKind::Boundary,
@@ -73,17 +74,11 @@ impl Edge {
 /// A validated crease pattern with its topology.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Mesh {
-    /// Reference (stress-free, flat) vertex coordinates in metres.
-    pub coords: Vec<Vector2<f64>>,
-    /// Triangles, counter-clockwise in the reference coordinates.
-    pub triangles: Vec<[usize; 3]>,
-    /// All edges: the listed ones first, in the given order, then the
-    /// unlisted triangle edges.
-    pub edges: Vec<Edge>,
-    /// For each edge, the one or two triangles that contain it.
-    pub edge_faces: Vec<Vec<usize>>,
-    /// For each triangle, the edge index of its sides (v0v1, v1v2, v2v0).
-    pub face_edges: Vec<[usize; 3]>,
+    coords: Vec<Vector2<f64>>,
+    triangles: Vec<[VertexId; 3]>,
+    edges: Vec<Edge>,
+    edge_faces: Vec<Vec<FacetId>>,
+    face_edges: Vec<[EdgeId; 3]>,
 }
 
 /// What is wrong with a mesh, naming the index.
@@ -94,33 +89,33 @@ pub enum MeshError {
     VertexOutOfRange {
         what: String,
         index: usize,
-        vertex: usize,
+        vertex: VertexId,
         count: usize,
     },
     /// A triangle names the same vertex twice.
-    RepeatedVertex { triangle: usize },
+    RepeatedVertex { triangle: FacetId },
     /// A triangle has (nearly) zero area.
-    Degenerate { triangle: usize, area: f64 },
+    Degenerate { triangle: FacetId, area: f64 },
     /// A triangle is clockwise in the reference plane.
-    Inverted { triangle: usize },
+    Inverted { triangle: FacetId },
     /// More than two triangles share an edge.
     NonManifold {
-        vertices: [usize; 2],
-        faces: Vec<usize>,
+        vertices: [VertexId; 2],
+        faces: Vec<FacetId>,
     },
     /// A listed edge is not a side of any triangle.
-    DanglingEdge { edge: usize },
+    DanglingEdge { edge: EdgeId },
     /// An edge is listed twice.
-    DuplicateEdge { first: usize, second: usize },
+    DuplicateEdge { first: EdgeId, second: EdgeId },
     /// A crease does not lie between exactly two triangles.
-    CreaseNotInterior { edge: usize, faces: usize },
+    CreaseNotInterior { edge: EdgeId, faces: usize },
     /// An edge marked boundary has two triangles.
-    BoundaryNotOnBoundary { edge: usize },
+    BoundaryNotOnBoundary { edge: EdgeId },
     /// A non-finite coordinate or fold angle.
     NotFinite { what: String, index: usize },
     /// The vertex fan around a vertex is not a single disc or half-disc
     /// (e.g. two sheets touching at a point).
-    NonManifoldVertex { vertex: usize },
+    NonManifoldVertex { vertex: VertexId },
 }
 
 impl fmt::Display for MeshError {
@@ -175,15 +170,40 @@ impl fmt::Display for MeshError {
 impl std::error::Error for MeshError {}
 
 /// Relative area below which a triangle counts as degenerate (against the
-/// square of the mean edge length of the whole mesh).
+/// square of the mean edge length of the whole mesh). The FOLD loader tests
+/// its polygons against the same threshold ([`is_degenerate`]) before they
+/// are triangulated, so that such a face is named in the file's terms.
 const DEGENERATE_AREA: f64 = 1e-12;
+
+/// The mean squared side length of `polygons` (closed, by vertex index into
+/// `coords`), 1 when there is no side: the scale of [`is_degenerate`].
+pub(crate) fn mean_side_length2<'a>(
+    polygons: impl IntoIterator<Item = &'a [usize]>,
+    coords: &[Vector2<f64>],
+) -> f64 {
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    for p in polygons {
+        for k in 0..p.len() {
+            sum += (coords[p[(k + 1) % p.len()]] - coords[p[k]]).norm_squared();
+            count += 1;
+        }
+    }
+    if count > 0 { sum / count as f64 } else { 1.0 }
+}
+
+/// True for a triangle or polygon of (signed) `area` that is degenerate
+/// against `mean_len2` ([`mean_side_length2`] of the whole mesh or pattern).
+pub(crate) fn is_degenerate(area: f64, mean_len2: f64) -> bool {
+    area.abs() <= DEGENERATE_AREA * mean_len2
+}
 
 impl Mesh {
     /// Validate the pattern and build its topology. `edges` lists labelled
     /// edges; unlisted triangle sides become smooth or boundary edges.
     pub fn new(
         coords: Vec<Vector2<f64>>,
-        triangles: Vec<[usize; 3]>,
+        triangles: Vec<[VertexId; 3]>,
         edges: Vec<Edge>,
     ) -> Result<Mesh, MeshError> {
         let nv = coords.len();
@@ -195,11 +215,9 @@ impl Mesh {
                 });
             }
         }
-        let mut scale2 = 0.0;
-        let mut nscale = 0usize;
         for (t, tri) in triangles.iter().enumerate() {
             for &v in tri {
-                if v >= nv {
+                if v.index() >= nv {
                     return Err(MeshError::VertexOutOfRange {
                         what: "face".into(),
                         index: t,
@@ -209,37 +227,37 @@ impl Mesh {
                 }
             }
             if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
-                return Err(MeshError::RepeatedVertex { triangle: t });
-            }
-            for k in 0..3 {
-                scale2 += (coords[tri[(k + 1) % 3]] - coords[tri[k]]).norm_squared();
-                nscale += 1;
+                return Err(MeshError::RepeatedVertex {
+                    triangle: FacetId(t),
+                });
             }
         }
-        let mean_len2 = if nscale > 0 {
-            scale2 / nscale as f64
-        } else {
-            1.0
-        };
-        for (t, tri) in triangles.iter().enumerate() {
-            let a = coords[tri[1]] - coords[tri[0]];
-            let b = coords[tri[2]] - coords[tri[0]];
-            let area = 0.5 * (a.x * b.y - a.y * b.x);
-            if area.abs() <= DEGENERATE_AREA * mean_len2 {
-                return Err(MeshError::Degenerate { triangle: t, area });
+        let corners: Vec<[usize; 3]> = triangles.iter().map(|t| t.map(VertexId::index)).collect();
+        let mean_len2 = mean_side_length2(corners.iter().map(|t| &t[..]), &coords);
+        for (t, &[a, b, c]) in corners.iter().enumerate() {
+            let u = coords[b] - coords[a];
+            let w = coords[c] - coords[a];
+            let area = 0.5 * (u.x * w.y - u.y * w.x);
+            if is_degenerate(area, mean_len2) {
+                return Err(MeshError::Degenerate {
+                    triangle: FacetId(t),
+                    area,
+                });
             }
             if area < 0.0 {
-                return Err(MeshError::Inverted { triangle: t });
+                return Err(MeshError::Inverted {
+                    triangle: FacetId(t),
+                });
             }
         }
 
         // Listed edges first.
-        let key = |a: usize, b: usize| if a < b { (a, b) } else { (b, a) };
-        let mut index: HashMap<(usize, usize), usize> = HashMap::new();
+        let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
+        let mut index: HashMap<(VertexId, VertexId), EdgeId> = HashMap::new();
         let mut all = Vec::with_capacity(edges.len() + triangles.len() * 2);
         for (e, edge) in edges.into_iter().enumerate() {
             for &v in &edge.v {
-                if v >= nv {
+                if v.index() >= nv {
                     return Err(MeshError::VertexOutOfRange {
                         what: "edge".into(),
                         index: e,
@@ -255,24 +273,27 @@ impl Mesh {
                 });
             }
             if let Some(&first) = index.get(&key(edge.v[0], edge.v[1])) {
-                return Err(MeshError::DuplicateEdge { first, second: e });
+                return Err(MeshError::DuplicateEdge {
+                    first,
+                    second: EdgeId(e),
+                });
             }
-            index.insert(key(edge.v[0], edge.v[1]), e);
+            index.insert(key(edge.v[0], edge.v[1]), EdgeId(e));
             all.push(edge);
         }
         let n_listed = all.len();
-        let mut edge_faces: Vec<Vec<usize>> = vec![Vec::new(); n_listed];
+        let mut edge_faces: Vec<Vec<FacetId>> = vec![Vec::new(); n_listed];
         let mut face_edges = Vec::with_capacity(triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
-            let mut fe = [0usize; 3];
+            let mut fe = [EdgeId(0); 3];
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
                 let e = *index.entry(key(a, b)).or_insert_with(|| {
                     all.push(Edge::smooth(a, b));
                     edge_faces.push(Vec::new());
-                    all.len() - 1
+                    EdgeId(all.len() - 1)
                 });
-                edge_faces[e].push(t);
+                edge_faces[e.index()].push(FacetId(t));
                 fe[k] = e;
             }
             face_edges.push(fe);
@@ -285,17 +306,17 @@ impl Mesh {
                 });
             }
             if faces.is_empty() {
-                return Err(MeshError::DanglingEdge { edge: e });
+                return Err(MeshError::DanglingEdge { edge: EdgeId(e) });
             }
             match all[e].kind {
                 EdgeKind::Crease if faces.len() != 2 => {
                     return Err(MeshError::CreaseNotInterior {
-                        edge: e,
+                        edge: EdgeId(e),
                         faces: faces.len(),
                     });
                 }
                 EdgeKind::Boundary if faces.len() == 2 => {
-                    return Err(MeshError::BoundaryNotOnBoundary { edge: e });
+                    return Err(MeshError::BoundaryNotOnBoundary { edge: EdgeId(e) });
                 }
                 _ => {}
             }
@@ -312,8 +333,8 @@ impl Mesh {
         for (e, faces) in edge_faces.iter().enumerate() {
             if faces.len() == 2 {
                 let [a, b] = all[e].v;
-                let dir = |t: usize| {
-                    let tri = triangles[t];
+                let dir = |t: FacetId| {
+                    let tri = triangles[t.index()];
                     (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
                 };
                 if dir(faces[0]) == dir(faces[1]) {
@@ -332,6 +353,110 @@ impl Mesh {
         // quadratic in the mesh size).
         mesh.fans()?;
         Ok(mesh)
+    }
+
+    /// Reference (stress-free, flat) vertex coordinates in metres, by
+    /// [`VertexId::index`].
+    pub fn coords(&self) -> &[Vector2<f64>] {
+        &self.coords
+    }
+
+    /// The reference coordinates of vertex `v`.
+    pub fn coord(&self, v: VertexId) -> Vector2<f64> {
+        self.coords[v.index()]
+    }
+
+    /// Triangles, counter-clockwise in the reference coordinates, by
+    /// [`FacetId::index`].
+    pub fn triangles(&self) -> &[[VertexId; 3]] {
+        &self.triangles
+    }
+
+    /// The corners of facet `t`, counter-clockwise.
+    pub fn triangle(&self, t: FacetId) -> [VertexId; 3] {
+        self.triangles[t.index()]
+    }
+
+    /// All edges, by [`EdgeId::index`]: the listed ones first, in the given
+    /// order, then the unlisted triangle edges.
+    pub fn edges(&self) -> &[Edge] {
+        &self.edges
+    }
+
+    /// Edge `e`.
+    pub fn edge(&self, e: EdgeId) -> &Edge {
+        &self.edges[e.index()]
+    }
+
+    /// The creases, in edge order.
+    pub fn creases(&self) -> impl Iterator<Item = &Edge> {
+        self.edges.iter().filter(|e| e.kind == EdgeKind::Crease)
+    }
+
+    /// For each edge, the one or two triangles that contain it.
+    pub fn edge_faces(&self) -> &[Vec<FacetId>] {
+        &self.edge_faces
+    }
+
+    /// The one or two triangles that contain edge `e`.
+    pub fn faces_of(&self, e: EdgeId) -> &[FacetId] {
+        &self.edge_faces[e.index()]
+    }
+
+    /// For each triangle, the edges of its sides (v0v1, v1v2, v2v0).
+    pub fn face_edges(&self) -> &[[EdgeId; 3]] {
+        &self.face_edges
+    }
+
+    /// The edges of the sides of facet `t` (v0v1, v1v2, v2v0).
+    pub fn sides_of(&self, t: FacetId) -> [EdgeId; 3] {
+        self.face_edges[t.index()]
+    }
+
+    /// The vertices, in order.
+    pub fn vertex_ids(&self) -> impl ExactSizeIterator<Item = VertexId> + use<> {
+        (0..self.coords.len()).map(VertexId)
+    }
+
+    /// The facets, in order.
+    pub fn facet_ids(&self) -> impl ExactSizeIterator<Item = FacetId> + use<> {
+        (0..self.triangles.len()).map(FacetId)
+    }
+
+    /// The edges, in order.
+    pub fn edge_ids(&self) -> impl ExactSizeIterator<Item = EdgeId> + use<> {
+        (0..self.edges.len()).map(EdgeId)
+    }
+
+    /// Tag edge `e` with the FOLD edge it lies on (`None`: none).
+    pub fn set_fold_edge(&mut self, e: EdgeId, fold_edge: Option<FoldEdgeId>) {
+        self.edges[e.index()].fold_edge = fold_edge;
+    }
+
+    /// Tag every crease without a FOLD edge with the FOLD edge of its own
+    /// index ([`FoldEdgeId::of_mesh_edge`]): for a mesh built in code, with
+    /// no FOLD file behind it, whose edge indices are the FOLD edge indices.
+    /// (The tag is not checked by [`Mesh::new`]: this changes nothing that
+    /// it validated.)
+    pub fn tag_creases_as_fold_edges(&mut self) {
+        for (e, edge) in self.edges.iter_mut().enumerate() {
+            if edge.fold_edge.is_none() && edge.kind == EdgeKind::Crease {
+                edge.fold_edge = Some(FoldEdgeId::of_mesh_edge(EdgeId(e)));
+            }
+        }
+    }
+
+    /// Set the target fold angle (radians, FOLD sign) of edge `e`; an error
+    /// (and no change) for a number that is not finite, as in [`Mesh::new`].
+    pub fn set_fold_target(&mut self, e: EdgeId, fold_target: f64) -> Result<(), MeshError> {
+        if !fold_target.is_finite() {
+            return Err(MeshError::NotFinite {
+                what: "fold angle of edge".into(),
+                index: e.index(),
+            });
+        }
+        self.edges[e.index()].fold_target = fold_target;
+        Ok(())
     }
 
     /// Number of vertices.
@@ -354,25 +479,26 @@ impl Mesh {
     }
 
     /// Reference area of triangle `t`.
-    pub fn area(&self, t: usize) -> f64 {
-        let [a, b, c] = self.triangles[t];
-        let u = self.coords[b] - self.coords[a];
-        let w = self.coords[c] - self.coords[a];
+    pub fn area(&self, t: FacetId) -> f64 {
+        let [a, b, c] = self.triangle(t);
+        let u = self.coord(b) - self.coord(a);
+        let w = self.coord(c) - self.coord(a);
         0.5 * (u.x * w.y - u.y * w.x)
     }
 
     /// Reference length of edge `e`.
-    pub fn edge_length(&self, e: usize) -> f64 {
-        let [a, b] = self.edges[e].v;
-        (self.coords[b] - self.coords[a]).norm()
+    pub fn edge_length(&self, e: EdgeId) -> f64 {
+        let [a, b] = self.edge(e).v;
+        (self.coord(b) - self.coord(a)).norm()
     }
 
     /// The edge between vertices `a` and `b`, if any (a linear search: for
     /// tests and small meshes).
-    pub fn find_edge(&self, a: usize, b: usize) -> Option<usize> {
+    pub fn find_edge(&self, a: VertexId, b: VertexId) -> Option<EdgeId> {
         self.edges
             .iter()
             .position(|e| (e.v[0] == a && e.v[1] == b) || (e.v[0] == b && e.v[1] == a))
+            .map(EdgeId)
     }
 
     /// The triangles around vertex `v`, ordered counter-clockwise, with the
@@ -382,9 +508,10 @@ impl Mesh {
     /// for a boundary vertex it is open, starts and ends on a boundary edge
     /// (`edges.len() == faces.len() + 1`). A vertex used by no face has an
     /// empty fan. Scans all triangles: use [`Mesh::fans`] for all vertices.
-    pub fn fan(&self, v: usize) -> Result<Fan, MeshError> {
-        let faces: Vec<usize> = (0..self.triangles.len())
-            .filter(|&t| self.triangles[t].contains(&v))
+    pub fn fan(&self, v: VertexId) -> Result<Fan, MeshError> {
+        let faces: Vec<FacetId> = self
+            .facet_ids()
+            .filter(|&t| self.triangle(t).contains(&v))
             .collect();
         self.fan_of(v, &faces)
     }
@@ -395,25 +522,25 @@ impl Mesh {
         let mut around = vec![Vec::new(); self.n_vertices()];
         for (t, tri) in self.triangles.iter().enumerate() {
             for &v in tri {
-                around[v].push(t);
+                around[v.index()].push(FacetId(t));
             }
         }
         around
             .iter()
             .enumerate()
-            .map(|(v, faces)| self.fan_of(v, faces))
+            .map(|(v, faces)| self.fan_of(VertexId(v), faces))
             .collect()
     }
 
-    fn fan_of(&self, v: usize, faces_at_v: &[usize]) -> Result<Fan, MeshError> {
+    fn fan_of(&self, v: VertexId, faces_at_v: &[FacetId]) -> Result<Fan, MeshError> {
         // For each incident face: the edge entering (v -> prev-ccw) and leaving.
         // In a CCW triangle (v, p, q): going CCW around v we pass edge v-p,
         // then the face, then edge v-q.
-        let mut incident: Vec<(usize, usize, usize)> = Vec::new(); // (face, in_edge, out_edge)
+        let mut incident: Vec<(FacetId, EdgeId, EdgeId)> = Vec::new(); // (face, in_edge, out_edge)
         for &t in faces_at_v {
-            let tri = self.triangles[t];
+            let tri = self.triangle(t);
             if let Some(k) = tri.iter().position(|&x| x == v) {
-                let fe = self.face_edges[t];
+                let fe = self.sides_of(t);
                 // side k is (tri[k], tri[k+1]); side k+2 is (tri[k+2], tri[k]).
                 incident.push((t, fe[k], fe[(k + 2) % 3]));
             }
@@ -429,9 +556,9 @@ impl Mesh {
         // Find a start: a face whose in-edge is a boundary edge (open fan).
         let start = incident
             .iter()
-            .position(|&(_, ein, _)| self.edge_faces[ein].len() == 1)
+            .position(|&(_, ein, _)| self.faces_of(ein).len() == 1)
             .unwrap_or(0);
-        let closed = self.edge_faces[incident[start].1].len() == 2;
+        let closed = self.faces_of(incident[start].1).len() == 2;
         let mut faces = Vec::with_capacity(incident.len());
         let mut edges = vec![incident[start].1];
         let mut cur = start;
@@ -440,7 +567,7 @@ impl Mesh {
             used[cur] = true;
             let (t, _, eout) = incident[cur];
             faces.push(t);
-            if self.edge_faces[eout].len() == 1 {
+            if self.faces_of(eout).len() == 1 {
                 edges.push(eout);
                 break;
             }
@@ -472,11 +599,11 @@ impl Mesh {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Fan {
     /// The centre vertex.
-    pub vertex: usize,
+    pub vertex: VertexId,
     /// Faces in counter-clockwise order.
-    pub faces: Vec<usize>,
+    pub faces: Vec<FacetId>,
     /// Edges in counter-clockwise order; `edges[i]` precedes `faces[i]`.
-    pub edges: Vec<usize>,
+    pub edges: Vec<EdgeId>,
     /// True for an interior vertex (the fan closes on itself).
     pub closed: bool,
 }
@@ -495,11 +622,11 @@ pub mod builders {
             Vector2::new(a, a),
             Vector2::new(0.0, a),
         ];
-        let tris = vec![[0, 1, 2], [0, 2, 3]];
+        let tris = vec![vertex_ids([0, 1, 2]), vertex_ids([0, 2, 3])];
         let diag = if crease {
-            Edge::crease(0, 2, fold_target)
+            Edge::crease(VertexId(0), VertexId(2), fold_target)
         } else {
-            Edge::smooth(0, 2)
+            Edge::smooth(VertexId(0), VertexId(2))
         };
         Mesh::new(coords, tris, vec![diag]).expect("valid square")
     }
@@ -561,7 +688,7 @@ pub mod builders {
         diagonals: Diagonals,
         jitter: f64,
     ) -> Mesh {
-        let id = |i: usize, j: usize| j * (nx + 1) + i;
+        let id = |i: usize, j: usize| VertexId(j * (nx + 1) + i);
         let seed = match diagonals {
             Diagonals::Random(s) => s,
             _ => 0x9E37_79B9_7F4A_7C15,
@@ -636,17 +763,17 @@ mod tests {
                 .count(),
             4
         );
-        let fan0 = m.fan(0).unwrap();
+        let fan0 = m.fan(VertexId(0)).unwrap();
         assert!(!fan0.closed);
-        assert_eq!(fan0.faces, vec![0, 1]);
+        assert_eq!(fan0.faces, vec![FacetId(0), FacetId(1)]);
         assert_eq!(fan0.edges.len(), 3);
-        assert_eq!(fan0.edges[1], 0);
+        assert_eq!(fan0.edges[1], EdgeId(0));
     }
 
     #[test]
     fn interior_fan_is_closed() {
         let m = grid(2.0, 2.0, 2, 2, &[]);
-        let centre = 4;
+        let centre = VertexId(4);
         let fan = m.fan(centre).unwrap();
         assert!(fan.closed);
         assert_eq!(fan.faces.len(), fan.edges.len());
@@ -657,26 +784,46 @@ mod tests {
     fn bad_meshes_are_errors() {
         let sq = || vec![v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.)];
         assert!(matches!(
-            Mesh::new(sq(), vec![[0, 1, 7]], vec![]),
-            Err(MeshError::VertexOutOfRange { vertex: 7, .. })
+            Mesh::new(sq(), vec![vertex_ids([0, 1, 7])], vec![]),
+            Err(MeshError::VertexOutOfRange {
+                vertex: VertexId(7),
+                ..
+            })
         ));
         assert!(matches!(
-            Mesh::new(sq(), vec![[0, 2, 1]], vec![]),
-            Err(MeshError::Inverted { triangle: 0 })
+            Mesh::new(sq(), vec![vertex_ids([0, 2, 1])], vec![]),
+            Err(MeshError::Inverted {
+                triangle: FacetId(0)
+            })
         ));
         let line = vec![v(0., 0.), v(1., 0.), v(2., 0.)];
         assert!(matches!(
-            Mesh::new(line, vec![[0, 1, 2]], vec![]),
-            Err(MeshError::Degenerate { triangle: 0, .. })
+            Mesh::new(line, vec![vertex_ids([0, 1, 2])], vec![]),
+            Err(MeshError::Degenerate {
+                triangle: FacetId(0),
+                ..
+            })
         ));
         // crease with one facet
         assert!(matches!(
-            Mesh::new(sq(), vec![[0, 1, 2]], vec![Edge::crease(0, 1, 1.0)]),
-            Err(MeshError::CreaseNotInterior { edge: 0, faces: 1 })
+            Mesh::new(
+                sq(),
+                vec![vertex_ids([0, 1, 2])],
+                vec![Edge::crease(VertexId(0), VertexId(1), 1.0)]
+            ),
+            Err(MeshError::CreaseNotInterior {
+                edge: EdgeId(0),
+                faces: 1
+            })
         ));
         // three triangles on edge 0-1 (non-manifold)
         let c = vec![v(0., 0.), v(1., 0.), v(0.5, 1.), v(0.5, 2.), v(0.5, -1.)];
-        let err = Mesh::new(c, vec![[0, 1, 2], [0, 1, 3], [1, 0, 4]], vec![]).unwrap_err();
+        let tris = vec![
+            vertex_ids([0, 1, 2]),
+            vertex_ids([0, 1, 3]),
+            vertex_ids([1, 0, 4]),
+        ];
+        let err = Mesh::new(c, tris, vec![]).unwrap_err();
         assert!(matches!(err, MeshError::NonManifold { .. }), "{err}");
         assert!(err.to_string().contains("non-manifold"));
     }

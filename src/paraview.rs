@@ -16,6 +16,7 @@
 //! The format is small enough to write directly; the writer is tested by
 //! reading files back (tests/paraview.rs and the fmpy suite with meshio).
 
+use crate::ids::VertexId;
 use crate::mesh::EdgeKind;
 use crate::model::Model;
 use std::fmt::Write as _;
@@ -256,6 +257,8 @@ pub struct Series {
     entries: Vec<(f64, String)>,
     reference: Vec<[f64; 3]>,
     areas: Vec<f64>,
+    /// The mesh's triangles (vertex indices).
+    triangles: Vec<[usize; 3]>,
     /// Crease lines of the mesh with their FOLD edge.
     lines: Vec<([usize; 2], usize)>,
     /// For each line, the index of its `crease[e].angle` output (None when
@@ -269,8 +272,13 @@ impl Series {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         let mesh = &model.scene().mesh;
-        let reference = mesh.coords.iter().map(|x| [x.x, x.y, 0.0]).collect();
-        let areas = (0..mesh.triangles.len()).map(|t| mesh.area(t)).collect();
+        let reference = mesh.coords().iter().map(|x| [x.x, x.y, 0.0]).collect();
+        let areas = mesh.facet_ids().map(|t| mesh.area(t)).collect();
+        let triangles = mesh
+            .triangles()
+            .iter()
+            .map(|t| t.map(VertexId::index))
+            .collect();
         let outputs: std::collections::HashMap<&str, usize> = model
             .outputs()
             .iter()
@@ -279,9 +287,9 @@ impl Series {
             .collect();
         let mut lines = Vec::new();
         let mut line_output = Vec::new();
-        for edge in &mesh.edges {
+        for edge in mesh.edges() {
             if let (EdgeKind::Crease, Some(f)) = (edge.kind, edge.fold_edge) {
-                lines.push((edge.v, f));
+                lines.push((edge.v.map(VertexId::index), f.index()));
                 line_output.push(outputs.get(format!("crease[{f}].angle").as_str()).copied());
             }
         }
@@ -291,6 +299,7 @@ impl Series {
             entries: Vec::new(),
             reference,
             areas,
+            triangles,
             lines,
             line_output,
         })
@@ -299,7 +308,8 @@ impl Series {
     /// Write the model's current state as the next frame at its time.
     pub fn write(&mut self, model: &Model) -> Result<(), String> {
         let mesh = &model.scene().mesh;
-        let points: Vec<[f64; 3]> = (0..mesh.n_vertices())
+        let points: Vec<[f64; 3]> = mesh
+            .vertex_ids()
             .map(|v| model.vertex_position(v))
             .collect();
         let energy = model.facet_strain_energies();
@@ -313,7 +323,7 @@ impl Series {
             points: &points,
             reference: &self.reference,
             fold_vertex_count: model.scene().fold_vertex_count,
-            triangles: &mesh.triangles,
+            triangles: &self.triangles,
             facet_energy: &energy,
             facet_area: &self.areas,
             lines: &self.lines,

@@ -203,12 +203,15 @@ fn folded_miura() -> (Assembler, Vec<f64>) {
     // G = sum_k q_k c_k^T, i.e. [q0 q1] = G C^-1 with the c_k as rows of C.
     for sectors in &layout.sectors {
         for sec in sectors {
-            let [a, b, c] = mesh.triangles[sec.faces[0]];
+            let [a, b, c] = mesh.triangle(sec.faces[0]);
             let flat = Matrix2::from_columns(&[
-                mesh.coords[b] - mesh.coords[a],
-                mesh.coords[c] - mesh.coords[a],
+                mesh.coord(b) - mesh.coord(a),
+                mesh.coord(c) - mesh.coord(a),
             ]);
-            let bent = Matrix3x2::from_columns(&[folded[b] - folded[a], folded[c] - folded[a]]);
+            let bent = Matrix3x2::from_columns(&[
+                folded[b.index()] - folded[a.index()],
+                folded[c.index()] - folded[a.index()],
+            ]);
             let g = bent * flat.try_inverse().unwrap();
             let (s0, c0) = sec.terms[0];
             let (s1, c1) = sec.terms[1];

@@ -4,6 +4,7 @@
 
 use origami_fmu::assembly::{Assembler, Physics};
 use origami_fmu::element::ElementOptions;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{Fix, Integrator, Material, NewtonMode, Scene, Support};
@@ -104,7 +105,7 @@ fn two_panels(integrator: Integrator) -> Scene {
     scene.material.youngs_modulus = 1.0e7;
     scene.material.thickness = 1e-3;
     scene.supports.push(Support {
-        vertices: vec![0, 3],
+        vertices: vec![VertexId(0), VertexId(3)],
         fix: Fix::Clamped,
     });
     scene.solver.integrator = integrator;

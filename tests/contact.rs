@@ -9,6 +9,7 @@ use nalgebra::{Vector2, Vector3};
 use origami_fmu::assembly::{Assembler, Evaluation, MatrixCoeffs, State};
 use origami_fmu::contact::{ContactSettings, ContactTerm};
 use origami_fmu::element::ElementOptions;
+use origami_fmu::ids::{EdgeId, VertexId, vertex_ids};
 use origami_fmu::mesh::Mesh;
 use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::Model;
@@ -30,7 +31,9 @@ fn two_squares(a: f64, b: f64) -> Mesh {
         Vector2::new(x0 + b, b),
         Vector2::new(x0, b),
     ];
-    let tris = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]]
+        .map(vertex_ids)
+        .to_vec();
     Mesh::new(coords, tris, vec![]).expect("two squares")
 }
 
@@ -99,7 +102,7 @@ fn barrier_force_and_tangent_match_finite_differences() {
     let r = rot_y(0.02);
     let rm = nalgebra::Matrix3::from_fn(|i, j| r[i][j]);
     for v in 4..8 {
-        for s in asm.layout.vertex_slots(v) {
+        for s in asm.layout.vertex_slots(VertexId(v)) {
             let x = Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
             let y = if s == asm.layout.position_slot[v] {
                 rm * (x - Vector3::new(2.0 * a - 0.01, -0.01, 0.0))
@@ -175,7 +178,7 @@ fn diagonal_folded_flat_stops_at_the_thickness() {
         let mut scene = Scene::with_defaults("diag", square_with_diagonal(a, true, PI));
         scene.material.thickness = 5e-4;
         scene.supports.push(Support {
-            vertices: vec![1],
+            vertices: vec![VertexId(1)],
             fix: Fix::Clamped,
         });
         if contact {
@@ -198,8 +201,8 @@ fn diagonal_folded_flat_stops_at_the_thickness() {
                 assert_clear(&model, "diagonal");
             }
         }
-        let p1 = Vector3::from(model.vertex_position(1));
-        let p3 = Vector3::from(model.vertex_position(3));
+        let p1 = Vector3::from(model.vertex_position(VertexId(1)));
+        let p3 = Vector3::from(model.vertex_position(VertexId(3)));
         (model, max_angle, (p1 - p3).norm())
     };
     let (model, max_angle, gap) = run(true);
@@ -232,7 +235,7 @@ fn dropped_panel_comes_to_rest_at_the_thickness() {
     let b = 0.04;
     let mut scene = Scene::with_defaults("drop", two_squares(a, b));
     scene.supports.push(Support {
-        vertices: vec![0, 1, 2, 3],
+        vertices: vec![VertexId(0), VertexId(1), VertexId(2), VertexId(3)],
         fix: Fix::Clamped,
     });
     scene.gravity = Some([0.0, 0.0, -9.81]);
@@ -241,7 +244,11 @@ fn dropped_panel_comes_to_rest_at_the_thickness() {
     model.initialize().unwrap();
     // Over the middle of panel A, 5 mm up.
     model
-        .move_rigidly(&[4, 5, 6, 7], rot_y(0.0), [-2.0 * a + 0.03, 0.03, 5e-3])
+        .move_rigidly(
+            &[4, 5, 6, 7].map(VertexId),
+            rot_y(0.0),
+            [-2.0 * a + 0.03, 0.03, 5e-3],
+        )
         .unwrap();
     let mut peak: f64 = 0.0;
     let mut last = 0.0;
@@ -258,7 +265,7 @@ fn dropped_panel_comes_to_rest_at_the_thickness() {
     let gap = model.contact().unwrap().min_gap;
     assert!(gap > 0.0 && gap < c.width * c.thickness, "gap {gap:.3e}");
     for v in 4..8 {
-        let z = model.vertex_position(v)[2];
+        let z = model.vertex_position(VertexId(v))[2];
         assert!(
             z >= c.thickness && z <= 1.15 * c.thickness,
             "corner {v} rests at z = {z:.4e}, thickness {:.1e}",
@@ -283,7 +290,7 @@ fn panel_on_incline_sticks_or_slides_with_coulomb_friction() {
     let run = |mu: f64| {
         let mut scene = Scene::with_defaults("incline", two_squares(a, b));
         scene.supports.push(Support {
-            vertices: vec![0, 1, 2, 3],
+            vertices: vec![VertexId(0), VertexId(1), VertexId(2), VertexId(3)],
             fix: Fix::Clamped,
         });
         scene.gravity = Some([g * incline.sin(), 0.0, -g * incline.cos()]);
@@ -296,14 +303,21 @@ fn panel_on_incline_sticks_or_slides_with_coulomb_friction() {
         // Just inside the barrier, at x = 0.05.
         let z = c.thickness * (1.0 + 0.9 * c.width);
         model
-            .move_rigidly(&[4, 5, 6, 7], rot_y(0.0), [-2.0 * a + 0.05, 0.1, z])
+            .move_rigidly(
+                &[4, 5, 6, 7].map(VertexId),
+                rot_y(0.0),
+                [-2.0 * a + 0.05, 0.1, z],
+            )
             .unwrap();
         let mut samples = Vec::new();
         let dt = 0.01;
         for _ in 0..30 {
             model.advance(dt).unwrap();
             assert_clear(&model, "incline");
-            let x: f64 = (4..8).map(|v| model.vertex_position(v)[0]).sum::<f64>() / 4.0;
+            let x: f64 = (4..8)
+                .map(|v| model.vertex_position(VertexId(v))[0])
+                .sum::<f64>()
+                / 4.0;
             samples.push((model.time(), x));
         }
         (model, samples)
@@ -350,9 +364,11 @@ fn fit_acceleration(pts: &[(f64, f64)]) -> f64 {
 /// two facets intersect and the smallest gap is not negative.
 fn fold_flat(path: &str, t_fold: f64, t_end: f64) -> Model {
     let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
-    for e in scene.mesh.edges.iter_mut() {
-        if e.kind == origami_fmu::mesh::EdgeKind::Crease {
-            e.fold_target = PI * e.fold_target.signum();
+    for e in 0..scene.mesh.edges().len() {
+        let edge = &scene.mesh.edges()[e];
+        if edge.kind == origami_fmu::mesh::EdgeKind::Crease {
+            let target = PI * edge.fold_target.signum();
+            scene.mesh.set_fold_target(EdgeId(e), target).unwrap();
         }
     }
     contact_on(&mut scene, 0.3);
@@ -427,7 +443,7 @@ fn deployable_closes_its_energy_balance() {
         scene.solver.rho_inf = 1.0;
         scene.solver.tolerance = 1e-7;
         scene.supports.push(Support {
-            vertices: vec![1],
+            vertices: vec![VertexId(1)],
             fix: Fix::Clamped,
         });
         let mut c = contact_on(&mut scene, mu);

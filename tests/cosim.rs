@@ -10,6 +10,7 @@ use common::{crease_angle, input, two_panels};
 use nalgebra::Vector3;
 use origami_fmu::assembly::Assembler;
 use origami_fmu::element::ElementOptions;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::{Error, Model, physics};
 use origami_fmu::scene::{InputTiming, Integrator, Scene};
@@ -27,7 +28,7 @@ fn parameter(m: &Model, name: &str) -> usize {
 /// Positions of every FOLD vertex, flattened.
 fn positions(m: &Model) -> Vec<f64> {
     (0..m.scene().fold_vertex_count)
-        .flat_map(|v| m.vertex_position(v))
+        .flat_map(|v| m.vertex_position(VertexId(v)))
         .collect()
 }
 
@@ -142,7 +143,7 @@ fn a_free_sheet_falls_freely_under_the_default_damping() {
     }
     let want = 0.5 * 9.81 * 0.25;
     for v in 0..4 {
-        let z = m.vertex_position(v)[2];
+        let z = m.vertex_position(VertexId(v))[2];
         assert!(
             ((-z) - want).abs() < 1e-3 * want,
             "vertex {v} fell {} m, free fall {want} m",

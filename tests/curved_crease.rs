@@ -8,6 +8,7 @@
 //! stretching is not, so the folded sheet is nearly isometric).
 
 use origami_fmu::benchmarks::fold_by_ramp;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
 use origami_fmu::scene::patterns::CurvedCrease;
@@ -23,20 +24,20 @@ fn fold(scene: Scene) -> Model {
 
 /// Crease vertices in order along the crease (by y), and the fold angle at
 /// each crease edge in the same order (edge i joins vertices i and i + 1).
-fn crease_chain(m: &Model) -> (Vec<usize>, Vec<f64>) {
+fn crease_chain(m: &Model) -> (Vec<VertexId>, Vec<f64>) {
     let mesh = &m.scene().mesh;
-    let mut edges: Vec<(usize, [usize; 2])> = mesh
-        .edges
+    let mut edges: Vec<(usize, [VertexId; 2])> = mesh
+        .edges()
         .iter()
         .enumerate()
         .filter(|(_, e)| e.kind == EdgeKind::Crease)
         .map(|(i, e)| {
             let mut v = e.v;
-            v.sort_by(|a, b| mesh.coords[*a].y.total_cmp(&mesh.coords[*b].y));
+            v.sort_by(|&a, &b| mesh.coord(a).y.total_cmp(&mesh.coord(b).y));
             (i, v)
         })
         .collect();
-    edges.sort_by(|a, b| mesh.coords[a.1[0]].y.total_cmp(&mesh.coords[b.1[0]].y));
+    edges.sort_by(|a, b| mesh.coord(a.1[0]).y.total_cmp(&mesh.coord(b.1[0]).y));
     let mut verts = vec![edges[0].1[0]];
     verts.extend(edges.iter().map(|e| e.1[1]));
     let names: Vec<String> = m.outputs().iter().map(|v| v.name.clone()).collect();
@@ -83,8 +84,9 @@ fn shipped_curved_crease_scene_folds() {
     let k = origami_fmu::model::physics(&scene).crease_k_per_length;
     let mesh = scene.mesh.clone();
     let target = std::f64::consts::FRAC_PI_2;
-    let unfolded: f64 = (0..mesh.edges.len())
-        .filter(|&e| mesh.edges[e].kind == EdgeKind::Crease)
+    let unfolded: f64 = mesh
+        .edge_ids()
+        .filter(|&e| mesh.edge(e).kind == EdgeKind::Crease)
         .map(|e| 0.5 * k * mesh.edge_length(e) * target * target)
         .sum();
     let m = fold(scene);
@@ -180,7 +182,7 @@ fn curved_crease_vertices_share_one_tangent() {
     for &v in &verts[1..verts.len() - 1] {
         assert!(layout.curves.is_curved(v), "vertex {v}");
         assert_eq!(layout.vertex_slots(v).len(), 4, "vertex {v}");
-        let sectors = &layout.sectors[v];
+        let sectors = &layout.sectors[v.index()];
         assert_eq!(sectors.len(), 2, "vertex {v}");
         let slots = |s: &origami_fmu::dofs::Sector| s.terms.iter().map(|t| t.0).collect::<Vec<_>>();
         let (a, b) = (slots(&sectors[0]), slots(&sectors[1]));
@@ -209,27 +211,29 @@ fn both_sides_take_different_planes_at_every_crease_vertex() {
     let mut worst: f64 = 0.0;
     for &v in &verts {
         // The shared direction at v: the crease tangent of any crease edge.
-        let e = (0..mesh.edges.len())
-            .find(|&e| mesh.edges[e].kind == EdgeKind::Crease && mesh.edges[e].v.contains(&v))
+        let e = mesh
+            .edge_ids()
+            .find(|&e| mesh.edge(e).kind == EdgeKind::Crease && mesh.edge(e).v.contains(&v))
             .unwrap();
-        let w = if mesh.edges[e].v[0] == v {
-            mesh.edges[e].v[1]
+        let w = if mesh.edge(e).v[0] == v {
+            mesh.edge(e).v[1]
         } else {
-            mesh.edges[e].v[0]
+            mesh.edge(e).v[0]
         };
         let t = layout.curves.direction(&mesh, e, v, w);
         let rot =
             Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::new(t.x, t.y, 0.0)), fold);
         let mut written: Vec<(usize, Vector3<f64>)> = Vec::new();
-        for sec in &layout.sectors[v] {
+        for sec in &layout.sectors[v.index()] {
             // Side by the centroid of the sector's first facet (crease along y, bulging to +x).
             let f = sec.faces[0];
-            let c = mesh.triangles[f]
+            let c = mesh
+                .triangle(f)
                 .iter()
-                .map(|&x| mesh.coords[x])
+                .map(|&x| mesh.coord(x))
                 .sum::<nalgebra::Vector2<f64>>()
                 / 3.0;
-            let g = if c.x > mesh.coords[v].x {
+            let g = if c.x > mesh.coord(v).x {
                 rot.matrix() * identity
             } else {
                 identity

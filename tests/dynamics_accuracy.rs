@@ -18,6 +18,7 @@ mod common;
 
 use common::*;
 use nalgebra::{Matrix3x2, Vector3};
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid_with;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{Fix, Integrator, NewtonMode, Scene, Support};
@@ -186,9 +187,9 @@ fn cantilever_first_frequency() {
     let beta: f64 = 1.875104;
     for &integrator in INTEGRATORS {
         let mesh = grid_with(l, b, n, 1, &[], false);
-        let at = |x: f64| -> Vec<usize> {
-            (0..mesh.n_vertices())
-                .filter(|&v| mesh.coords[v].x == x)
+        let at = |x: f64| -> Vec<VertexId> {
+            mesh.vertex_ids()
+                .filter(|&v| mesh.coord(v).x == x)
                 .collect()
         };
         let (root, tips) = (at(0.0), at(l));

@@ -15,6 +15,7 @@ mod common;
 
 use common::*;
 use nalgebra::{Vector2, Vector3};
+use origami_fmu::ids::{VertexId, vertex_ids};
 use origami_fmu::mesh::{Edge, Mesh};
 use origami_fmu::model::Model;
 use origami_fmu::scene::{CreaseStiffness, Scene};
@@ -76,9 +77,9 @@ fn panel_error(m: &Model, w: f64, phi: f64) -> f64 {
     [2, 5]
         .iter()
         .map(|&v| {
-            let y = m.scene().mesh.coords[v].y;
+            let y = m.scene().mesh.coords()[v].y;
             let want = Vector3::new(w + w * phi.cos(), y, w * phi.sin());
-            (Vector3::from(m.vertex_position(v)) - want).norm() / w
+            (Vector3::from(m.vertex_position(VertexId(v))) - want).norm() / w
         })
         .fold(0.0, f64::max)
 }
@@ -282,10 +283,12 @@ fn near_degenerate_triangle() {
         [5, 4, 6],
         [4, 1, 6],
     ];
-    let mesh = Mesh::new(coords, tris, vec![Edge::crease(1, 4, target)]).unwrap();
+    let tris = tris.into_iter().map(vertex_ids).collect();
+    let crease = Edge::crease(VertexId(1), VertexId(4), target);
+    let mesh = Mesh::new(coords, tris, vec![crease]).unwrap();
     let (a, b) = (
-        mesh.coords[5] - mesh.coords[2],
-        mesh.coords[6] - mesh.coords[2],
+        mesh.coords()[5] - mesh.coords()[2],
+        mesh.coords()[6] - mesh.coords()[2],
     );
     let aspect = a.norm().powi(2) / (a.x * b.y - a.y * b.x).abs();
     assert!((aspect - 1e3).abs() < 1.0, "aspect ratio {aspect}");
@@ -408,7 +411,7 @@ fn rigid_spin_100_rad_per_s() {
             set_velocity(&mut m, |x, _| rigid_rotation(rate * axis, centre, x));
             let n = m.scene().mesh.n_vertices();
             let start: Vec<Vector3<f64>> = (0..n)
-                .map(|v| Vector3::from(m.vertex_position(v)))
+                .map(|v| Vector3::from(m.vertex_position(VertexId(v))))
                 .collect();
             let mut work = Work::default();
             let (mut strain, mut crease, mut gain, mut loss, mut last) =
@@ -425,7 +428,7 @@ fn rigid_spin_100_rad_per_s() {
                 last = rel;
             }
             let back = (0..n)
-                .map(|v| (Vector3::from(m.vertex_position(v)) - start[v]).norm() / r)
+                .map(|v| (Vector3::from(m.vertex_position(VertexId(v))) - start[v]).norm() / r)
                 .fold(0.0, f64::max);
             let bound = 10.0 * mt.density * rate * rate * r * r / mt.youngs_modulus;
             row(

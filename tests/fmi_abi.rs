@@ -5,6 +5,7 @@
 use origami_fmu::fmi::exports::*;
 use origami_fmu::fmi::resources::{SCENE_FILE, guid, scene_bytes};
 use origami_fmu::fmi::types::*;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::Model;
 use origami_fmu::scene::Scene;
@@ -61,7 +62,7 @@ fn scene() -> Scene {
     let mut s = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));
     s.vertex_forces.push(origami_fmu::scene::VertexInput {
         name: "tip".into(),
-        vertex: 2,
+        vertex: VertexId(2),
     });
     s
 }

@@ -5,6 +5,7 @@
 //! input without overshooting; folded states are refused with what to do.
 
 use origami_fmu::fmi;
+use origami_fmu::ids::FoldEdgeId;
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{self, FrameSelector, LoadOptions};
@@ -82,8 +83,11 @@ fn load_build_fold(name: &str) -> scene::Loaded {
     let out = m.output_values();
     assert!(out.iter().all(|x| x.is_finite()), "{name}");
     let mut moved = 0;
-    for (e, edge) in s.mesh.edges.iter().enumerate() {
-        if edge.kind != EdgeKind::Crease || edge.fold_target == 0.0 || edge.fold_edge != Some(e) {
+    for (e, edge) in s.mesh.edges().iter().enumerate() {
+        if edge.kind != EdgeKind::Crease
+            || edge.fold_target == 0.0
+            || edge.fold_edge != Some(FoldEdgeId(e))
+        {
             continue;
         }
         let a = out[output(&m, &format!("crease[{e}].angle"))];
@@ -98,7 +102,7 @@ fn load_build_fold(name: &str) -> scene::Loaded {
     }
     let targets = s
         .mesh
-        .edges
+        .edges()
         .iter()
         .filter(|e| e.kind == EdgeKind::Crease && e.fold_target != 0.0)
         .count();
@@ -116,7 +120,7 @@ fn load_build_fold(name: &str) -> scene::Loaded {
 fn real_crease_patterns_load_build_and_fold() {
     // Cube net, unitless; its frame_classes says foldedForm but it is flat.
     let l = load_build_fold("fold-spec/cube-cp.fold");
-    assert_eq!(l.scene.mesh.triangles.len(), 12);
+    assert_eq!(l.scene.mesh.triangles().len(), 12);
     assert!(
         l.notes[0].contains("1 file unit = 0.025 m"),
         "{:?}",
@@ -137,7 +141,7 @@ fn real_crease_patterns_load_build_and_fold() {
     // An Origami Simulator export (cm, pattern in the x-z plane): its F
     // edges are triangulation lines.
     let l = load_build_fold("origami_simulator_export.fold");
-    assert_eq!(l.scene.mesh.edges[10].kind, EdgeKind::Smooth);
+    assert_eq!(l.scene.mesh.edges()[10].kind, EdgeKind::Smooth);
     assert!(
         l.notes
             .iter()
@@ -185,7 +189,7 @@ fn folded_states_are_refused_with_what_to_do() {
         ..Default::default()
     };
     let (s, _) = scene::from_str_with(&text, &o).unwrap();
-    assert_eq!(s.mesh.triangles.len(), 2);
+    assert_eq!(s.mesh.triangles().len(), 2);
 }
 
 /// Origami Simulator's BoxPleatPyramid (the speed bench's large real
@@ -199,7 +203,7 @@ fn box_pleat_pyramid_loads_and_initializes() {
         &LoadOptions::default(),
     )
     .unwrap();
-    assert_eq!(l.scene.mesh.triangles.len(), 5202);
+    assert_eq!(l.scene.mesh.triangles().len(), 5202);
     assert!(
         l.notes.iter().any(|n| n.starts_with("size: 0.1 m x 0.1 m")),
         "{:?}",

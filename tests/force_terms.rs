@@ -8,6 +8,7 @@ use nalgebra::{Matrix3, Vector3};
 use origami_fmu::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, Physics, State};
 use origami_fmu::dofs::DofLayout;
 use origami_fmu::element::ElementOptions;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::scene::Material;
 use std::sync::Arc;
@@ -24,7 +25,10 @@ struct Spring {
 
 impl Spring {
     fn ends(&self, asm: &Assembler) -> (usize, usize) {
-        (asm.position_slot(self.a), asm.position_slot(self.b))
+        (
+            asm.position_slot(VertexId(self.a)),
+            asm.position_slot(VertexId(self.b)),
+        )
     }
 }
 
@@ -144,7 +148,10 @@ fn an_outside_term_adds_force_energy_matrix_and_hook() {
     assert!(energy > 0.0);
     // Force of the term = d(term energy)/dq, by central differences.
     let h = 1e-6;
-    let (sa, sb) = (asm.position_slot(a), asm.position_slot(b));
+    let (sa, sb) = (
+        asm.position_slot(VertexId(a)),
+        asm.position_slot(VertexId(b)),
+    );
     let mut plain_ev = Evaluation::default();
     let s0 = State {
         q: &q,

@@ -13,6 +13,7 @@
 use nalgebra::Vector2;
 use origami_fmu::contact::ContactSettings;
 use origami_fmu::fmi::{self, resources::scene_bytes};
+use origami_fmu::ids::{EdgeId, FoldEdgeId, VertexId, vertex_ids};
 use origami_fmu::mesh::{Edge, Mesh, builders};
 use origami_fmu::scene::{
     Actuator, ActuatorMode, CreaseStiffness, Fix, Scene, Support, VertexInput,
@@ -23,10 +24,10 @@ use std::path::Path;
 /// Tag every mesh edge with its own index as FOLD edge (the examples are
 /// built without a FOLD file), so creases get `crease[e].angle` outputs.
 fn tag_fold_edges(mut s: Scene) -> Scene {
-    for (e, edge) in s.mesh.edges.iter_mut().enumerate() {
-        edge.fold_edge = Some(e);
+    for e in s.mesh.edge_ids() {
+        s.mesh.set_fold_edge(e, Some(FoldEdgeId::of_mesh_edge(e)));
     }
-    s.fold_edge_count = s.mesh.edges.len();
+    s.fold_edge_count = s.mesh.edges().len();
     s
 }
 
@@ -49,13 +50,13 @@ fn strip() -> Scene {
     let mesh = builders::grid(0.2, 0.05, 4, 1, &[(2, PI / 2.0)]);
     let mut s = tag_fold_edges(Scene::with_defaults("strip", mesh));
     s.supports.push(Support {
-        vertices: vec![0, 5],
+        vertices: vec![VertexId(0), VertexId(5)],
         fix: Fix::Clamped,
     });
     s.gravity = Some([0.0, 0.0, -9.81]);
     s.vertex_forces.push(VertexInput {
         name: "tip".into(),
-        vertex: 4,
+        vertex: VertexId(4),
     });
     s.damping.crease = 1e-4;
     s
@@ -75,17 +76,17 @@ fn case_c() -> Scene {
     s.damping.crease = 3e-4;
     s.actuators = vec![Actuator {
         name: "torque".into(),
-        edges: vec![0],
+        edges: vec![EdgeId(0)],
         mode: ActuatorMode::Torque,
         start: 0.0,
     }];
     s.supports = vec![
         Support {
-            vertices: vec![1],
+            vertices: vec![VertexId(1)],
             fix: Fix::Clamped,
         },
         Support {
-            vertices: vec![0, 2],
+            vertices: vec![VertexId(0), VertexId(2)],
             fix: Fix::Position,
         },
     ];
@@ -135,11 +136,12 @@ fn miura() -> Scene {
     let straight = PI / 3.0;
     let zigzag = -2.0 * ((straight / 2.0).tan() / c_).atan();
     let edges = vec![
-        Edge::crease(4, 7, straight),
-        Edge::crease(4, 1, -straight),
-        Edge::crease(4, 5, zigzag),
-        Edge::crease(4, 3, zigzag),
+        Edge::crease(VertexId(4), VertexId(7), straight),
+        Edge::crease(VertexId(4), VertexId(1), -straight),
+        Edge::crease(VertexId(4), VertexId(5), zigzag),
+        Edge::crease(VertexId(4), VertexId(3), zigzag),
     ];
+    let tris = tris.into_iter().map(vertex_ids).collect();
     let mesh = Mesh::new(coords, tris, edges).expect("valid Miura vertex");
     let mut s = tag_fold_edges(Scene::with_defaults("miura", mesh));
     s.auto_damping = false;
@@ -160,7 +162,7 @@ fn diagonal_contact() -> Scene {
     ));
     s.material.thickness = 5e-4;
     s.supports.push(Support {
-        vertices: vec![1],
+        vertices: vec![VertexId(1)],
         fix: Fix::Clamped,
     });
     s.contact = Some(ContactSettings {

@@ -2,6 +2,7 @@
 //! folds to the target and settles there (BENCHMARKS.md case C: driving the
 //! rest angle quasi-statically must end at phi_0 with zero crease moment).
 
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{Fix, Scene, Support};
@@ -11,7 +12,7 @@ fn two_panels(target: f64) -> Scene {
     let mesh = grid(0.04, 0.02, 2, 1, &[(1, target)]);
     let mut scene = Scene::with_defaults("two_panels", mesh);
     scene.supports.push(Support {
-        vertices: vec![0, 3],
+        vertices: vec![VertexId(0), VertexId(3)],
         fix: Fix::Clamped,
     });
     scene

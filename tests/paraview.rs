@@ -4,6 +4,7 @@
 //! `energy.strain` output and its line angles equal the `crease[e].angle`
 //! outputs.
 
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::Model;
 use origami_fmu::paraview::{Frame, Series, pvd_text, vtu_text};
@@ -129,7 +130,7 @@ fn a_folding_series_has_every_time_and_consistent_fields() {
     let mesh = grid(0.04, 0.02, 2, 1, &[(1, std::f64::consts::FRAC_PI_2)]);
     let mut scene = Scene::with_defaults("two_panels", mesh);
     scene.supports.push(Support {
-        vertices: vec![0, 3],
+        vertices: vec![VertexId(0), VertexId(3)],
         fix: Fix::Clamped,
     });
     let scene = origami_fmu::scene::refine::refine(&scene, 1).unwrap();
@@ -195,7 +196,7 @@ fn a_folding_series_has_every_time_and_consistent_fields() {
     }
     let pts = array(&xml, "");
     for v in 0..n_vertices {
-        let p = m.vertex_position(v);
+        let p = m.vertex_position(VertexId(v));
         for c in 0..3 {
             assert!((pts[3 * v + c] - p[c]).abs() <= 1e-15 * (1.0 + p[c].abs()));
         }

@@ -20,6 +20,7 @@ use nalgebra::{Matrix3, Matrix3x2, Vector2, Vector3};
 use origami_fmu::assembly::{Assembler, MatrixCoeffs, State};
 use origami_fmu::benchmarks::{MeshFamily, plate_physics};
 use origami_fmu::element::{ElementOptions, Interpolation};
+use origami_fmu::ids::{FacetId, VertexId, vertex_ids};
 use origami_fmu::mesh::Mesh;
 
 /// A two-ring fan: centre, an inner ring of 7 vertices at irregular angles
@@ -43,9 +44,9 @@ fn fan() -> Mesh {
     for k in 0..n {
         let (i, j) = (1 + k, 1 + (k + 1) % n);
         let (o, p) = (1 + n + k, 1 + n + (k + 1) % n);
-        tris.push([0, i, j]);
-        tris.push([i, o, p]);
-        tris.push([i, p, j]);
+        tris.push(vertex_ids([0, i, j]));
+        tris.push(vertex_ids([i, o, p]));
+        tris.push(vertex_ids([i, p, j]));
     }
     Mesh::new(coords, tris, vec![]).expect("valid fan")
 }
@@ -93,8 +94,8 @@ fn residual_and_energy(mesh: &Mesh, interp: Interpolation, u: &[f64], h: f64) ->
         }
     }
     let energy = 0.5 * u.iter().zip(&ku).map(|(a, b)| a * b).sum::<f64>();
-    let interior = |v: usize| {
-        let x = mesh.coords[v];
+    let interior = |v: VertexId| {
+        let x = mesh.coord(v);
         let e = 1e-12;
         x.x > e && x.y > e && x.x < 1.0 - e && x.y < 1.0 - e
     };
@@ -125,7 +126,9 @@ fn plane_c(nu: f64) -> Matrix3<f64> {
 }
 
 fn area(mesh: &Mesh) -> f64 {
-    (0..mesh.triangles.len()).map(|t| mesh.area(t)).sum()
+    (0..mesh.triangles().len())
+        .map(|t| mesh.area(FacetId(t)))
+        .sum()
 }
 
 #[test]

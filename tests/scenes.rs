@@ -9,6 +9,7 @@
 //!   instead of comparing them.
 //! - `ORIGAMI_FUZZ_CASES=N` runs N fuzz cases (default 3000).
 
+use origami_fmu::ids::{EdgeId, FacetId};
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{self, patterns, refine};
@@ -89,7 +90,7 @@ fn shipped_scenes_load_cleanly_and_build_models() {
         let (s, warnings) = scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(warnings.is_empty(), "{name}: {warnings:?}");
         assert_eq!(s.name, name.trim_end_matches(".fold"));
-        assert!(s.mesh.edges.iter().any(|e| e.kind == EdgeKind::Crease));
+        assert!(s.mesh.edges().iter().any(|e| e.kind == EdgeKind::Crease));
         let text = origami_fmu::cli::check::summary(name, &s, &warnings).unwrap();
         assert!(text.contains("valid"), "{text}");
         let model = Model::new(s).unwrap();
@@ -104,7 +105,7 @@ fn shipped_scenes_load_cleanly_and_build_models() {
     }
     let (miura, _) = scene::load(dir.join("miura_4x4.fold")).unwrap();
     assert_eq!(miura.fold_vertex_count, 81);
-    assert_eq!(miura.mesh.triangles.len(), 128);
+    assert_eq!(miura.mesh.triangles().len(), 128);
 }
 
 #[test]
@@ -115,20 +116,20 @@ fn origami_simulator_export_loads() {
     assert_eq!(s.fold_vertex_count, 8);
     assert_eq!(s.fold_edge_count, 13);
     // Already triangulated: no new diagonals; the F edges are smooth.
-    assert_eq!(s.mesh.triangles.len(), 6);
-    assert_eq!(s.mesh.edges.len(), 13);
+    assert_eq!(s.mesh.triangles().len(), 6);
+    assert_eq!(s.mesh.edges().len(), 13);
     for e in 10..13 {
-        assert_eq!(s.mesh.edges[e].kind, EdgeKind::Smooth);
+        assert_eq!(s.mesh.edges()[e].kind, EdgeKind::Smooth);
     }
     // V at 90 degrees, M without its sign: -180; frame_unit cm.
-    assert_eq!(s.mesh.edges[8].kind, EdgeKind::Crease);
-    assert!((s.mesh.edges[8].fold_target - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
-    assert!((s.mesh.edges[9].fold_target + std::f64::consts::PI).abs() < 1e-15);
-    assert!((s.mesh.edge_length(0) - 0.1).abs() < 1e-15);
-    assert!((s.mesh.edge_length(2) - 0.1).abs() < 1e-15);
-    let area: f64 = (0..6).map(|t| s.mesh.area(t)).sum();
+    assert_eq!(s.mesh.edges()[8].kind, EdgeKind::Crease);
+    assert!((s.mesh.edges()[8].fold_target - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    assert!((s.mesh.edges()[9].fold_target + std::f64::consts::PI).abs() < 1e-15);
+    assert!((s.mesh.edge_length(EdgeId(0)) - 0.1).abs() < 1e-15);
+    assert!((s.mesh.edge_length(EdgeId(2)) - 0.1).abs() < 1e-15);
+    let area: f64 = (0..6).map(|t| s.mesh.area(FacetId(t))).sum();
     assert!((area - 0.03).abs() < 1e-15);
-    assert_eq!(s.actuators[0].edges, vec![8, 9]);
+    assert_eq!(s.actuators[0].edges, vec![EdgeId(8), EdgeId(9)]);
     let m = Model::new(s).unwrap();
     assert!(m.outputs().iter().any(|v| v.name == "crease[9].angle"));
 }
@@ -148,7 +149,7 @@ fn documented_example_loads() {
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_eq!(s.name, "hinge");
     assert!(!s.auto_damping);
-    assert_eq!(s.mesh.triangles.len(), 16); // refined once
+    assert_eq!(s.mesh.triangles().len(), 16); // refined once
     let m = Model::new(s).unwrap();
     let inputs: Vec<&str> = m.inputs().iter().map(|v| v.name.as_str()).collect();
     assert_eq!(inputs, ["fold", "tip.x", "tip.y", "tip.z"]);
@@ -223,7 +224,7 @@ fn cli_pattern_then_check() {
         .unwrap();
     assert!(out.status.success());
     let (s, _) = scene::from_str(&String::from_utf8_lossy(&out.stdout)).unwrap();
-    assert!(s.mesh.edges[..7].iter().any(|e| e.fold_target < 0.0));
+    assert!(s.mesh.edges()[..7].iter().any(|e| e.fold_target < 0.0));
     // bad parameter and bad scene: non-zero exit, message naming the key
     let out = bin()
         .args(["pattern", "miura", "--nx", "0"])
@@ -483,7 +484,7 @@ fn fuzz_bases() -> Vec<String> {
 /// What the reader and the code after it do with one input.
 fn exercise(text: &str) {
     if let Ok((s, _)) = scene::from_str(text) {
-        if s.mesh.triangles.len() <= 20_000 {
+        if s.mesh.triangles().len() <= 20_000 {
             let _ = refine::refine(&s, 1);
         }
         let _ = Model::new(s);

@@ -5,6 +5,7 @@
 use origami_fmu::assembly::{Assembler, Physics};
 use origami_fmu::benchmarks::RollUp;
 use origami_fmu::element::ElementOptions;
+use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::scene::Material;
 use origami_fmu::solver::statics::{self, Load, StaticSettings};
@@ -69,14 +70,14 @@ fn plate() -> (Assembler, Vec<f64>, Vec<f64>) {
     };
     let layout = origami_fmu::dofs::DofLayout::new(&mesh);
     let fixed: Vec<usize> = (0..mesh.n_vertices())
-        .filter(|&v| mesh.coords[v].x == 0.0)
-        .flat_map(|v| layout.vertex_slots(v))
+        .filter(|&v| mesh.coords()[v].x == 0.0)
+        .flat_map(|v| layout.vertex_slots(VertexId(v)))
         .collect();
     let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &fixed).unwrap();
     let q = asm.layout.reference_state(&mesh);
     let mut f = vec![0.0; q.len()];
     for v in 0..mesh.n_vertices() {
-        if mesh.coords[v].x == 1.0 {
+        if mesh.coords()[v].x == 1.0 {
             f[3 * asm.layout.position_slot[v] + 2] = 1e-3;
         }
     }

@@ -74,13 +74,8 @@ fn summary_with(
 ) -> Result<String, String> {
     use std::fmt::Write as _;
     let m = &scene.mesh;
-    let count = |k: EdgeKind| m.edges.iter().filter(|e| e.kind == k).count();
-    let creases: Vec<f64> = m
-        .edges
-        .iter()
-        .filter(|e| e.kind == EdgeKind::Crease)
-        .map(|e| e.fold_target)
-        .collect();
+    let count = |k: EdgeKind| m.edges().iter().filter(|e| e.kind == k).count();
+    let creases: Vec<f64> = m.creases().map(|e| e.fold_target).collect();
     let mountains = creases.iter().filter(|&&t| t < 0.0).count();
     let valleys = creases.iter().filter(|&&t| t > 0.0).count();
     let mut o = String::new();
@@ -104,7 +99,7 @@ fn summary_with(
         "  mesh:      {} vertices, {} facets (triangles); {} creases ({mountains} mountain, \
          {valleys} valley, {} zero targets), {} smooth and {} boundary edges",
         m.n_vertices(),
-        m.triangles.len(),
+        m.triangles().len(),
         creases.len(),
         creases.len() - mountains - valleys,
         count(EdgeKind::Smooth),

@@ -210,12 +210,7 @@ pub fn run(args: PatternArgs) -> Result<(), String> {
     let (scene, _) = crate::scene::from_fold(&file, None)
         .map_err(|e| format!("internal error: the generated pattern does not load: {e}"))?;
     let text = file.to_json();
-    let creases = scene
-        .mesh
-        .edges
-        .iter()
-        .filter(|e| e.kind == crate::mesh::EdgeKind::Crease)
-        .count();
+    let creases = scene.mesh.creases().count();
     let summary = format!(
         "{} vertices, {} edges ({creases} creases), {} faces",
         file.vertices_coords.len(),

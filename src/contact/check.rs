@@ -53,7 +53,7 @@ pub fn check(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize, search: f64) -> 
         ..Default::default()
     };
     for (f, g) in overlapping(&boxes, &boxes, true) {
-        let (tf, tg) = (mesh.triangles[f], mesh.triangles[g]);
+        let (tf, tg) = (mesh.triangles()[f], mesh.triangles()[g]);
         if tf.iter().any(|v| tg.contains(v)) {
             continue;
         }

@@ -14,6 +14,7 @@
 
 use crate::dofs::DofLayout;
 use crate::element::ShellElement;
+use crate::ids::VertexId;
 use crate::mesh::Mesh;
 use nalgebra::Vector3;
 use std::collections::HashMap;
@@ -54,8 +55,8 @@ pub struct ContactSurface {
 /// (lower vertex, upper vertex, steps from the lower), or inside a facet.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum Site {
-    Corner(usize),
-    Side(usize, usize, usize),
+    Corner(VertexId),
+    Side(VertexId, VertexId, usize),
     Inside(usize, usize, usize),
 }
 
@@ -69,8 +70,8 @@ impl ContactSurface {
         let mut maps: Vec<VertexMap> = Vec::new();
         let mut vertex_facets: Vec<Vec<usize>> = Vec::new();
         let mut fine_tris = Vec::new();
-        let mut facet_slots = Vec::with_capacity(mesh.triangles.len());
-        for (f, tri) in mesh.triangles.iter().enumerate() {
+        let mut facet_slots = Vec::with_capacity(mesh.triangles().len());
+        for (f, tri) in mesh.triangles().iter().enumerate() {
             let shape = elements[f].shape();
             let local = &layout.local[f];
             let mut slots: Vec<usize> = local
@@ -133,14 +134,15 @@ impl ContactSurface {
         for vf in vertex_facets.iter_mut() {
             vf.sort_unstable();
         }
-        let mut facet_vertices = vec![Vec::new(); mesh.triangles.len()];
+        let mut facet_vertices = vec![Vec::new(); mesh.triangles().len()];
         for (v, fs) in vertex_facets.iter().enumerate() {
             for &f in fs {
                 facet_vertices[f].push(v);
             }
         }
         let rest: Vec<Vector3<f64>> = maps.iter().map(|m| eval_map(m, &q_ref)).collect();
-        let corner: Vec<usize> = (0..mesh.n_vertices())
+        let corner: Vec<usize> = mesh
+            .vertex_ids()
             .map(|v| index.get(&Site::Corner(v)).copied().unwrap_or(usize::MAX))
             .collect();
         // Fine edges: each sub-triangle side once, with the facets it lies on.
@@ -161,28 +163,28 @@ impl ContactSurface {
             }
         }
         let coarse_edges = mesh
-            .edges
+            .edges()
             .iter()
-            .zip(&mesh.edge_faces)
+            .zip(mesh.edge_faces())
             .map(|(e, faces)| {
-                let mut fs = faces.clone();
+                let mut fs: Vec<usize> = faces.iter().map(|f| f.index()).collect();
                 fs.sort_unstable();
-                ([corner[e.v[0]], corner[e.v[1]]], fs)
+                ([corner[e.v[0].index()], corner[e.v[1].index()]], fs)
             })
             .collect();
         let mut vertex_faces = vec![Vec::new(); mesh.n_vertices()];
-        for (f, tri) in mesh.triangles.iter().enumerate() {
+        for (f, tri) in mesh.triangles().iter().enumerate() {
             for &v in tri {
-                vertex_faces[v].push(f);
+                vertex_faces[v.index()].push(f);
             }
         }
         let neighbours = mesh
-            .triangles
+            .triangles()
             .iter()
             .map(|tri| {
                 let mut nb: Vec<usize> = tri
                     .iter()
-                    .flat_map(|&v| vertex_faces[v].iter().copied())
+                    .flat_map(|&v| vertex_faces[v.index()].iter().copied())
                     .collect();
                 nb.sort_unstable();
                 nb.dedup();
@@ -228,8 +230,12 @@ impl ContactSurface {
 
     /// The corner triangle of facet `f` (contact vertices).
     pub fn coarse_tri(&self, mesh: &Mesh, f: usize) -> [usize; 3] {
-        let t = mesh.triangles[f];
-        [self.corner[t[0]], self.corner[t[1]], self.corner[t[2]]]
+        let t = mesh.triangles()[f];
+        [
+            self.corner[t[0].index()],
+            self.corner[t[1].index()],
+            self.corner[t[2].index()],
+        ]
     }
 }
 

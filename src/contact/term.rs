@@ -193,12 +193,10 @@ impl ContactTerm {
             return Err("contact needs a positive thickness".into());
         }
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
-        let nf = mesh.triangles.len().max(1);
+        let nf = mesh.triangles().len().max(1);
         let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
-        let edge = (0..mesh.edges.len())
-            .map(|e| mesh.edge_length(e))
-            .sum::<f64>()
-            / mesh.edges.len().max(1) as f64;
+        let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
+            / mesh.edges().len().max(1) as f64;
         let n = surf.n as f64;
         // The barrier must absorb impacts: kappa s_hat^2 is its energy scale.
         // D / l^2 (bending) leaves 1e-11 J against the 1e-6 J of a 4 cm
@@ -328,17 +326,19 @@ impl ContactTerm {
         for &(f, g) in &near_neighbours {
             for (a, b) in [(f, g), (g, f)] {
                 let tb = bx(&s.coarse_tri(&self.mesh, b));
-                for &v in &self.mesh.triangles[a] {
-                    if !self.mesh.triangles[b].contains(&v) && bx(&[s.corner[v]]).overlaps(&tb) {
-                        corner_pairs.push((v, b));
+                for &v in &self.mesh.triangles()[a] {
+                    if !self.mesh.triangles()[b].contains(&v)
+                        && bx(&[s.corner[v.index()]]).overlaps(&tb)
+                    {
+                        corner_pairs.push((v.index(), b));
                     }
                 }
             }
-            for &i in &self.mesh.face_edges[f] {
-                for &j in &self.mesh.face_edges[g] {
-                    let (ea, eb) = (s.coarse_edges[i].0, s.coarse_edges[j].0);
+            for &i in &self.mesh.face_edges()[f] {
+                for &j in &self.mesh.face_edges()[g] {
+                    let (ea, eb) = (s.coarse_edges[i.index()].0, s.coarse_edges[j.index()].0);
                     if i != j && !ea.iter().any(|v| eb.contains(v)) && bx(&ea).overlaps(&bx(&eb)) {
-                        edge_pairs.push((i.min(j), i.max(j)));
+                        edge_pairs.push((i.min(j).index(), i.max(j).index()));
                     }
                 }
             }

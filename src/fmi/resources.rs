@@ -75,8 +75,12 @@ pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
     // The derived Deserialize does not check the mesh: rebuild it through
     // the validating constructor (all edges listed, so nothing is added).
     let m = &scene.mesh;
-    scene.mesh = crate::mesh::Mesh::new(m.coords.clone(), m.triangles.clone(), m.edges.clone())
-        .map_err(|e| format!("mesh: {e}"))?;
+    scene.mesh = crate::mesh::Mesh::new(
+        m.coords().to_vec(),
+        m.triangles().to_vec(),
+        m.edges().to_vec(),
+    )
+    .map_err(|e| format!("mesh: {e}"))?;
     validate_scene(&scene)?;
     Ok(scene)
 }
@@ -90,7 +94,7 @@ fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), String> {
 /// validation until the FOLD reader lands.
 fn validate_scene(s: &Scene) -> Result<(), String> {
     let nv = s.mesh.n_vertices();
-    let ne = s.mesh.edges.len();
+    let ne = s.mesh.edges().len();
     check(!s.name.trim().is_empty(), || "name: empty".into())?;
     check(s.fold_vertex_count <= nv, || {
         format!(
@@ -98,9 +102,9 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             s.fold_vertex_count
         )
     })?;
-    for (e, edge) in s.mesh.edges.iter().enumerate() {
+    for (e, edge) in s.mesh.edges().iter().enumerate() {
         if let Some(f) = edge.fold_edge {
-            check(f < s.fold_edge_count, || {
+            check(f.index() < s.fold_edge_count, || {
                 format!(
                     "mesh edge {e}: fold_edge {f} >= fold_edge_count {}",
                     s.fold_edge_count
@@ -114,21 +118,20 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             format!("actuators[{i}].start: not a finite number")
         })?;
         for &e in &a.edges {
-            check(e < ne, || {
+            check(e.index() < ne, || {
                 format!(
                     "actuators[{i}] ({}): edge {e} out of range (mesh has {ne} edges)",
                     a.name
                 )
             })?;
-            check(
-                s.mesh.edges[e].kind == crate::mesh::EdgeKind::Crease,
-                || format!("actuators[{i}] ({}): edge {e} is not a crease", a.name),
-            )?;
+            check(s.mesh.edge(e).kind == crate::mesh::EdgeKind::Crease, || {
+                format!("actuators[{i}] ({}): edge {e} is not a crease", a.name)
+            })?;
         }
     }
     for (i, sup) in s.supports.iter().enumerate() {
         for &v in &sup.vertices {
-            check(v < nv, || {
+            check(v.index() < nv, || {
                 format!("supports[{i}]: vertex {v} out of range (mesh has {nv} vertices)")
             })?;
         }
@@ -138,7 +141,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
         ("vertex_motions", &s.vertex_motions),
     ] {
         for (i, vi) in list.iter().enumerate() {
-            check(vi.vertex < nv, || {
+            check(vi.vertex.index() < nv, || {
                 format!(
                     "{what}[{i}] ({}): vertex {} out of range (mesh has {nv} vertices)",
                     vi.name, vi.vertex

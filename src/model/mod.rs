@@ -125,7 +125,7 @@ pub struct Model {
 impl Model {
     /// Build a model of a validated scene.
     pub fn new(scene: Scene) -> Result<Model, Error> {
-        let facets = scene.mesh.triangles.len();
+        let facets = scene.mesh.triangles().len();
         if facets > crate::scene::build::MAX_FACETS {
             // Refused before the large allocations of the assembly.
             return Err(Error::Scene(

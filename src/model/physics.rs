@@ -37,8 +37,8 @@ pub fn physics(sc: &Scene) -> Physics {
 /// alpha / 2, so a fold settles within a few of its periods.
 fn auto_alpha(sc: &Scene, k_per_length: f64) -> f64 {
     let mesh = &sc.mesh;
-    let nt = mesh.triangles.len().max(1);
-    let mean_area: f64 = (0..mesh.triangles.len()).map(|t| mesh.area(t)).sum::<f64>() / nt as f64;
+    let nt = mesh.triangles().len().max(1);
+    let mean_area: f64 = mesh.facet_ids().map(|t| mesh.area(t)).sum::<f64>() / nt as f64;
     let w = (2.0 * mean_area).sqrt();
     let m = &sc.material;
     let omega = (3.0 * k_per_length / (m.density * m.thickness * w.powi(3))).sqrt();

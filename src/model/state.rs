@@ -5,6 +5,7 @@
 
 use super::{Error, Model, Phase};
 use crate::assembly::{Evaluation, State};
+use crate::ids::VertexId;
 use crate::solver::generalized_alpha::{self as ga, Dynamics};
 use serde::{Deserialize, Serialize};
 
@@ -177,7 +178,7 @@ impl Model {
     /// [`Model::initialize`]; supported and prescribed slots do not move.
     pub fn move_rigidly(
         &mut self,
-        vertices: &[usize],
+        vertices: &[VertexId],
         rotation: [[f64; 3]; 3],
         translation: [f64; 3],
     ) -> Result<(), Error> {
@@ -187,10 +188,10 @@ impl Model {
             ));
         }
         let nv = self.scene.mesh.n_vertices();
-        if let Some(&v) = vertices.iter().find(|&&v| v >= nv) {
+        if let Some(&v) = vertices.iter().find(|&&v| v.index() >= nv) {
             return Err(Error::BadValue {
                 name: "vertex".into(),
-                value: v as f64,
+                value: v.index() as f64,
                 reason: format!("the mesh has {nv} vertices"),
             });
         }
@@ -220,7 +221,7 @@ impl Model {
                 }
                 done[s] = true;
                 let x = nalgebra::Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
-                let y = if s == layout.position_slot[v] {
+                let y = if s == layout.position_slot[v.index()] {
                     r * x + t
                 } else {
                     r * x

@@ -6,6 +6,7 @@ use super::{Error, Model, fold_edges, physics};
 use crate::assembly::Assembler;
 use crate::contact::ContactTerm;
 use crate::element::ElementOptions;
+use crate::ids::FoldEdgeId;
 use crate::scene::{ActuatorMode, Fix, Integrator, SolverSettings};
 use crate::solver::SparseSolver;
 use crate::solver::central_difference::CentralDifference;
@@ -64,7 +65,7 @@ impl Model {
         for sup in &sc.supports {
             for &v in &sup.vertices {
                 let slots = match sup.fix {
-                    Fix::Position => vec![layout.position_slot[v]],
+                    Fix::Position => vec![layout.position_slot[v.index()]],
                     Fix::Clamped => layout.vertex_slots(v),
                 };
                 for s in slots {
@@ -82,7 +83,7 @@ impl Model {
         let mut motion = Vec::new();
         let mut idx = n_act + 3 * sc.vertex_forces.len();
         for m in &sc.vertex_motions {
-            let s = layout.position_slot[m.vertex];
+            let s = layout.position_slot[m.vertex.index()];
             if !is_fixed[s] {
                 is_fixed[s] = true;
                 fixed.push(s);
@@ -94,7 +95,7 @@ impl Model {
         }
         let mut force = Vec::new();
         for (k, f) in sc.vertex_forces.iter().enumerate() {
-            let s = layout.position_slot[f.vertex];
+            let s = layout.position_slot[f.vertex.index()];
             for c in 0..3 {
                 force.push((n_act + 3 * k + c, 3 * s + c));
             }
@@ -134,25 +135,25 @@ impl Model {
         let mut rest = vec![Vec::new(); nends];
         let mut torque = vec![Vec::new(); nends];
         // The actuators of each mesh edge, in actuator order.
-        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges.len()];
+        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges().len()];
         for (a, act) in sc.actuators.iter().enumerate() {
             for &e in &act.edges {
-                if driven_by[e].last() != Some(&a) {
-                    driven_by[e].push(a);
+                if driven_by[e.index()].last() != Some(&a) {
+                    driven_by[e.index()].push(a);
                 }
             }
         }
         for (i, ce) in asm.creases.iter().enumerate() {
-            for &a in &driven_by[ce.edge] {
+            for &a in &driven_by[ce.edge.index()] {
                 match sc.actuators[a].mode {
-                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edges[ce.edge].fold_target)),
+                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edge(ce.edge).fold_target)),
                     ActuatorMode::Torque => torque[i].push(a),
                 }
             }
         }
         let gravity = sc.gravity.map(|g| {
             let mut qg = vec![0.0; asm.n_dofs()];
-            for v in 0..mesh.n_vertices() {
+            for v in mesh.vertex_ids() {
                 let s = asm.position_slot(v);
                 qg[3 * s..3 * s + 3].copy_from_slice(&g);
             }
@@ -162,13 +163,14 @@ impl Model {
         });
         // For each crease output (FOLD edge), its crease ends in order.
         let outputs = fold_edges(sc);
-        let mut output_of: HashMap<usize, usize> = HashMap::with_capacity(outputs.len());
+        let mut output_of: HashMap<FoldEdgeId, usize> = HashMap::with_capacity(outputs.len());
         for (k, &fe) in outputs.iter().enumerate() {
             output_of.insert(fe, k);
         }
         let mut angle_ends: Vec<Vec<usize>> = vec![Vec::new(); outputs.len()];
         for (i, ce) in asm.creases.iter().enumerate() {
-            if let Some(&k) = mesh.edges[ce.edge]
+            if let Some(&k) = mesh
+                .edge(ce.edge)
                 .fold_edge
                 .and_then(|fe| output_of.get(&fe))
             {

@@ -4,6 +4,7 @@
 
 use super::{Error, Model, Phase};
 use crate::assembly::Evaluation;
+use crate::ids::{FoldEdgeId, VertexId};
 use crate::scene::{ActuatorMode, InputTiming, Scene};
 use serde::{Deserialize, Serialize};
 
@@ -56,7 +57,7 @@ pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
         }
     }
     for m in &scene.vertex_motions {
-        let x = scene.mesh.coords[m.vertex];
+        let x = scene.mesh.coord(m.vertex);
         for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
             v.push(spec(
                 format!("{}.{c}", m.name),
@@ -76,7 +77,7 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
     let o = scene.outputs;
     if o.positions {
         for i in 0..scene.fold_vertex_count {
-            let x = scene.mesh.coords[i];
+            let x = scene.mesh.coords()[i];
             for (c, start) in ["x", "y", "z"].iter().zip([x.x, x.y, 0.0]) {
                 v.push(spec(
                     format!("vertex[{i}].{c}"),
@@ -144,14 +145,8 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
 
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`
 /// outputs.
-pub fn fold_edges(scene: &Scene) -> Vec<usize> {
-    let mut es: Vec<usize> = scene
-        .mesh
-        .edges
-        .iter()
-        .filter(|e| e.kind == crate::mesh::EdgeKind::Crease)
-        .filter_map(|e| e.fold_edge)
-        .collect();
+pub fn fold_edges(scene: &Scene) -> Vec<FoldEdgeId> {
+    let mut es: Vec<FoldEdgeId> = scene.mesh.creases().filter_map(|e| e.fold_edge).collect();
     es.sort_unstable();
     es.dedup();
     es
@@ -265,7 +260,7 @@ impl Model {
         if o.positions {
             let n = 3 * self.scene.fold_vertex_count;
             if i < n {
-                return self.vertex_position(i / 3)[i % 3];
+                return self.vertex_position(VertexId(i / 3))[i % 3];
             }
             i -= n;
         }
@@ -337,7 +332,7 @@ impl Model {
     }
 
     /// Current position of mesh vertex `v`.
-    pub fn vertex_position(&self, v: usize) -> [f64; 3] {
+    pub fn vertex_position(&self, v: VertexId) -> [f64; 3] {
         match &self.sys {
             Some(sys) if self.state.phase == Phase::Running => {
                 let s = sys.asm.position_slot(v);
@@ -345,21 +340,21 @@ impl Model {
                 [q[3 * s], q[3 * s + 1], q[3 * s + 2]]
             }
             _ => {
-                let x = self.scene.mesh.coords[v];
+                let x = self.scene.mesh.coord(v);
                 [x.x, x.y, 0.0]
             }
         }
     }
 
     /// Strain energy (membrane + bending, J) of each mesh triangle now, in
-    /// the order of `scene().mesh.triangles`; zeros before initialization
+    /// the order of `scene().mesh.triangles()`; zeros before initialization
     /// (the flat reference state is stress-free).
     pub fn facet_strain_energies(&self) -> Vec<f64> {
         match &self.sys {
             Some(sys) if self.state.phase == Phase::Running => {
                 sys.asm.facet_strain_energies(&self.state.dynamics.q)
             }
-            _ => vec![0.0; self.scene.mesh.triangles.len()],
+            _ => vec![0.0; self.scene.mesh.triangles().len()],
         }
     }
 
@@ -368,7 +363,8 @@ impl Model {
         let mut out = Vec::with_capacity(self.outputs.len());
         let o = self.scene.outputs;
         if o.positions {
-            for v in 0..self.scene.fold_vertex_count {
+            // FOLD vertex i is mesh vertex i.
+            for v in (0..self.scene.fold_vertex_count).map(VertexId) {
                 out.extend(self.vertex_position(v));
             }
         }

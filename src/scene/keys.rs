@@ -29,6 +29,7 @@ use super::{
     Outputs, SolverSettings, VertexInput,
 };
 use crate::contact::ContactSettings;
+use crate::ids::VertexId;
 use serde_json::{Map, Value};
 
 /// Every `ancf:` key this version understands.
@@ -324,7 +325,7 @@ fn vertex_inputs(v: &Value, key: &str) -> Result<Vec<(VertexInput, String)>, Sce
         out.push((
             VertexInput {
                 name: name.to_string(),
-                vertex,
+                vertex: VertexId::of_fold_vertex(vertex),
             },
             k,
         ));
@@ -834,7 +835,7 @@ mod tests {
         assert_eq!(a[1].mode, ActuatorMode::RestAngle);
         assert_eq!(p.supports[0].fix, Fix::Clamped);
         assert_eq!(p.gravity, Some([0.0, 0.0, -9.81]));
-        assert_eq!(p.vertex_forces[0].0.vertex, 3);
+        assert_eq!(p.vertex_forces[0].0.vertex, VertexId(3));
         assert_eq!(p.vertex_motions[0].0.name, "grip");
         assert_eq!(p.solver.integrator, Integrator::CentralDifference);
         assert_eq!(p.solver.max_newton, 30);

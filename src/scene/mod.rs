@@ -16,7 +16,7 @@
 //! }"#;
 //! let (scene, warnings) = origami_fmu::scene::from_str(text).unwrap();
 //! assert_eq!(scene.fold_vertex_count, 6);
-//! assert_eq!(scene.mesh.triangles.len(), 4);
+//! assert_eq!(scene.mesh.triangles().len(), 4);
 //! assert_eq!(scene.actuators[0].name, "fold");
 //! // Every face side is listed, so nothing is guessed and nothing warned.
 //! assert!(warnings.is_empty());
@@ -39,6 +39,7 @@
 //! [`LoadOptions::size`], [`LoadOptions::unit`] and the `ancf:import` key
 //! change that (docs/scenes.md, "Size").
 
+use crate::ids::{EdgeId, VertexId};
 use crate::mesh::Mesh;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -249,7 +250,7 @@ pub struct Actuator {
     /// FMI variable name of the input.
     pub name: String,
     /// Mesh edge indices (creases) it drives.
-    pub edges: Vec<usize>,
+    pub edges: Vec<EdgeId>,
     /// Rest-angle or torque actuation.
     pub mode: ActuatorMode,
     /// Input value at t = 0.
@@ -269,7 +270,7 @@ pub enum Fix {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Support {
     /// Mesh vertex indices.
-    pub vertices: Vec<usize>,
+    pub vertices: Vec<VertexId>,
     /// What is fixed.
     pub fix: Fix,
 }
@@ -281,7 +282,7 @@ pub struct VertexInput {
     /// Variable name prefix.
     pub name: String,
     /// Mesh vertex index.
-    pub vertex: usize,
+    pub vertex: VertexId,
 }
 
 /// Time integrator choice.
@@ -495,16 +496,13 @@ impl Scene {
     pub fn with_defaults(name: &str, mut mesh: Mesh) -> Scene {
         // A mesh built in code has no FOLD file behind it: its edge indices
         // are the FOLD edge indices.
-        for (e, edge) in mesh.edges.iter_mut().enumerate() {
-            if edge.fold_edge.is_none() && edge.kind == crate::mesh::EdgeKind::Crease {
-                edge.fold_edge = Some(e);
-            }
-        }
-        let creases: Vec<usize> = (0..mesh.edges.len())
-            .filter(|&e| mesh.edges[e].kind == crate::mesh::EdgeKind::Crease)
+        mesh.tag_creases_as_fold_edges();
+        let creases: Vec<EdgeId> = mesh
+            .edge_ids()
+            .filter(|&e| mesh.edge(e).kind == crate::mesh::EdgeKind::Crease)
             .collect();
         let fold_vertex_count = mesh.n_vertices();
-        let fold_edge_count = mesh.edges.len();
+        let fold_edge_count = mesh.edges().len();
         Scene {
             name: name.to_string(),
             mesh,

@@ -10,23 +10,32 @@
 
 use super::Scene;
 use super::error::SceneError;
+use crate::ids::{EdgeId, VertexId};
 use crate::mesh::{Edge, EdgeKind, Mesh, MeshError};
 
 /// Most triangles a refinement may produce: the size budget
 /// [`super::build::MAX_FACETS`].
 pub const MAX_TRIANGLES: usize = super::build::MAX_FACETS;
 
+/// The two halves of mesh edge `e` after one level of refinement: new
+/// edges `2e` and `2e + 1` (from its first vertex to the midpoint, and on).
+pub fn halves(e: EdgeId) -> [EdgeId; 2] {
+    [EdgeId(2 * e.index()), EdgeId(2 * e.index() + 1)]
+}
+
 /// One level of refinement of a mesh; returns the new mesh (old edge `e`
-/// is new edges `2e`, `2e + 1`).
+/// is new edges [`halves`]`(e)`).
 pub fn refine_mesh(mesh: &Mesh) -> Result<Mesh, MeshError> {
     let nv = mesh.n_vertices();
-    let mut coords = mesh.coords.clone();
-    for e in &mesh.edges {
-        coords.push(0.5 * (mesh.coords[e.v[0]] + mesh.coords[e.v[1]]));
+    let mut coords = mesh.coords().to_vec();
+    for e in mesh.edges() {
+        coords.push(0.5 * (mesh.coord(e.v[0]) + mesh.coord(e.v[1])));
     }
-    let mid = |e: usize| nv + e;
-    let mut edges = Vec::with_capacity(2 * mesh.edges.len() + 3 * mesh.triangles.len());
-    for (e, old) in mesh.edges.iter().enumerate() {
+    // The midpoint of edge e: new vertex nv + e.
+    let mid = |e: EdgeId| VertexId(nv + e.index());
+    let mut edges = Vec::with_capacity(2 * mesh.edges().len() + 3 * mesh.triangles().len());
+    // Pushed in edge order, two per edge: edge e becomes halves(e).
+    for (e, old) in mesh.edge_ids().zip(mesh.edges()) {
         for half in [[old.v[0], mid(e)], [mid(e), old.v[1]]] {
             edges.push(Edge {
                 v: half,
@@ -36,9 +45,9 @@ pub fn refine_mesh(mesh: &Mesh) -> Result<Mesh, MeshError> {
             });
         }
     }
-    let mut triangles = Vec::with_capacity(4 * mesh.triangles.len());
-    for (t, &[a, b, c]) in mesh.triangles.iter().enumerate() {
-        let [eab, ebc, eca] = mesh.face_edges[t];
+    let mut triangles = Vec::with_capacity(4 * mesh.triangles().len());
+    for (t, &[a, b, c]) in mesh.facet_ids().zip(mesh.triangles()) {
+        let [eab, ebc, eca] = mesh.sides_of(t);
         let (mab, mbc, mca) = (mid(eab), mid(ebc), mid(eca));
         triangles.push([a, mab, mca]);
         triangles.push([mab, b, mbc]);
@@ -53,7 +62,7 @@ pub fn refine_mesh(mesh: &Mesh) -> Result<Mesh, MeshError> {
 
 /// `levels` levels of refinement of a scene (see the module docs).
 pub fn refine(scene: &Scene, levels: usize) -> Result<Scene, SceneError> {
-    let tris = scene.mesh.triangles.len();
+    let tris = scene.mesh.triangles().len();
     let grown = (0..levels).try_fold(tris, |n, _| {
         n.checked_mul(4).filter(|&m| m <= MAX_TRIANGLES)
     });
@@ -71,44 +80,41 @@ pub fn refine(scene: &Scene, levels: usize) -> Result<Scene, SceneError> {
         out.mesh = refine_mesh(&out.mesh)
             .map_err(|e| SceneError::invalid("ancf:refine", format!("refinement failed: {e}")))?;
         for a in &mut out.actuators {
-            a.edges = a.edges.iter().flat_map(|&e| [2 * e, 2 * e + 1]).collect();
+            a.edges = a.edges.iter().flat_map(|&e| halves(e)).collect();
         }
     }
-    debug_assert!(out.mesh.edges.iter().all(
-        |e| e.kind != EdgeKind::Crease || e.fold_edge.is_some_and(|f| f < out.fold_edge_count)
-    ));
+    debug_assert!(out.mesh.edges().iter().all(|e| e.kind != EdgeKind::Crease
+        || e.fold_edge.is_some_and(|f| f.index() < out.fold_edge_count)));
     Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ids::FoldEdgeId;
     use crate::mesh::builders::square_with_diagonal;
 
     #[test]
     fn square_refines_into_four_times_the_triangles() {
         let mut m = square_with_diagonal(1.0, true, 1.0);
-        m.edges[0].fold_edge = Some(0);
+        m.tag_creases_as_fold_edges();
+        assert_eq!(m.edges()[0].fold_edge, Some(FoldEdgeId(0)));
         let r = refine_mesh(&m).unwrap();
-        assert_eq!(r.triangles.len(), 8);
+        assert_eq!(r.triangles().len(), 8);
         assert_eq!(r.n_vertices(), 4 + 5);
-        let area: f64 = (0..r.triangles.len()).map(|t| r.area(t)).sum();
+        let area: f64 = r.facet_ids().map(|t| r.area(t)).sum();
         assert!((area - 1.0).abs() < 1e-14);
         // The crease 0-2 became two creases through the centre, same target and tag.
-        for e in [0, 1] {
-            assert_eq!(r.edges[e].kind, EdgeKind::Crease);
-            assert_eq!(r.edges[e].fold_target, 1.0);
-            assert_eq!(r.edges[e].fold_edge, Some(0));
+        for e in [EdgeId(0), EdgeId(1)] {
+            assert_eq!(r.edge(e).kind, EdgeKind::Crease);
+            assert_eq!(r.edge(e).fold_target, 1.0);
+            assert_eq!(r.edge(e).fold_edge, Some(FoldEdgeId(0)));
             assert!((r.edge_length(e) - 0.5 * 2f64.sqrt()).abs() < 1e-14);
         }
-        let creases = r
-            .edges
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .count();
+        let creases = r.creases().count();
         assert_eq!(creases, 2);
         let boundary = r
-            .edges
+            .edges()
             .iter()
             .filter(|e| e.kind == EdgeKind::Boundary)
             .count();

@@ -3,6 +3,7 @@
 
 use nalgebra::{Matrix3x2, Vector2, Vector3};
 use origami_fmu::dofs::DofLayout;
+use origami_fmu::ids::{FacetId, VertexId};
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::{CreaseStiffness, Fix, Integrator, Scene, Support};
@@ -18,7 +19,7 @@ pub fn two_panels(w: f64, target: f64, integrator: Integrator) -> Scene {
     let mesh = grid(2.0 * w, w, 2, 1, &[(1, target)]);
     let mut scene = Scene::with_defaults("two_panels", mesh);
     scene.supports.push(Support {
-        vertices: vec![0, 3],
+        vertices: vec![VertexId(0), VertexId(3)],
         fix: Fix::Clamped,
     });
     scene.solver.integrator = integrator;
@@ -110,7 +111,7 @@ impl Work {
 /// do not depend on the velocity. Outputs (energies) update at the next advance.
 pub fn set_velocity(
     model: &mut Model,
-    field: impl Fn(Vector2<f64>, &[usize]) -> (Vector3<f64>, Matrix3x2<f64>),
+    field: impl Fn(Vector2<f64>, &[FacetId]) -> (Vector3<f64>, Matrix3x2<f64>),
 ) {
     let scene = model.scene();
     let d = &scene.damping;
@@ -138,14 +139,14 @@ pub fn set_velocity(
         }
         old.copy_from_slice(x.as_slice());
     };
-    for vx in 0..mesh.n_vertices() {
-        let x = mesh.coords[vx];
-        let all: Vec<usize> = layout.sectors[vx]
+    for vx in mesh.vertex_ids() {
+        let x = mesh.coord(vx);
+        let all: Vec<FacetId> = layout.sectors[vx.index()]
             .iter()
             .flat_map(|s| s.faces.clone())
             .collect();
-        put(layout.position_slot[vx], field(x, &all).0);
-        for sec in &layout.sectors[vx] {
+        put(layout.position_slot[vx.index()], field(x, &all).0);
+        for sec in &layout.sectors[vx.index()] {
             let (_, grad) = field(x, &sec.faces);
             for &(slot, _) in &sec.terms {
                 let dir = Vector2::new(q_ref[3 * slot], q_ref[3 * slot + 1]);
@@ -177,14 +178,14 @@ pub fn rigid_rotation(
 pub fn hinge_velocity(model: &mut Model, w: f64, rate: f64) {
     let mesh = &model.scene().mesh;
     let free: Vec<bool> = mesh
-        .triangles
+        .triangles()
         .iter()
-        .map(|t| t.iter().map(|&v| mesh.coords[v].x).sum::<f64>() / 3.0 > w)
+        .map(|t| t.iter().map(|&v| mesh.coord(v).x).sum::<f64>() / 3.0 > w)
         .collect();
     let axis = Vector3::new(0.0, rate, 0.0);
     let centre = Vector3::new(w, 0.0, 0.0);
     set_velocity(model, |x, faces| {
-        if faces.iter().any(|&f| free[f]) {
+        if faces.iter().any(|&f| free[f.index()]) {
             rigid_rotation(axis, centre, x)
         } else {
             (Vector3::zeros(), Matrix3x2::zeros())

@@ -115,19 +115,13 @@ impl CurvedCrease {
 mod tests {
     use super::super::tests::round_trip;
     use super::*;
-    use crate::mesh::EdgeKind;
 
     #[test]
     fn arc_of_short_creases() {
         let cc = CurvedCrease::default();
         let f = cc.generate().unwrap();
         let s = round_trip(&f);
-        let creases: Vec<_> = s
-            .mesh
-            .edges
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .collect();
+        let creases: Vec<_> = s.mesh.creases().collect();
         assert_eq!(creases.len(), 16);
         // all crease vertices on the circle
         let w = cc.width;
@@ -135,7 +129,7 @@ mod tests {
         let centre = nalgebra::Vector2::new(0.5 * (w - sag) + sag - cc.radius, 0.5 * cc.length);
         for e in &creases {
             for v in e.v {
-                let d = (s.mesh.coords[v] - centre).norm();
+                let d = (s.mesh.coord(v) - centre).norm();
                 assert!((d - cc.radius).abs() < 1e-12, "{d}");
             }
         }

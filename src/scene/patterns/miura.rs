@@ -141,7 +141,6 @@ impl Miura {
 mod tests {
     use super::super::tests::{assert_closure, assert_isometric, round_trip};
     use super::*;
-    use crate::mesh::EdgeKind;
     use crate::scene::fold::Assignment;
 
     #[test]
@@ -151,7 +150,7 @@ mod tests {
         assert_isometric(&m.draft(), &m.folded(), 1e-15);
         let scene = round_trip(&f);
         assert_eq!(scene.fold_vertex_count, 81);
-        assert_eq!(scene.mesh.triangles.len(), 128);
+        assert_eq!(scene.mesh.triangles().len(), 128);
         assert_closure(&scene, 1e-12);
         // Zig-zag lines: whole lines of one kind, alternating line to line.
         let ev = f.edges_vertices.as_ref().unwrap();
@@ -178,12 +177,7 @@ mod tests {
                 assert_eq!(asg[e], *expect, "edge {e}");
             }
         }
-        let n_creases = scene
-            .mesh
-            .edges
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .count();
+        let n_creases = scene.mesh.creases().count();
         // interior edges of an 8 x 8 facet grid: 7*8 + 8*7
         assert_eq!(n_creases, 112);
     }

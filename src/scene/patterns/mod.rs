@@ -316,13 +316,13 @@ pub(crate) mod tests {
 
     pub fn assert_same_mesh(a: &Scene, b: &Scene) {
         let (m, n) = (&a.mesh, &b.mesh);
-        assert_eq!(m.triangles, n.triangles);
-        assert_eq!(m.coords.len(), n.coords.len());
-        for (p, q) in m.coords.iter().zip(&n.coords) {
+        assert_eq!(m.triangles(), n.triangles());
+        assert_eq!(m.coords().len(), n.coords().len());
+        for (p, q) in m.coords().iter().zip(n.coords()) {
             assert!((p - q).norm() <= 1e-15 * (1.0 + p.norm()), "{p} vs {q}");
         }
-        assert_eq!(m.edges.len(), n.edges.len());
-        for (e, f) in m.edges.iter().zip(&n.edges) {
+        assert_eq!(m.edges().len(), n.edges().len());
+        for (e, f) in m.edges().iter().zip(n.edges()) {
             assert_eq!((e.v, e.kind, e.fold_edge), (f.v, f.kind, f.fold_edge));
             assert!((e.fold_target - f.fold_target).abs() < 1e-14);
         }
@@ -349,16 +349,16 @@ pub(crate) mod tests {
     /// counter-clockwise order, by the target angles is the identity.
     pub fn assert_closure(scene: &Scene, tol: f64) {
         let m = &scene.mesh;
-        for v in 0..m.n_vertices() {
+        for v in m.vertex_ids() {
             let fan = m.fan(v).unwrap();
             if !fan.closed {
                 continue;
             }
             let mut r = Rotation3::identity();
             for &e in &fan.edges {
-                let edge = &m.edges[e];
+                let edge = m.edge(e);
                 let other = if edge.v[0] == v { edge.v[1] } else { edge.v[0] };
-                let d = m.coords[other] - m.coords[v];
+                let d = m.coord(other) - m.coord(v);
                 let axis = Unit::new_normalize(Vector3::new(d.x, d.y, 0.0));
                 let angle = if edge.kind == EdgeKind::Crease {
                     edge.fold_target
@@ -389,7 +389,11 @@ pub(crate) mod tests {
             let file = p.generate().unwrap_or_else(|e| panic!("{name}: {e}"));
             let scene = round_trip(&file);
             assert!(
-                scene.mesh.edges.iter().any(|e| e.kind == EdgeKind::Crease),
+                scene
+                    .mesh
+                    .edges()
+                    .iter()
+                    .any(|e| e.kind == EdgeKind::Crease),
                 "{name} has no creases"
             );
             crate::model::Model::new(scene).unwrap();

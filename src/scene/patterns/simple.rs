@@ -67,21 +67,15 @@ impl SingleCrease {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::EdgeKind;
     use crate::scene::fold::Assignment;
 
     #[test]
     fn one_crease_with_the_given_target() {
         let f = SingleCrease::default().generate().unwrap();
         let s = super::super::tests::round_trip(&f);
-        let creases: Vec<_> = s
-            .mesh
-            .edges
-            .iter()
-            .filter(|e| e.kind == EdgeKind::Crease)
-            .collect();
+        let creases: Vec<_> = s.mesh.creases().collect();
         assert_eq!(creases.len(), 1);
-        assert_eq!(creases[0].v, [1, 4]);
+        assert_eq!(creases[0].v, [1, 4].map(crate::ids::VertexId));
         assert!((creases[0].fold_target - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         let m = SingleCrease {
             angle: -45.0,

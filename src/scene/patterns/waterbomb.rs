@@ -250,14 +250,7 @@ mod tests {
             }
         }
         let s = round_trip(&WaterbombBase::default().generate().unwrap());
-        assert_eq!(
-            s.mesh
-                .edges
-                .iter()
-                .filter(|e| e.kind == EdgeKind::Crease)
-                .count(),
-            8
-        );
+        assert_eq!(s.mesh.creases().count(), 8);
     }
 
     #[test]
@@ -271,14 +264,14 @@ mod tests {
         // Flat-folded closure: rotations by +-pi multiply to the identity.
         assert_closure(&s, 1e-9);
         // every interior vertex has degree 6
-        for v in 0..s.mesh.n_vertices() {
+        for v in s.mesh.vertex_ids() {
             let fan = s.mesh.fan(v).unwrap();
             if fan.closed {
                 assert_eq!(fan.edges.len(), 6, "vertex {v}");
                 let c = fan
                     .edges
                     .iter()
-                    .filter(|&&e| s.mesh.edges[e].kind == EdgeKind::Crease)
+                    .filter(|&&e| s.mesh.edge(e).kind == EdgeKind::Crease)
                     .count();
                 assert_eq!(c, 6);
             }

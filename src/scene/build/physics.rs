@@ -1,0 +1,375 @@
+//! The `ancf:` physics (material, damping, actuators, supports, loads,
+//! solver, outputs) checked against the mesh and set on the scene.
+
+use super::edges::FoldEdges;
+use super::{invalid, vertex_exists};
+use crate::ids::{EdgeId, FoldEdgeId, VertexId};
+use crate::mesh::EdgeKind;
+use crate::scene::error::SceneError;
+use crate::scene::keys::{self, EdgeSelection};
+use crate::scene::{ActuatorMode, Damping, Scene, Support};
+use std::collections::HashMap;
+
+/// Material, damping, actuators, supports, loads, solver and outputs,
+/// checked against the mesh.
+pub(super) fn apply_physics(
+    scene: &mut Scene,
+    p: keys::PhysicsKeys,
+    edges: &FoldEdges,
+    copies: &[usize],
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let nv = scene.fold_vertex_count;
+    let ne = edges.v.len();
+    scene.material = p.material;
+    scene.crease = p.crease;
+    let (alpha, beta) = p.damping.unwrap_or((0.0, 0.0));
+    scene.damping = Damping {
+        alpha,
+        beta,
+        crease: p.crease_damping.unwrap_or(0.0),
+    };
+    scene.auto_damping = p.damping.is_none();
+    scene.gravity = p.gravity;
+    scene.contact = p.contact.map(|mut c| {
+        if c.thickness == 0.0 {
+            c.thickness = p.material.thickness;
+        }
+        c
+    });
+    scene.solver = p.solver;
+    scene.outputs = p.outputs;
+
+    let creases: Vec<usize> = (0..ne)
+        .filter(|&e| edges.kind[e] == EdgeKind::Crease)
+        .collect();
+    let zero = |list: &[usize]| list.iter().all(|&e| edges.target[e] == 0.0);
+    match p.actuators {
+        None => {
+            // with_defaults made `fold` over every mesh crease (= FOLD creases).
+            if creases.is_empty() {
+                warnings.push(
+                    "the pattern has no creases; the default actuator 'fold' drives nothing"
+                        .to_string(),
+                );
+            } else if zero(&creases) {
+                warnings.push(format!(
+                    "the default actuator 'fold' drives nothing: all {} creases have the target \
+                     0 (U or F edges without edges_foldAngle); give the creases M/V assignments \
+                     or edges_foldAngle, or drive them with a torque actuator (ancf:actuators)",
+                    creases.len()
+                ));
+            }
+        }
+        Some(list) => {
+            let mut rest_owner: HashMap<usize, (String, String)> = HashMap::new();
+            scene.actuators.clear();
+            for a in list {
+                let sel_key = format!("{}.edges", a.key);
+                let selected: Vec<usize> = match &a.edges {
+                    EdgeSelection::All => {
+                        if creases.is_empty() {
+                            warnings.push(format!(
+                                "{sel_key}: \"all\" selects nothing; the pattern has no creases"
+                            ));
+                        }
+                        creases.clone()
+                    }
+                    EdgeSelection::Assignment(x) => {
+                        let s: Vec<usize> = creases
+                            .iter()
+                            .copied()
+                            .filter(|&e| edges.assignment[e] == *x)
+                            .collect();
+                        if s.is_empty() {
+                            warnings.push(format!(
+                                "{sel_key}: no crease has assignment {}; the actuator drives nothing",
+                                x.letter()
+                            ));
+                        }
+                        s
+                    }
+                    EdgeSelection::List(l) => {
+                        let mut s = Vec::with_capacity(l.len());
+                        for (i, &e) in l.iter().enumerate() {
+                            let k = format!("{sel_key}[{i}]");
+                            if e >= ne {
+                                return Err(invalid(
+                                    k,
+                                    format!("FOLD edge {e} does not exist (there are {ne} edges)"),
+                                ));
+                            }
+                            if edges.kind[e] != EdgeKind::Crease {
+                                return Err(invalid(
+                                    k,
+                                    format!(
+                                        "FOLD edge {e} is not a crease (assignment {}{})",
+                                        edges.assignment[e].letter(),
+                                        if edges.kind[e] == EdgeKind::Boundary {
+                                            ", on the boundary"
+                                        } else {
+                                            ""
+                                        }
+                                    ),
+                                ));
+                            }
+                            if s.contains(&e) {
+                                return Err(invalid(k, format!("FOLD edge {e} is listed twice")));
+                            }
+                            s.push(e);
+                        }
+                        s
+                    }
+                };
+                if a.mode == ActuatorMode::RestAngle && !selected.is_empty() && zero(&selected) {
+                    warnings.push(format!(
+                        "{sel_key}: every crease the rest_angle actuator '{}' drives has the \
+                         target 0, so it drives nothing; give them edges_foldAngle, or use \
+                         \"mode\": \"torque\"",
+                        a.name
+                    ));
+                }
+                if a.mode == ActuatorMode::RestAngle {
+                    for &e in &selected {
+                        if let Some((name, key)) = rest_owner.get(&e) {
+                            return Err(invalid(
+                                sel_key,
+                                format!(
+                                    "FOLD edge {e} is already driven by the rest_angle actuator \
+                                     '{name}' ({key}); a crease can follow only one rest angle"
+                                ),
+                            ));
+                        }
+                        rest_owner.insert(e, (a.name.clone(), a.key.clone()));
+                    }
+                }
+                scene.actuators.push(crate::scene::Actuator {
+                    name: a.name,
+                    edges: selected
+                        .into_iter()
+                        .map(|e| EdgeId::of_fold_edge(FoldEdgeId(e)))
+                        .collect(),
+                    mode: a.mode,
+                    start: a.start,
+                });
+            }
+        }
+    }
+
+    let mut supported: HashMap<usize, String> = HashMap::new();
+    for s in p.supports {
+        for (i, &v) in s.vertices.iter().enumerate() {
+            let k = format!("{}.vertices[{i}]", s.key);
+            vertex_exists(v, nv, || k.clone())?;
+            if let Some(first) = supported.get(&v) {
+                return Err(invalid(
+                    k,
+                    format!("vertex {v} is already supported by {first}"),
+                ));
+            }
+            supported.insert(v, s.key.clone());
+        }
+        // A support on a split vertex holds all its copies.
+        let mut vertices: Vec<VertexId> = s
+            .vertices
+            .iter()
+            .map(|&v| VertexId::of_fold_vertex(v))
+            .collect();
+        if !copies.is_empty() {
+            let held: std::collections::HashSet<usize> = s.vertices.iter().copied().collect();
+            vertices.extend(
+                copies
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| held.contains(v))
+                    .map(|(j, _)| VertexId(nv + j)),
+            );
+        }
+        scene.supports.push(Support {
+            vertices,
+            fix: s.fix,
+        });
+    }
+
+    for (vi, key) in &p.vertex_forces {
+        let k = format!("{key}.vertex");
+        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
+        if let Some(s) = supported.get(&vi.vertex.index()) {
+            warnings.push(format!(
+                "{k}: vertex {} is fixed by {s}; the force '{}' acts on a support",
+                vi.vertex, vi.name
+            ));
+        }
+    }
+    let mut driven: HashMap<VertexId, String> = HashMap::new();
+    for (vi, key) in &p.vertex_motions {
+        let k = format!("{key}.vertex");
+        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
+        if let Some(s) = supported.get(&vi.vertex.index()) {
+            return Err(invalid(
+                k,
+                format!(
+                    "vertex {} is also fixed by {s}; a vertex cannot be both supported and driven",
+                    vi.vertex
+                ),
+            ));
+        }
+        if let Some(first) = driven.insert(vi.vertex, key.clone()) {
+            return Err(invalid(
+                k,
+                format!("vertex {} is already driven by {first}", vi.vertex),
+            ));
+        }
+    }
+    scene.vertex_forces = p.vertex_forces.into_iter().map(|x| x.0).collect();
+    scene.vertex_motions = p.vertex_motions.into_iter().map(|x| x.0).collect();
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::fixtures::{base, err, load, with};
+    use crate::ids::{EdgeId, VertexId};
+    use crate::scene::Fix;
+    use serde_json::json;
+
+    #[test]
+    fn physics_against_the_mesh() {
+        let v = with(
+            base(),
+            "ancf:actuators",
+            json!([{"name": "a", "edges": [7]}]),
+        );
+        let e = err(&v, "ancf:actuators[0].edges[0]");
+        assert!(e.contains("does not exist"), "{e}");
+        let v = with(
+            base(),
+            "ancf:actuators",
+            json!([{"name": "a", "edges": [0]}]),
+        );
+        let e = err(&v, "ancf:actuators[0].edges[0]");
+        assert!(e.contains("not a crease (assignment B"), "{e}");
+        let v = with(
+            base(),
+            "ancf:actuators",
+            json!([{"name": "a"}, {"name": "b", "edges": "V"}]),
+        );
+        let e = err(&v, "ancf:actuators[1].edges");
+        assert!(
+            e.contains("already driven by the rest_angle actuator 'a'"),
+            "{e}"
+        );
+        let v = with(
+            base(),
+            "ancf:actuators",
+            json!([{"name": "a"}, {"name": "t", "edges": [6], "mode": "torque"}]),
+        );
+        let (s, _) = load(&v).unwrap();
+        assert_eq!(s.actuators.len(), 2);
+        assert_eq!(s.actuators[1].edges, vec![EdgeId(6)]);
+        let v = with(
+            base(),
+            "ancf:actuators",
+            json!([{"name": "m", "edges": "M"}]),
+        );
+        let (s, w) = load(&v).unwrap();
+        assert!(s.actuators[0].edges.is_empty());
+        assert!(w[0].contains("no crease has assignment M"), "{w:?}");
+        let v = with(base(), "ancf:actuators", json!([]));
+        let (s, _) = load(&v).unwrap();
+        assert!(s.actuators.is_empty());
+
+        let v = with(base(), "ancf:supports", json!([{"vertices": [0, 6]}]));
+        let e = err(&v, "ancf:supports[0].vertices[1]");
+        assert!(e.contains("vertex 6 does not exist"), "{e}");
+        let v = with(
+            base(),
+            "ancf:supports",
+            json!([{"vertices": [0]}, {"vertices": [5, 0], "fix": "clamped"}]),
+        );
+        let e = err(&v, "ancf:supports[1].vertices[1]");
+        assert!(e.contains("already supported by ancf:supports[0]"), "{e}");
+        let v = with(
+            base(),
+            "ancf:supports",
+            json!([{"vertices": [0, 5], "fix": "clamped"}]),
+        );
+        let v = with(v, "ancf:motions", json!([{"name": "grip", "vertex": 5}]));
+        let e = err(&v, "ancf:motions[0].vertex");
+        assert!(e.contains("both supported and driven"), "{e}");
+        let v = with(
+            v,
+            "ancf:motions",
+            json!([{"name": "grip", "vertex": 3}, {"name": "g2", "vertex": 3}]),
+        );
+        err(&v, "ancf:motions[1].vertex");
+        let v = with(v, "ancf:motions", json!([{"name": "grip", "vertex": 3}]));
+        let v = with(
+            v,
+            "ancf:loads",
+            json!({"gravity": [0, 0, -9.81], "vertex_forces": [{"name": "push", "vertex": 0}]}),
+        );
+        let (s, w) = load(&v).unwrap();
+        assert!(w[0].contains("acts on a support"), "{w:?}");
+        assert_eq!(s.supports[0].fix, Fix::Clamped);
+        assert_eq!(s.vertex_motions[0].vertex, VertexId(3));
+        assert_eq!(s.vertex_forces[0].name, "push");
+        assert_eq!(s.gravity, Some([0.0, 0.0, -9.81]));
+        let m = crate::model::Model::new(s).unwrap();
+        let names: Vec<&str> = m.inputs().iter().map(|x| x.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "fold", "push.x", "push.y", "push.z", "grip.x", "grip.y", "grip.z"
+            ]
+        );
+        let v = with(
+            base(),
+            "ancf:loads",
+            json!({"vertex_forces": [{"name": "p", "vertex": 60}]}),
+        );
+        err(&v, "ancf:loads.vertex_forces[0].vertex");
+    }
+
+    #[test]
+    fn damping_and_material_keys() {
+        let v = with(base(), "ancf:damping", json!({"alpha": 2.0}));
+        let (s, _) = load(&v).unwrap();
+        assert!(!s.auto_damping);
+        assert_eq!((s.damping.alpha, s.damping.beta), (2.0, 0.0));
+        let v = with(
+            base(),
+            "ancf:crease",
+            json!({"length_scale": 0.02, "damping_per_length": 1e-4}),
+        );
+        let (s, _) = load(&v).unwrap();
+        assert!(s.auto_damping);
+        assert_eq!(s.damping.crease, 1e-4);
+        let e = err(
+            &with(base(), "ancf:material", json!({"thickness": -1})),
+            "ancf:material.thickness",
+        );
+        assert!(e.contains("positive"), "{e}");
+        let e = err(
+            &with(base(), "ancf:material", json!({"poisson_ratio": 0.7})),
+            "ancf:material.poisson_ratio",
+        );
+        assert!(e.contains("(-1, 0.5)"), "{e}");
+        err(
+            &with(base(), "ancf:material", json!({"youngs_modulus": 0})),
+            "ancf:material.youngs_modulus",
+        );
+        err(
+            &with(base(), "ancf:material", json!({"density": 0})),
+            "ancf:material.density",
+        );
+        let (_, w) = load(&with(base(), "ancf:material", json!({"thickness": 0.2}))).unwrap();
+        assert!(w[0].contains("thin-shell"), "{w:?}");
+        let e = err(&with(base(), "ancf:stiffness", json!({})), "ancf:stiffness");
+        assert!(e.contains("unknown key"), "{e}");
+        let (s, _) = load(&with(base(), "ancf:name", json!("pair"))).unwrap();
+        assert_eq!(s.name, "pair");
+        let (s, _) = load(&with(base(), "file_title", json!("titled"))).unwrap();
+        assert_eq!(s.name, "titled");
+    }
+}
