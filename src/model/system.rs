@@ -101,8 +101,11 @@ impl Model {
             }
         }
         let physics = physics(sc);
-        let mut asm = Assembler::new(mesh, physics, ElementOptions::default(), &fixed)
-            .map_err(Error::Scene)?;
+        let element = ElementOptions {
+            rule: sc.solver.quadrature,
+            ..ElementOptions::default()
+        };
+        let mut asm = Assembler::new(mesh, physics, element, &fixed).map_err(Error::Scene)?;
         if let Some(c) = &sc.contact {
             if sc.solver.integrator == Integrator::CentralDifference {
                 return Err(Error::Scene(

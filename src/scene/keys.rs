@@ -11,7 +11,7 @@
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
 //! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
-//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing}` |
+//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, quadrature}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
 //! | `ancf:import` | `{size, unit, f_edges}`: how the FOLD geometry is read |
@@ -29,6 +29,7 @@ use super::{
     Outputs, SolverSettings, VertexInput,
 };
 use crate::contact::ContactSettings;
+use crate::element::Rule;
 use crate::ids::VertexId;
 use serde_json::{Map, Value};
 
@@ -629,6 +630,7 @@ pub fn parse(
                 "stop_time",
                 "max_internal_steps",
                 "input_timing",
+                "quadrature",
             ],
         )?;
         let s = &mut p.solver;
@@ -682,6 +684,13 @@ pub fn parse(
         }
         if let Some(x) = o.num_limited("stop_time", "solver.stop_time")? {
             s.stop_time = x;
+        }
+        if let Some(name) = o.string("quadrature")? {
+            s.quadrature = enum_value(
+                &o.path("quadrature"),
+                name,
+                &[("12-point", Rule::Dunavant12), ("7-point", Rule::Dunavant7)],
+            )?;
         }
     }
 
@@ -816,7 +825,8 @@ mod tests {
             "ancf:motions": [{"name": "grip", "vertex": 2}],
             "ancf:contact": {"enabled": false, "friction": 0.3},
             "ancf:solver": {"integrator": "central-difference", "rho_inf": 0.5, "max_step": 1e-4,
-                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "newton": "full", "stop_time": 2},
+                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "newton": "full", "stop_time": 2,
+                            "quadrature": "7-point"},
             "ancf:outputs": ["positions", "energies"],
             "ancf:refine": 2,
             "ancf:import": {"size": 0.2, "f_edges": "smooth"}
@@ -840,6 +850,7 @@ mod tests {
         assert_eq!(p.solver.integrator, Integrator::CentralDifference);
         assert_eq!(p.solver.max_newton, 30);
         assert_eq!(p.solver.newton, NewtonMode::Full);
+        assert_eq!(p.solver.quadrature, Rule::Dunavant7);
         assert!(p.outputs.positions && !p.outputs.fold_angles && p.outputs.energies);
         assert_eq!(p.refine, 2);
         assert_eq!(p.import.size, Some(0.2));
@@ -933,6 +944,11 @@ mod tests {
         assert!(e.contains("larger than max_step"), "{e}");
         let e = err(r#"{"ancf:solver": {"max_newton": 0}}"#);
         assert!(e.starts_with("ancf:solver.max_newton:"), "{e}");
+        let e = err(r#"{"ancf:solver": {"quadrature": "6-point"}}"#);
+        assert!(
+            e.starts_with("ancf:solver.quadrature:") && e.contains("12-point, 7-point"),
+            "{e}"
+        );
         let e = err(r#"{"ancf:refine": 9}"#);
         assert!(e.contains("too many"), "{e}");
         let e = err(r#"{"ancf:refine": -1}"#);
