@@ -19,6 +19,7 @@ use crate::ids::{EdgeId, VertexId};
 use crate::material::Material;
 use crate::mesh::{EdgeKind, Mesh};
 use crate::rigid::RigidModes;
+use crate::solver::LowRank;
 use nalgebra::{SMatrix, Vector2, Vector3};
 
 /// Marker for "not a free scalar".
@@ -564,6 +565,30 @@ impl Assembler {
             return Err("internal forces are not finite".into());
         }
         Ok(())
+    }
+
+    /// The dense low-rank part of the iteration matrix at `q` (free DOFs):
+    /// what force terms add to `k df/dq + c df/dv` beyond the sparse values
+    /// [`Assembler::evaluate`] writes (mass damping's rigid-body
+    /// projection). The solver takes it with
+    /// [`crate::solver::SparseSolver::set_low_rank`].
+    pub fn matrix_low_rank(&self, q: &[f64], co: MatrixCoeffs) -> Option<LowRank> {
+        let n = self.n_dofs();
+        self.terms
+            .iter()
+            .filter_map(|t| t.low_rank(self, q, co))
+            .map(|lr| {
+                let mut u = vec![0.0; self.n_free * lr.rank()];
+                for (col, all) in u.chunks_mut(self.n_free).zip(lr.u.chunks(n)) {
+                    for (&fi, &x) in self.free.iter().zip(all) {
+                        if fi != FIXED {
+                            col[fi] = x;
+                        }
+                    }
+                }
+                LowRank { u, s: lr.s }
+            })
+            .reduce(LowRank::join)
     }
 
     /// The unwrapped angle of every crease end at `q` (each nearest its

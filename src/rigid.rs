@@ -106,26 +106,18 @@ impl RigidModes {
         self.allowed.as_ref().map(|a| a.ncols()).unwrap_or(6)
     }
 
-    /// The rigid part of the velocity `v` at positions `q`, M-orthogonally
-    /// projected, returned as its momentum `M P v` (3 scalars a slot) in
-    /// `out`; `mv` = M v and `mq` = M q. None when the sheet has no
-    /// well-defined rigid modes (degenerate geometry): then nothing is
-    /// projected.
-    pub fn rigid_momentum(&self, q: &[f64], mv: &[f64], mq: &[f64], out: &mut [f64]) -> Option<()> {
-        let n = self.is_position.len();
-        // R^T M v (translation, rotation), the Gram matrix from the total
-        // mass m, the first moment c and Q = sum_i (M q)_i q_i^T.
-        let (mut bt, mut br) = (Vector3::zeros(), Vector3::zeros());
+    /// The Gram matrix `G = R^T M R` of the six modes at positions `q`
+    /// (`mq` = M q), from the total mass, the first moment and
+    /// `Q = sum_i (M q)_i q_i^T`.
+    fn gram(&self, q: &[f64], mq: &[f64]) -> Matrix6<f64> {
         let mut m = 0.0;
         let mut c = Vector3::zeros();
         let mut qq = Matrix3::zeros();
-        for s in 0..n {
-            let (qs, mvs, mqs) = (v3(q, s), v3(mv, s), v3(mq, s));
+        for s in 0..self.is_position.len() {
+            let (qs, mqs) = (v3(q, s), v3(mq, s));
             if self.is_position[s] {
-                bt += mvs;
                 m += self.pos_mass[s];
             }
-            br += qs.cross(&mvs);
             c += self.pos_mass[s] * qs;
             qq += mqs * qs.transpose();
         }
@@ -137,6 +129,37 @@ impl RigidModes {
         g.fixed_view_mut::<3, 3>(0, 3).copy_from(&gtr);
         g.fixed_view_mut::<3, 3>(3, 0).copy_from(&gtr.transpose());
         g.fixed_view_mut::<3, 3>(3, 3).copy_from(&grr);
+        g
+    }
+
+    /// Column `k` of `M R` (the momentum of unit mode `k`: translations,
+    /// then rotations about the origin) at slot `s`.
+    fn mode_momentum(&self, k: usize, s: usize, mq: &[f64]) -> Vector3<f64> {
+        let e = Vector3::ith(k % 3, 1.0);
+        if k < 3 {
+            self.pos_mass[s] * e
+        } else {
+            e.cross(&v3(mq, s))
+        }
+    }
+
+    /// The rigid part of the velocity `v` at positions `q`, M-orthogonally
+    /// projected, returned as its momentum `M P v` (3 scalars a slot) in
+    /// `out`; `mv` = M v and `mq` = M q. None when the sheet has no
+    /// well-defined rigid modes (degenerate geometry): then nothing is
+    /// projected.
+    pub fn rigid_momentum(&self, q: &[f64], mv: &[f64], mq: &[f64], out: &mut [f64]) -> Option<()> {
+        let n = self.is_position.len();
+        // R^T M v (translation, rotation).
+        let (mut bt, mut br) = (Vector3::zeros(), Vector3::zeros());
+        for s in 0..n {
+            let (qs, mvs) = (v3(q, s), v3(mv, s));
+            if self.is_position[s] {
+                bt += mvs;
+            }
+            br += qs.cross(&mvs);
+        }
+        let g = self.gram(q, mq);
         let mut b = Vector6::zeros();
         b.fixed_rows_mut::<3>(0).copy_from(&bt);
         b.fixed_rows_mut::<3>(3).copy_from(&br);
@@ -157,6 +180,36 @@ impl RigidModes {
             out[3 * s..3 * s + 3].copy_from_slice(f.as_slice());
         }
         Some(())
+    }
+
+    /// The projection as a dense low-rank matrix: `M P = U G^-1 U^T` with
+    /// `U = M R N` (all scalars, column-major, one column per allowed mode)
+    /// and `G = N^T R^T M R N` (`N` the allowed combinations, the identity
+    /// for a free sheet), at positions `q` (`mq` = M q). None when no mode
+    /// is allowed or the modes are degenerate (as [`RigidModes::rigid_momentum`]
+    /// then projects nothing).
+    pub fn momentum_basis(&self, q: &[f64], mq: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
+        let n_slots = self.is_position.len();
+        let g = DMatrix::from_column_slice(6, 6, self.gram(q, mq).as_slice());
+        let comb = match &self.allowed {
+            None => DMatrix::identity(6, 6),
+            Some(n) if n.ncols() == 0 => return None,
+            Some(n) => n.clone(),
+        };
+        let r = comb.ncols();
+        let gs = comb.transpose() * &g * &comb;
+        // Degenerate modes: nothing is projected.
+        gs.clone().cholesky()?;
+        let mut u = vec![0.0; 3 * n_slots * r];
+        for s in 0..n_slots {
+            let cols: [Vector3<f64>; 6] = std::array::from_fn(|k| self.mode_momentum(k, s, mq));
+            for j in 0..r {
+                let f: Vector3<f64> = (0..6).map(|k| cols[k] * comb[(k, j)]).sum();
+                u[j * 3 * n_slots + 3 * s..j * 3 * n_slots + 3 * s + 3]
+                    .copy_from_slice(f.as_slice());
+            }
+        }
+        Some((u, gs))
     }
 
     /// The velocity of the rigid field (translation `t`, angular velocity

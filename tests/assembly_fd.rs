@@ -361,3 +361,105 @@ fn energy_angles_and_force_follow_rigid_motions() {
         "worst: energy {worst_e:.2e} of unit, force {worst_f:.2e} of max |f|, angle {worst_theta:.2e} rad"
     );
 }
+
+/// `c df/dv` of mass damping (it spares the rigid motion: `alpha M (v - P v)`)
+/// is the sparse `c alpha M` plus the dense low-rank `-c alpha M P`; together
+/// they match central differences of the force in the velocity, for a free
+/// sheet (six modes) and a sheet whose supports leave only rotations about
+/// one vertex (three).
+#[test]
+fn mass_damping_matrix_with_its_low_rank_part_matches_finite_differences() {
+    let (mut asm, mut q) = folded_miura();
+    perturb(&asm, &mut q);
+    asm.physics.alpha = 40.0;
+    check_damping(&asm, &q, 6);
+    // Pin vertex 0's position slot: translations are no longer rigid motions.
+    let s = asm.layout.position_slot[0];
+    let supported = [3 * s, 3 * s + 1, 3 * s + 2];
+    let length = 0.04;
+    asm.rigid.set_supports(&supported, &q, length);
+    check_damping(&asm, &q, 3);
+}
+
+fn check_damping(asm: &Assembler, q: &[f64], rank: usize) {
+    let n = q.len();
+    let mut rng = Rng(777);
+    let v: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let w: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let nc = asm.creases.len();
+    let theta0 = vec![PI; nc];
+    let moment = vec![0.0; nc];
+    let theta_prev = {
+        let mut t = Vec::new();
+        asm.crease_angles(q, &vec![PI; nc], &mut t).unwrap();
+        t
+    };
+    let co = MatrixCoeffs {
+        k: 0.0,
+        m: 0.0,
+        c: 1.0,
+    };
+    let force = |v: &[f64], m: Option<&mut Vec<f64>>| {
+        let st = State {
+            q,
+            v,
+            theta0: &theta0,
+            moment: &moment,
+            theta_prev: &theta_prev,
+        };
+        let mut out = Evaluation::default();
+        asm.evaluate(&st, &mut out, m.map(|m| (m.as_mut_slice(), co)))
+            .unwrap();
+        out.force
+    };
+    let mut c = vec![0.0; asm.nnz()];
+    force(&v, Some(&mut c));
+    let lr = asm.matrix_low_rank(q, co).expect("a low-rank part");
+    assert_eq!(lr.rank(), rank);
+    // The matrix times w (free DOFs): sparse part, then -U S^-1 U^T w.
+    let nf = asm.n_free;
+    let wf: Vec<f64> = (0..nf)
+        .map(|f| w[asm.free.iter().position(|&x| x == f).unwrap()])
+        .collect();
+    let mut cw = vec![0.0; nf];
+    for (j, wj) in wf.iter().enumerate() {
+        for p in asm.col_ptr[j]..asm.col_ptr[j + 1] {
+            cw[asm.row_idx[p]] += c[p] * wj;
+        }
+    }
+    let u = nalgebra::DMatrix::from_column_slice(nf, rank, &lr.u);
+    let y =
+        lr.s.clone()
+            .lu()
+            .solve(&(u.transpose() * nalgebra::DVector::from_column_slice(&wf)))
+            .unwrap();
+    let low = &u * y;
+    for i in 0..nf {
+        cw[i] -= low[i];
+    }
+    // Central differences in v along w (fixed DOFs of w count too: the
+    // force's dependence on them is not in the free-DOF matrix, so keep
+    // them at zero).
+    let wv: Vec<f64> = (0..n)
+        .map(|i| if asm.free[i] == usize::MAX { 0.0 } else { w[i] })
+        .collect();
+    let eps = 1e-3;
+    let vp: Vec<f64> = v.iter().zip(&wv).map(|(a, b)| a + eps * b).collect();
+    let vm: Vec<f64> = v.iter().zip(&wv).map(|(a, b)| a - eps * b).collect();
+    let (fp, fm) = (force(&vp, None), force(&vm, None));
+    let scale = cw.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let mut worst: f64 = 0.0;
+    let mut low_size: f64 = 0.0;
+    for i in 0..n {
+        let f = asm.free[i];
+        if f == usize::MAX {
+            continue;
+        }
+        let fd = (fp[i] - fm[i]) / (2.0 * eps);
+        worst = worst.max((fd - cw[f]).abs() / scale);
+        low_size = low_size.max(low[f].abs() / scale);
+    }
+    assert!(worst < 1e-8, "damping matrix error {worst}");
+    // The low-rank part is no round-off correction.
+    assert!(low_size > 1e-2, "low-rank part only {low_size}");
+}

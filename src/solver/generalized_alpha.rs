@@ -200,6 +200,22 @@ fn matrix_coeffs(co: Coefficients, h: f64) -> MatrixCoeffs {
     }
 }
 
+/// Factor the iteration matrix formed at `q` (its sparse values in
+/// `matrix`) with the dense low-rank part the force terms add to it.
+fn factor_iteration_matrix(
+    asm: &Assembler,
+    solver: &mut SparseSolver,
+    matrix: &[f64],
+    q: &[f64],
+    co: MatrixCoeffs,
+) -> Result<(), String> {
+    solver.factor(matrix)?;
+    if let Some(lr) = asm.matrix_low_rank(q, co) {
+        solver.set_low_rank(lr)?;
+    }
+    Ok(())
+}
+
 /// Make the solver hold the iteration matrix formed at `point` (None: no
 /// matrix, the next step forms one). Nothing to do when it already does;
 /// otherwise the matrix is assembled at `point` and factored, which gives
@@ -237,7 +253,7 @@ pub fn restore_jacobian(
         &mut scratch,
         Some((&mut ws.matrix[..], matrix_coeffs(co, p.h))),
     )?;
-    solver.factor(&ws.matrix)?;
+    factor_iteration_matrix(asm, solver, &ws.matrix, &p.q, matrix_coeffs(co, p.h))?;
     ws.jacobian = Some(p.clone());
     Ok(())
 }
@@ -411,7 +427,7 @@ pub fn step(
         if refresh {
             // Record where the matrix is formed (buffers reused).
             let mut jp = ws.jacobian.take().unwrap_or_default();
-            solver.factor(&ws.matrix)?;
+            factor_iteration_matrix(asm, solver, &ws.matrix, &next.q, coeffs)?;
             jp.h = h;
             jp.q.clone_from(&next.q);
             jp.v.clone_from(&next.v);

@@ -17,7 +17,51 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
+use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
+
+/// A dense low-rank part of a matrix that its sparse pattern cannot hold:
+/// the matrix is `A - U S^-1 U^T`, `A` sparse, `U` (n x rank, column-major)
+/// and the small symmetric `S` (rank x rank) dense. Mass damping's
+/// rigid-body projection is one (its `U` couples every DOF).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LowRank {
+    /// `U`, column-major, `n * rank` values.
+    pub u: Vec<f64>,
+    /// `S`, invertible.
+    pub s: DMatrix<f64>,
+}
+
+impl LowRank {
+    /// Number of columns of `U`.
+    pub fn rank(&self) -> usize {
+        self.s.nrows()
+    }
+
+    /// Both parts side by side: `[U1 U2]` with the block-diagonal inner
+    /// matrix (the sum of the two low-rank parts).
+    pub fn join(self, other: LowRank) -> LowRank {
+        let (r1, r2) = (self.rank(), other.rank());
+        let mut s = DMatrix::zeros(r1 + r2, r1 + r2);
+        s.view_mut((0, 0), (r1, r1)).copy_from(&self.s);
+        s.view_mut((r1, r1), (r2, r2)).copy_from(&other.s);
+        let mut u = self.u;
+        u.extend(other.u);
+        LowRank { u, s }
+    }
+}
+
+/// Largest rank of a low-rank part solved in one blocked solve (the six
+/// rigid-body modes); higher ranks are solved a column at a time.
+const LOW_RANK_MAX: usize = 6;
+
+/// The Woodbury form of a factored `A - U S^-1 U^T`:
+/// `x = A^-1 b + Z (S - U^T Z)^-1 U^T A^-1 b` with `Z = A^-1 U`.
+struct Woodbury {
+    u: Vec<f64>,
+    z: Vec<f64>,
+    capacitance: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+}
 
 /// Which factorization the last [`SparseSolver::factor`] produced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -119,6 +163,8 @@ pub struct SparseSolver {
     work: Vec<f64>,
     residual: Vec<f64>,
     stats: SolverStats,
+    /// The low-rank part of the matrix in force, if any.
+    low_rank: Option<Woodbury>,
 }
 
 impl SparseSolver {
@@ -163,7 +209,7 @@ impl SparseSolver {
         let mem = MemBuffer::new(StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+            symbolic.solve_in_place_scratch::<f64>(LOW_RANK_MAX, Par::Seq),
         ]));
         Ok(SparseSolver {
             l_values: vec![0.0; symbolic.len_val()],
@@ -177,6 +223,7 @@ impl SparseSolver {
             work: vec![0.0; n],
             residual: vec![0.0; n],
             stats: SolverStats::default(),
+            low_rank: None,
         })
     }
 
@@ -206,12 +253,77 @@ impl SparseSolver {
         self.stats = from;
     }
 
-    /// Factor the matrix with these values (in pattern order).
+    /// Factor the matrix with these values (in pattern order). Any
+    /// low-rank part of the previous matrix is dropped.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), String> {
         let start = Instant::now();
+        self.low_rank = None;
         let r = self.factor_inner(values);
         self.stats.factor_time += start.elapsed();
         r
+    }
+
+    /// Make the factored matrix `A` into `A - U S^-1 U^T` for the solves
+    /// that follow (until the next [`SparseSolver::factor`]): `rank` more
+    /// solves now, and per solve two products with `U` and `A^-1 U` and a
+    /// `rank x rank` solve. Errors if nothing is factored, `U` has the
+    /// wrong size, or the sum is singular.
+    pub fn set_low_rank(&mut self, lr: LowRank) -> Result<(), String> {
+        let start = Instant::now();
+        let r = self.set_low_rank_inner(lr);
+        self.stats.factor_time += start.elapsed();
+        r
+    }
+
+    fn set_low_rank_inner(&mut self, lr: LowRank) -> Result<(), String> {
+        self.low_rank = None;
+        let n = self.pattern.nrows();
+        let rank = lr.rank();
+        if lr.u.len() != n * rank || lr.s.ncols() != rank {
+            return Err(format!(
+                "low-rank part: U has {} values for {n} unknowns and rank {rank}",
+                lr.u.len()
+            ));
+        }
+        if rank == 0 {
+            return Ok(());
+        }
+        let mut z = lr.u.clone();
+        if self.kind == Some(FactorKind::Llt) && rank <= LOW_RANK_MAX {
+            // All columns in one blocked solve.
+            let f = LltRef::new(&self.symbolic, &self.l_values);
+            let x = MatMut::from_column_major_slice_mut(&mut z, n, rank);
+            f.solve_in_place_with_conj(Conj::No, x, Par::Seq, MemStack::new(&mut self.mem));
+            if z.iter().any(|v| !v.is_finite()) {
+                return Err("linear solve produced non-finite values".into());
+            }
+        } else {
+            for col in z.chunks_mut(n) {
+                self.solve_inner(col)?;
+            }
+        }
+        // The capacitance matrix S - U^T A^-1 U (symmetrised: both factors
+        // of U^T Z are the same up to round-off).
+        let mut c = lr.s;
+        for i in 0..rank {
+            for j in 0..rank {
+                let ui = &lr.u[i * n..(i + 1) * n];
+                let zj = &z[j * n..(j + 1) * n];
+                let uz: f64 = ui.iter().zip(zj).map(|(a, b)| a * b).sum();
+                c[(i, j)] -= uz;
+            }
+        }
+        let c = (&c + c.transpose()) * 0.5;
+        let capacitance = c.lu();
+        if !capacitance.is_invertible() {
+            return Err("low-rank part makes the matrix singular".into());
+        }
+        self.low_rank = Some(Woodbury {
+            u: lr.u,
+            z,
+            capacitance,
+        });
+        Ok(())
     }
 
     fn factor_inner(&mut self, values: &[f64]) -> Result<(), String> {
@@ -280,7 +392,9 @@ impl SparseSolver {
     /// solution. Errors if nothing is factored or the result is not finite.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), String> {
         let start = Instant::now();
-        let r = self.solve_inner(rhs);
+        let r = self
+            .solve_inner(rhs)
+            .and_then(|()| self.apply_low_rank(rhs));
         self.stats.solves += 1;
         self.stats.solve_time += start.elapsed();
         r
@@ -318,6 +432,37 @@ impl SparseSolver {
             }
         }
         if rhs.iter().any(|v| !v.is_finite()) {
+            return Err("linear solve produced non-finite values".into());
+        }
+        Ok(())
+    }
+
+    /// `x += Z C^-1 U^T x` (with `x = A^-1 b` on entry): the solution with
+    /// the low-rank part in force, if any.
+    fn apply_low_rank(&self, x: &mut [f64]) -> Result<(), String> {
+        let Some(w) = &self.low_rank else {
+            return Ok(());
+        };
+        let n = x.len();
+        let rank = w.capacitance.l().nrows();
+        let ux = DMatrix::from_fn(rank, 1, |i, _| {
+            w.u[i * n..(i + 1) * n]
+                .iter()
+                .zip(x.iter())
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+        });
+        let y = w
+            .capacitance
+            .solve(&ux)
+            .ok_or("low-rank part makes the matrix singular")?;
+        for (j, zj) in w.z.chunks(n).enumerate() {
+            let yj = y[j];
+            for (xi, zi) in x.iter_mut().zip(zj) {
+                *xi += yj * zi;
+            }
+        }
+        if x.iter().any(|v| !v.is_finite()) {
             return Err("linear solve produced non-finite values".into());
         }
         Ok(())
@@ -407,5 +552,54 @@ mod tests {
         assert_eq!(s.kind(), Some(FactorKind::Lu));
         let stats = s.stats();
         assert_eq!((stats.llt, stats.lu), (0, 1));
+    }
+
+    /// `A - U S^-1 U^T` with a dense rank-2 part, against the dense
+    /// matrix; a new factorization drops the part.
+    #[test]
+    fn low_rank_part_is_solved_exactly() {
+        let n: usize = 6;
+        let (col_ptr, rows) = tridiagonal(n);
+        let mut s = SparseSolver::new(n, col_ptr.clone(), rows.clone()).unwrap();
+        let mut vals = Vec::new();
+        let mut dense = DMatrix::<f64>::zeros(n, n);
+        for j in 0..n {
+            for i in j.saturating_sub(1)..(j + 2).min(n) {
+                let v = if i == j { 4.0 } else { -1.0 };
+                vals.push(v);
+                dense[(i, j)] = v;
+            }
+        }
+        let u: Vec<f64> = (0..2 * n)
+            .map(|k| ((k * 7 % 5) as f64 - 2.0) * 0.3)
+            .collect();
+        let small = DMatrix::from_row_slice(2, 2, &[3.0, 0.5, 0.5, 2.0]);
+        let um = DMatrix::from_column_slice(n, 2, &u);
+        let full = &dense - &um * small.clone().try_inverse().unwrap() * um.transpose();
+        let x_true: Vec<f64> = (0..n).map(|i| (i as f64 - 2.5) * 0.7).collect();
+        let xt = DMatrix::from_column_slice(n, 1, &x_true);
+        let b = &full * &xt;
+        s.factor(&vals).unwrap();
+        s.set_low_rank(LowRank { u, s: small }).unwrap();
+        let mut x = b.as_slice().to_vec();
+        s.solve_in_place(&mut x).unwrap();
+        for i in 0..n {
+            assert!(
+                (x[i] - x_true[i]).abs() < 1e-12,
+                "{i}: {} {}",
+                x[i],
+                x_true[i]
+            );
+        }
+        // Refactoring drops the low-rank part: A alone again.
+        check(&mut s, &col_ptr, &rows, &vals);
+        // A U of the wrong size is named.
+        let err = s
+            .set_low_rank(LowRank {
+                u: vec![1.0; n],
+                s: DMatrix::identity(2, 2),
+            })
+            .unwrap_err();
+        assert!(err.contains("low-rank"), "{err}");
     }
 }

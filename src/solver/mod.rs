@@ -5,4 +5,4 @@ pub mod generalized_alpha;
 pub mod linear;
 pub mod statics;
 
-pub use linear::{FactorKind, SolverStats, SparseSolver};
+pub use linear::{FactorKind, LowRank, SolverStats, SparseSolver};
