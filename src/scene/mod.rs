@@ -397,7 +397,7 @@ impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
             integrator: Integrator::GeneralizedAlpha,
-            rho_inf: 0.8,
+            rho_inf: 0.6,
             max_step: 1e-2,
             min_step: 1e-9,
             tolerance: 1e-4,
