@@ -750,7 +750,7 @@ impl Assembler {
         self.layout.position_slot[v.index()]
     }
 
-    /// Characteristic size of each scalar DOF for error norms: `length`
+    /// Characteristic size of each scalar DOF for Newton's norms: `length`
     /// for positions, 1 for gradients.
     pub fn scales(&self, length: f64) -> Vec<f64> {
         let mut s = vec![1.0; self.n_dofs()];
@@ -763,6 +763,36 @@ impl Assembler {
         }
         s
     }
+}
+
+/// Characteristic size of each scalar DOF for the local error of a time
+/// step: the surface displacement an error in it makes, measured against the
+/// sheet size `length`. Positions count as they are (`length`); an error
+/// `d` in a gradient moves the surface by about `d w` within the facets
+/// around its vertex, so gradients count at `length / w` (at least 1), `w`
+/// the mean facet size `sqrt(2 * mean area)` (the one the automatic damping
+/// uses; a mean, not each vertex's own, so that a mesh refined in one place
+/// is not held looser there). With 1 for gradients, the gradients of a
+/// sheet of n x n facets were held about n times tighter than its
+/// positions, and the ringing of the panels' unresolved stiff modes in them
+/// set the step (traced on the 4x4 Miura fold: gradient errors 40x the
+/// positions').
+pub fn error_scales(layout: &DofLayout, mesh: &Mesh, length: f64) -> Vec<f64> {
+    let nt = mesh.triangles().len().max(1);
+    let mean_area = mesh.facet_ids().map(|t| mesh.area(t)).sum::<f64>() / nt as f64;
+    let w = (2.0 * mean_area).sqrt();
+    let gradient = if w > 0.0 { (length / w).max(1.0) } else { 1.0 };
+    layout
+        .slot_kind
+        .iter()
+        .flat_map(|kind| {
+            let x = match kind {
+                SlotKind::Position => length,
+                SlotKind::Gradient => gradient,
+            };
+            [x; 3]
+        })
+        .collect()
 }
 
 /// The 9 local nodal vectors of a facet from the slot vector.
@@ -845,4 +875,55 @@ fn crease_ends(mesh: &Mesh, layout: &DofLayout) -> Vec<CreaseEnd> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::builders::strip;
+
+    /// A 0.4 x 0.1 strip of 8 x 2 square cells (two triangles each): positions
+    /// count at the sheet size, gradients at the sheet size over the facet
+    /// size sqrt(2 x 0.05^2 / 2) = 0.05.
+    #[test]
+    fn error_scales_measure_gradients_by_the_surface_they_move() {
+        let mesh = strip(0.4, 0.1, 8, 2);
+        let layout = DofLayout::new(&mesh);
+        let length = mesh.size();
+        assert!((length - 0.17f64.sqrt()).abs() < 1e-15, "{length}");
+        let s = error_scales(&layout, &mesh, length);
+        assert_eq!(s.len(), 3 * layout.slot_kind.len());
+        let mut seen = [false; 2];
+        for (slot, kind) in layout.slot_kind.iter().enumerate() {
+            let want = match kind {
+                SlotKind::Position => length,
+                SlotKind::Gradient => length / 0.05,
+            };
+            seen[(*kind == SlotKind::Gradient) as usize] = true;
+            for c in 0..3 {
+                let got = s[3 * slot + c];
+                assert!(
+                    (got - want).abs() < 1e-12 * want,
+                    "{kind:?}: {got} vs {want}"
+                );
+            }
+        }
+        assert_eq!(seen, [true, true]);
+        // One cell, two facets: gradients count at the diagonal over the
+        // side, sqrt(2), positions at the diagonal.
+        let one = strip(0.1, 0.1, 1, 1);
+        let layout = DofLayout::new(&one);
+        let s = error_scales(&layout, &one, one.size());
+        for (slot, kind) in layout.slot_kind.iter().enumerate() {
+            let want = match kind {
+                SlotKind::Position => 0.02f64.sqrt(),
+                SlotKind::Gradient => 2f64.sqrt(),
+            };
+            assert!(
+                (s[3 * slot] - want).abs() < 1e-12,
+                "{kind:?}: {}",
+                s[3 * slot]
+            );
+        }
+    }
 }

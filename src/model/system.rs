@@ -22,7 +22,7 @@ pub(super) struct System {
     pub(super) coeffs: ga::Coefficients,
     /// The Newton iteration and error estimate of generalized-alpha.
     pub(super) newton: ga::Settings,
-    pub(super) scales: Vec<f64>,
+    pub(super) scales: ga::Scales,
     pub(super) inputs: InputMap,
     /// For each `crease[e]` output: the crease ends averaged.
     pub(super) angle_ends: Vec<Vec<usize>>,
@@ -181,7 +181,10 @@ impl Model {
             }
         }
         let length = mesh.size().max(f64::MIN_POSITIVE);
-        let scales = asm.scales(length);
+        let scales = ga::Scales {
+            newton: asm.scales(length),
+            error: crate::assembly::error_scales(&asm.layout, mesh, length),
+        };
         // The explicit stepper's stable step, estimated on the unstressed sheet.
         let cd = match sc.solver.integrator {
             Integrator::CentralDifference => Some(

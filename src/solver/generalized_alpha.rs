@@ -262,6 +262,18 @@ pub fn restore_jacobian(
 /// of the iteration exceeds this.
 const MAX_RATE: f64 = 0.25;
 
+/// Characteristic sizes of the scalar DOFs (all DOFs): what Newton's
+/// corrections and residuals are measured against, and what the local error
+/// estimate is ([`crate::assembly::Assembler::scales`],
+/// [`crate::assembly::error_scales`]).
+#[derive(Clone, Debug, Default)]
+pub struct Scales {
+    /// For Newton's corrections and residuals.
+    pub newton: Vec<f64>,
+    /// For the local error of a step.
+    pub error: Vec<f64>,
+}
+
 /// Settings of the Newton iteration and error estimate.
 #[derive(Clone, Copy, Debug)]
 pub struct Settings {
@@ -285,10 +297,14 @@ pub fn step(
     cur: &Dynamics,
     h: f64,
     drive: &Drive,
-    scales: &[f64],
+    scales: &Scales,
     settings: Settings,
     ws: &mut Workspace,
 ) -> Result<(Dynamics, Outcome), String> {
+    let Scales {
+        newton: scales,
+        error: error_scales,
+    } = scales;
     let n = asm.n_dofs();
     let Coefficients { am, beta, .. } = co;
     let bh2 = beta * h * h;
@@ -512,7 +528,7 @@ pub fn step(
                 asm.crease_angles(&next.q, drive.theta_prev, &mut ws.eval.theta)?;
             }
             out.assembly_time += t0.elapsed();
-            out.error = local_error(&next, cur, asm, h, beta, scales, settings.tolerance);
+            out.error = local_error(&next, cur, asm, h, beta, error_scales, settings.tolerance);
             return Ok((next, out));
         }
         // Diverging: the correction grew twice in a row (one growth alone
