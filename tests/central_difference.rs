@@ -44,6 +44,7 @@ fn free_vibration(h_factor: f64, steps: usize) -> f64 {
         qdd: vec![0.0; n],
         abar: vec![0.0; n],
         extrapolation_streak: 0,
+        held_streak: 0,
     };
     let zeros = vec![0.0; n];
     let moment = vec![0.0; asm.creases.len()];

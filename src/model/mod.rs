@@ -211,6 +211,7 @@ impl Model {
             qdd: vec![0.0; n],
             abar: vec![0.0; n],
             extrapolation_streak: 0,
+            held_streak: 0,
         };
         self.consistent_accelerations(&u, &theta_prev)?;
         self.state.h_next = self.sys.as_ref().expect("built").settings.max_step;

@@ -65,11 +65,14 @@ pub struct Dynamics {
     /// (part of the state, so a restored state predicts as the original run).
     #[serde(default)]
     pub extrapolation_streak: u32,
+    /// How many steps in a row the held guess has won (likewise).
+    #[serde(default)]
+    pub held_streak: u32,
 }
 
-/// After this many steps in a row won by the extrapolated guess, the held
-/// guess is skipped (one force evaluation less per step) ...
-const SKIP_HELD_AFTER: u32 = 4;
+/// After this many steps in a row won by one predictor guess, the other is
+/// skipped (one force evaluation less per step) ...
+const SKIP_LOSER_AFTER: u32 = 4;
 /// ... except on every this-many-th step of the streak, where both compete again.
 const RECHECK_EVERY: u32 = 8;
 
@@ -332,8 +335,12 @@ pub fn step(
     // Where extrapolation keeps winning (small steps: its error falls as
     // h^3, the held guess's as h) the held guess is skipped, and re-tried
     // every RECHECK_EVERY steps of the streak or when extrapolation fails.
+    // Where the held guess keeps winning (a folding sheet, whose stiff
+    // modes ring in qdd_n) extrapolation is skipped alike.
     let streak = cur.extrapolation_streak;
-    let skip_held = streak >= SKIP_HELD_AFTER && streak % RECHECK_EVERY != 0;
+    let skip_held = streak >= SKIP_LOSER_AFTER && streak % RECHECK_EVERY != 0;
+    let held = cur.held_streak;
+    let skip_extrapolated = held >= SKIP_LOSER_AFTER && held % RECHECK_EVERY != 0;
     // The size of a guess's residual (infinite where it cannot be evaluated).
     let evaluate = |k: usize, guess: &mut Dynamics, ws: &mut Workspace, out: &mut Outcome| {
         for &(i, x) in drive.prescribed {
@@ -372,7 +379,9 @@ pub fn step(
         }
     } else {
         size[0] = evaluate(0, &mut next, ws, &mut out);
-        size[1] = evaluate(1, &mut alt, ws, &mut out);
+        if !(skip_extrapolated && size[0].is_finite()) {
+            size[1] = evaluate(1, &mut alt, ws, &mut out);
+        }
     }
     // The winner's residual is Newton's first one (the same evaluation, so
     // the same numbers) unless the first iteration forms a matrix.
@@ -386,6 +395,7 @@ pub fn step(
         0
     };
     next.extrapolation_streak = if winner == 1 { streak + 1 } else { 0 };
+    next.held_streak = if winner == 0 { held + 1 } else { 0 };
     let have_rhs = size[winner].is_finite();
     ws.guess = alt;
     let coeffs = matrix_coeffs(co, h);
