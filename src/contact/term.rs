@@ -417,8 +417,8 @@ impl ContactTerm {
     }
 
     /// Slot pairs of the facet pairs within `pattern_pad` of each other
-    /// that the pattern lacks (one representative pair tells: a facet pair
-    /// always joins with all its slot pairs).
+    /// that the pattern lacks. Every slot pair is checked: neighbouring
+    /// facets share some slots (and so some blocks) but not all.
     fn pattern_pairs(&self, asm: &Assembler, x: &[Vector3<f64>]) -> Vec<(usize, usize)> {
         let s = &self.surf;
         let facet_boxes: Vec<Aabb> = s
@@ -431,14 +431,11 @@ impl ContactTerm {
             .collect();
         let mut out = Vec::new();
         for (f, g) in overlapping(&facet_boxes, &facet_boxes, true) {
-            let (sf, sg) = (&s.facet_slots[f], &s.facet_slots[g]);
-            let rep = (sf[0], sg[0]);
-            if asm.has_pair(rep.0, rep.1) && asm.has_pair(sf[sf.len() - 1], sg[sg.len() - 1]) {
-                continue;
-            }
-            for &a in sf {
-                for &b in sg {
-                    out.push((a, b));
+            for &a in &s.facet_slots[f] {
+                for &b in &s.facet_slots[g] {
+                    if !asm.has_pair(a, b) {
+                        out.push((a, b));
+                    }
                 }
             }
         }
