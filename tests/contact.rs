@@ -75,30 +75,25 @@ fn assert_clear(model: &Model, what: &str) {
     let _ = xi;
 }
 
-/// The contact term's force is the gradient of its energy, and its matrix
-/// (stiffness part, not projected where the Hessian is positive) the
-/// derivative of its force, on a tilted panel held just above another.
-#[test]
-fn barrier_force_and_tangent_match_finite_differences() {
+/// Two panels with contact (`settings`), panel B tilted over panel A so
+/// that one corner is within the barrier: the assembler (exact barrier
+/// Hessian) and the state.
+fn tilted_pair(settings: &ContactSettings) -> (Assembler, Vec<f64>) {
     let a = 0.05;
     let mesh = two_squares(a, 0.03);
     let scene = Scene::with_defaults("fd", mesh.clone());
-    let physics = origami_fmu::model::physics(&scene);
-    let mut asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
-    let mut settings = ContactSettings {
-        thickness: 1e-3,
-        friction: 0.0,
-        damping_ratio: 0.0,
-        subdivisions: 2,
-        ..Default::default()
+    // No other damping: the velocity derivatives are the contact's alone.
+    let physics = origami_fmu::assembly::Physics {
+        alpha: 0.0,
+        beta: 0.0,
+        ..origami_fmu::model::physics(&scene)
     };
-    settings.stiffness = Some(10.0);
-    let term = ContactTerm::new(&mesh, &asm.layout, &asm.elements, &settings, 0.1, 1e-3)
+    let mut asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
+    let term = ContactTerm::new(&mesh, &asm.layout, &asm.elements, settings, 0.1, 1e-3)
         .unwrap()
         .with_exact_hessian();
     asm.add_term(Box::new(term));
     let mut q = asm.layout.reference_state(&mesh);
-    // Panel B over panel A, tilted so that one corner is within the barrier.
     let r = rot_y(0.02);
     let rm = nalgebra::Matrix3::from_fn(|i, j| r[i][j]);
     for v in 4..8 {
@@ -113,35 +108,93 @@ fn barrier_force_and_tangent_match_finite_differences() {
             q[3 * s..3 * s + 3].copy_from_slice(y.as_slice());
         }
     }
+    (asm, q)
+}
+
+fn fd_settings(friction: f64, damping_ratio: f64) -> ContactSettings {
+    ContactSettings {
+        thickness: 1e-3,
+        friction,
+        damping_ratio,
+        subdivisions: 2,
+        stiffness: Some(10.0),
+        ..Default::default()
+    }
+}
+
+/// Forces (and the matrix `co` if given) of `asm` at `(q, v)`.
+fn eval_at(
+    asm: &Assembler,
+    q: &[f64],
+    v: &[f64],
+    m: Option<(&mut [f64], MatrixCoeffs)>,
+) -> Evaluation {
     let pi = vec![PI; asm.creases.len()];
-    let zeros = vec![0.0; q.len()];
-    let eval = |q: &[f64], m: Option<&mut [f64]>| {
-        let st = State {
-            q,
-            v: &zeros,
-            theta0: &pi,
-            moment: &[],
-            theta_prev: &pi,
-        };
-        let mut ev = Evaluation::default();
-        asm.evaluate(
-            &st,
-            &mut ev,
-            m.map(|v| {
-                (
-                    v,
-                    MatrixCoeffs {
-                        k: 1.0,
-                        m: 0.0,
-                        c: 0.0,
-                    },
-                )
-            }),
-        )
-        .unwrap();
-        ev
+    let st = State {
+        q,
+        v,
+        theta0: &pi,
+        moment: &[],
+        theta_prev: &pi,
     };
-    let e0 = eval(&q, None);
+    let mut ev = Evaluation::default();
+    asm.evaluate(&st, &mut ev, m).unwrap();
+    ev
+}
+
+/// Largest difference between the matrix `vals` (free DOFs) and central
+/// differences of the force along every DOF of `x` (`q` or `v`, by
+/// `along_v`), relative to the largest matrix entry.
+fn matrix_fd_error(
+    asm: &Assembler,
+    q: &[f64],
+    v: &[f64],
+    vals: &[f64],
+    along_v: bool,
+    h: f64,
+) -> f64 {
+    let n = q.len();
+    let maxk = vals.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    assert!(maxk > 0.0);
+    let mut worst: f64 = 0.0;
+    for j in 0..n {
+        let col = asm.free[j];
+        if col == usize::MAX {
+            continue;
+        }
+        let mut xp = if along_v { v.to_vec() } else { q.to_vec() };
+        let mut xm = xp.clone();
+        xp[j] += h;
+        xm[j] -= h;
+        let (ep, em) = if along_v {
+            (eval_at(asm, q, &xp, None), eval_at(asm, q, &xm, None))
+        } else {
+            (eval_at(asm, &xp, v, None), eval_at(asm, &xm, v, None))
+        };
+        let mut dense = vec![0.0; asm.nnz().max(n)];
+        for p in asm.col_ptr[col]..asm.col_ptr[col + 1] {
+            dense[asm.row_idx[p]] = vals[p];
+        }
+        for i in 0..n {
+            let fi = asm.free[i];
+            if fi == usize::MAX {
+                continue;
+            }
+            let fd = (ep.force[i] - em.force[i]) / (2.0 * h);
+            worst = worst.max((fd - dense[fi]).abs() / maxk);
+        }
+    }
+    worst
+}
+
+/// The contact term's force is the gradient of its energy on a tilted panel
+/// held just above another.
+#[test]
+fn barrier_force_and_tangent_match_finite_differences() {
+    let (mut asm, q) = tilted_pair(&fd_settings(0.0, 0.0));
+    let zeros = vec![0.0; q.len()];
+    asm.before_step(&q, &zeros);
+    let e0 = eval_at(&asm, &q, &zeros, None);
     assert!(
         e0.term_energy > 0.0,
         "the tilted corner is within the barrier"
@@ -156,7 +209,9 @@ fn barrier_force_and_tangent_match_finite_differences() {
         let mut qm = q.clone();
         qp[i] += h;
         qm[i] -= h;
-        let fd = (total(&eval(&qp, None)) - total(&eval(&qm, None))) / (2.0 * h);
+        let fd = (total(&eval_at(&asm, &qp, &zeros, None))
+            - total(&eval_at(&asm, &qm, &zeros, None)))
+            / (2.0 * h);
         worst = worst.max((fd - e0.force[i]).abs());
         fmax = fmax.max(e0.force[i].abs());
     }
@@ -165,6 +220,43 @@ fn barrier_force_and_tangent_match_finite_differences() {
         worst <= 1e-5 * fmax,
         "force vs energy: {worst:.3e} of {fmax:.3e}"
     );
+    // Tangent vs force (exact Hessian; the pattern holds the pair's blocks).
+    let mut k = vec![0.0; asm.nnz()];
+    let co = MatrixCoeffs {
+        k: 1.0,
+        m: 0.0,
+        c: 0.0,
+    };
+    eval_at(&asm, &q, &zeros, Some((&mut k, co)));
+    let err = matrix_fd_error(&asm, &q, &zeros, &k, false, 1e-8);
+    assert!(err <= 1e-5, "tangent vs force: {err:.3e}");
+}
+
+/// The contact's damping matrix (normal dashpot and friction, both lagged
+/// from the step start) is the derivative of its force in the velocities,
+/// with panel B sliding (friction slipping) and approaching.
+#[test]
+fn dashpot_and_friction_damping_match_finite_differences() {
+    let (mut asm, q) = tilted_pair(&fd_settings(0.5, 1.0));
+    let mut v = vec![0.0; q.len()];
+    for vx in 4..8 {
+        for s in asm.layout.vertex_slots(VertexId(vx)) {
+            if s == asm.layout.position_slot[vx] {
+                v[3 * s..3 * s + 3].copy_from_slice(&[0.02, 0.01, -0.005]);
+            }
+        }
+    }
+    asm.before_step(&q, &v);
+    let mut c = vec![0.0; asm.nnz()];
+    let co = MatrixCoeffs {
+        k: 0.0,
+        m: 0.0,
+        c: 1.0,
+    };
+    let ev = eval_at(&asm, &q, &v, Some((&mut c, co)));
+    assert!(ev.contact_damping_power > 0.0 && ev.friction_power > 0.0);
+    let err = matrix_fd_error(&asm, &q, &v, &c, true, 1e-9);
+    assert!(err <= 1e-5, "damping matrix vs force: {err:.3e}");
 }
 
 /// A square folded on its creased diagonal to 180 deg (the FOLD spec's

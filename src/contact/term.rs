@@ -7,7 +7,8 @@
 //! and gap `s = d - xi`: energy `kappa b(s)`, `b(s) = -(s - s_hat)^2
 //! ln(s / s_hat)` for `0 < s < s_hat` (edge-edge pairs times IPC's
 //! mollifier), a dashpot `c s_dot` with `c = 2 zeta sqrt(k m)` (critical at
-//! `zeta = 1` for the pair's barrier stiffness `k` and sample mass `m`),
+//! `zeta = 1` for the pair's barrier stiffness `k` and sample mass `m`;
+//! `c` is lagged from the step start, like friction),
 //! and friction `mu lambda f1(|u|) u/|u|` on the tangential relative
 //! velocity `u` (`f1` rises as `2y/eps - (y/eps)^2` up to the stick
 //! velocity `eps`). Gradients and Hessians are exact (forward-mode duals);
@@ -124,12 +125,19 @@ impl CandidateCache {
     }
 }
 
-/// Friction data of one pair, lagged from the start of the step.
+/// Dashpot and friction data of one pair, lagged from the start of the
+/// step: within a step both are smooth in the iterate (a coefficient read
+/// from the iterate's own gap would put `sqrt(b''(s))`, whose slope is
+/// infinite where a pair enters the barrier, into Newton's residual).
 #[derive(Clone, Debug)]
 struct Lagged {
     ids: [usize; 4],
+    /// Normal dashpot coefficient (N s/m).
+    c: f64,
     /// Relative velocity at the closest points: `sum w_i v_i`.
     w: [f64; 4],
+    /// Unit normal at the closest points (second side to first).
+    normal: Vector3<f64>,
     /// Orthonormal tangent basis.
     basis: [Vector3<f64>; 2],
     /// Normal force (N).
@@ -493,22 +501,25 @@ impl ContactTerm {
         self.kappa * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat)
     }
 
-    /// Friction's normal forces and bases from contact-vertex positions `x`.
+    /// Dashpot coefficients, friction's normal forces and bases from
+    /// contact-vertex positions `x`.
     fn lag_at(&mut self, x: &[Vector3<f64>]) {
         self.lagged.clear();
         let act = self.active(x).unwrap_or_default();
         self.touching = !act.is_empty();
-        if self.mu > 0.0 {
-            for (p, s) in act {
-                let xs = self.points(x, &p);
-                let (w, n) = self.closest(&p, &xs);
-                self.lagged.push(Lagged {
-                    ids: p.ids(),
-                    w,
-                    basis: tangent_basis(&n),
-                    lambda: self.normal_force(&p, &xs, s),
-                });
-            }
+        for (p, s) in act {
+            let xs = self.points(x, &p);
+            let (w, n) = self.closest(&p, &xs);
+            // Critical for zeta = 1 at the pair's barrier stiffness.
+            let k = self.kappa * ddb(s, self.s_hat).max(0.0);
+            self.lagged.push(Lagged {
+                ids: p.ids(),
+                c: 2.0 * self.zeta * (k * p.mass).sqrt(),
+                w,
+                normal: n,
+                basis: tangent_basis(&n),
+                lambda: self.normal_force(&p, &xs, s),
+            });
         }
     }
 
@@ -739,39 +750,55 @@ impl ForceTerm for ContactTerm {
         let mut v = Vec::new();
         self.surf.positions(st.q, &mut x);
         self.surf.positions(st.v, &mut v);
-        for (p, s) in self.active(&x)? {
+        for (p, _) in self.active(&x)? {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let vs = self.points(&v, &p);
-            let vv = SVector::<f64, 12>::from_iterator(vs.iter().flat_map(|a| a.iter().copied()));
-            let (energy, grad, grad_s, hess) = if let Some((_, co)) = matrix.as_ref() {
-                let (e, sd) = self.energy::<Dual2<12>>(&p, &xs);
+            let (energy, grad, hess) = if let Some((_, co)) = matrix.as_ref() {
+                let (e, _) = self.energy::<Dual2<12>>(&p, &xs);
                 let h = if co.k != 0.0 {
                     Some(if self.project { project_psd(&e.h) } else { e.h })
                 } else {
                     None
                 };
-                (e.v, e.g, sd.g, h)
+                (e.v, e.g, h)
             } else {
-                let (e, sd) = self.energy::<Dual1<12>>(&p, &xs);
-                (e.v, e.g, sd.g, None)
+                let (e, _) = self.energy::<Dual1<12>>(&p, &xs);
+                (e.v, e.g, None)
             };
             out.term_energy += energy;
-            // Dashpot on the gap rate, critical for zeta = 1.
-            let k = self.kappa * ddb(s, self.s_hat).max(0.0);
-            let c = 2.0 * self.zeta * (k * p.mass).sqrt();
-            let rate = grad_s.dot(&vv);
-            let f = grad + c * rate * grad_s;
-            out.contact_damping_power += c * rate * rate;
-            self.scatter_force(&ids, &f, &mut out.force);
+            self.scatter_force(&ids, &grad, &mut out.force);
+            if let (Some((vals, co)), Some(h)) = (matrix.as_mut(), hess) {
+                self.scatter_matrix(asm, &ids, &(co.k * h), vals);
+            }
+        }
+        // Dashpots on the gap rates along the lagged normals, with the
+        // lagged coefficients and closest-point weights (the pair's own
+        // distance gradient would turn tangential once a sample slides off
+        // its triangle within the step, and damp the slide).
+        for lg in self.lagged.iter().filter(|lg| lg.c > 0.0) {
+            let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
+            let rate = lg.normal.dot(&vr);
+            out.contact_damping_power += lg.c * rate * rate;
+            let mut g = SVector::<f64, 12>::zeros();
+            for k in 0..4 {
+                g.fixed_rows_mut::<3>(3 * k)
+                    .copy_from(&((lg.c * rate * lg.w[k]) * lg.normal));
+            }
+            self.scatter_force(&lg.ids, &g, &mut out.force);
             if let Some((vals, co)) = matrix.as_mut() {
-                let mut h = hess.map(|h| co.k * h).unwrap_or_else(SMatrix::zeros);
-                h += (co.c * c) * grad_s * grad_s.transpose();
-                self.scatter_matrix(asm, &ids, &h, vals);
+                let k3 = (co.c * lg.c) * lg.normal * lg.normal.transpose();
+                let mut h = SMatrix::<f64, 12, 12>::zeros();
+                for a in 0..4 {
+                    for b in 0..4 {
+                        h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
+                            .copy_from(&(lg.w[a] * lg.w[b] * k3));
+                    }
+                }
+                self.scatter_matrix(asm, &lg.ids, &h, vals);
             }
         }
         // Friction with the lagged normal forces and bases.
-        for lg in &self.lagged {
+        for lg in self.lagged.iter().filter(|_| self.mu > 0.0) {
             let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let y = u.norm();
