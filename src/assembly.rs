@@ -127,6 +127,9 @@ pub struct Evaluation {
     pub friction_power: f64,
     /// Power dissipated by the contact's normal dashpots (W).
     pub contact_damping_power: f64,
+    /// Pairs within a barrier's reach (contact): Newton's line search
+    /// watches iterates with any.
+    pub barrier_pairs: usize,
 }
 
 /// Coefficients of the requested matrix `k K + m M + c C`.
@@ -545,6 +548,7 @@ impl Assembler {
         out.term_energy = 0.0;
         out.friction_power = 0.0;
         out.contact_damping_power = 0.0;
+        out.barrier_pairs = 0;
         if let Some((vals, co)) = matrix.as_mut() {
             for (v, m) in vals.iter_mut().zip(&self.mass_values) {
                 *v = co.m * m;

@@ -732,7 +732,7 @@ impl ForceTerm for ContactTerm {
     }
 
     fn limits_steps(&self) -> bool {
-        self.touching
+        self.touching || !self.cache.pairs.is_empty()
     }
 
     fn reports_power(&self) -> bool {
@@ -750,7 +750,9 @@ impl ForceTerm for ContactTerm {
         let mut v = Vec::new();
         self.surf.positions(st.q, &mut x);
         self.surf.positions(st.v, &mut v);
-        for (p, _) in self.active(&x)? {
+        let active = self.active(&x)?;
+        out.barrier_pairs += active.len();
+        for (p, _) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
             let (energy, grad, hess) = if let Some((_, co)) = matrix.as_ref() {

@@ -53,6 +53,9 @@ pub struct StepReport {
     /// Newton steps cut short by contact's collision check.
     #[serde(default)]
     pub limited_steps: usize,
+    /// Newton corrections the line search near contact shortened.
+    #[serde(default)]
+    pub line_search_cuts: usize,
     /// Times the matrix pattern grew (new contact pairs; each one a new
     /// symbolic analysis).
     #[serde(default)]
@@ -75,6 +78,7 @@ impl StepReport {
         self.factor_time += r.factor_time;
         self.solve_time += r.solve_time;
         self.limited_steps += r.limited_steps;
+        self.line_search_cuts += r.line_search_cuts;
         self.pattern_growths += r.pattern_growths;
     }
 }
@@ -237,6 +241,7 @@ impl Model {
                     report.factorizations += out.factorizations;
                     report.assembly_time += out.assembly_time.as_secs_f64();
                     report.limited_steps += out.limited_steps;
+                    report.line_search_cuts += out.line_search_cuts;
                     let at_min = proposal_at_min || h <= sys.settings.min_step * AT_MIN_STEP;
                     if out.error <= 1.0 || at_min {
                         self.state.dynamics = next;

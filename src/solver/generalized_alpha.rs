@@ -116,6 +116,8 @@ pub struct Outcome {
     pub assembly_time: Duration,
     /// Newton steps cut short by a force term (contact's collision check).
     pub limited_steps: usize,
+    /// Corrections the line search near contact shortened.
+    pub line_search_cuts: usize,
 }
 
 /// Reusable work vectors, and which iteration matrix the solver holds.
@@ -135,6 +137,8 @@ pub struct Workspace {
     /// The residual of the predictor's first guess (kept for Newton's
     /// first iteration when that guess wins).
     first_rhs: Vec<f64>,
+    /// The residual at the iterate a correction started from (line search).
+    rhs_prev: Vec<f64>,
     /// Where the factorization in the solver was formed (None: no usable
     /// factorization).
     jacobian: Option<JacobianPoint>,
@@ -264,6 +268,12 @@ pub fn restore_jacobian(
 /// Modified Newton forms a new iteration matrix when the contraction rate
 /// of the iteration exceeds this.
 const MAX_RATE: f64 = 0.25;
+
+/// Sufficient-decrease constant of Newton's line search near contact.
+const ARMIJO: f64 = 0.1;
+
+/// Most halvings of one correction in the line search.
+const LINE_SEARCH_HALVINGS: usize = 8;
 
 /// Characteristic sizes of the scalar DOFs (all DOFs): what Newton's
 /// corrections and residuals are measured against, and what the local error
@@ -408,31 +418,44 @@ pub fn step(
     };
     let mut last_norm = f64::INFINITY;
     let mut last_rate = 0.0;
-    // While a term limits steps (contact's barrier is active at the step
-    // start) Newton backtracks: a correction that raises the residual is
-    // halved (up to 5 times).
+    // Near contact Newton searches along each correction d: the residual
+    // is the gradient of the step's incremental potential Phi (up to the
+    // dashpots), and the iteration matrix is positive definite (barrier
+    // Hessians projected), so d descends Phi. A correction is halved (up to
+    // LINE_SEARCH_HALVINGS times) until the slope g . d at its end meets the
+    // trapezoidal Armijo condition Phi(a) - Phi(0) ~ a (s0 + s(a)) / 2 <=
+    // c1 a s0, i.e. s(a) <= (1 - 2 c1) |s0|. A residual-norm search is no
+    // use here: a projected Newton direction need not lower |g|, and the
+    // iteration then cycles against the barrier.
     let line_search = asm.limits_steps();
-    let mut last_size = f64::INFINITY;
+    // Slope g . d at the iterate a correction started from (negative).
+    let mut slope0 = 0.0;
+    // Whether a barrier acted where the last correction started.
+    let mut barrier_before = true;
     let mut applied = 0.0;
     for it in 0..settings.max_newton {
         refresh |= !modified;
         update_rates(&mut next, cur, co, h);
-        if line_search && it > 0 {
+        if line_search && it > 0 && slope0 < 0.0 {
             let t0 = Instant::now();
             residual(asm, drive, &next, ws, None)?;
-            let mut size = residual_size(asm, &ws.rhs, scales);
             let mut tries = 0;
-            while size > last_size && tries < 5 {
+            // Away from the barrier the plain Newton step stands.
+            while (barrier_before || ws.eval.barrier_pairs > 0)
+                && slope_along(asm, &ws.rhs, &ws.dq) > (1.0 - 2.0 * ARMIJO) * -slope0
+                && tries < LINE_SEARCH_HALVINGS
+            {
                 applied *= 0.5;
                 for i in 0..n {
                     next.q[i] -= applied * ws.dq[i];
                 }
                 update_rates(&mut next, cur, co, h);
                 residual(asm, drive, &next, ws, None)?;
-                size = residual_size(asm, &ws.rhs, scales);
                 tries += 1;
             }
-            last_size = size;
+            if tries > 0 {
+                out.line_search_cuts += 1;
+            }
             if refresh {
                 residual(asm, drive, &next, ws, Some(coeffs))?;
             }
@@ -441,11 +464,11 @@ pub fn step(
             let t0 = Instant::now();
             residual(asm, drive, &next, ws, refresh.then_some(coeffs))?;
             out.assembly_time += t0.elapsed();
-            if line_search {
-                last_size = residual_size(asm, &ws.rhs, scales);
-            }
-        } else if line_search {
-            last_size = residual_size(asm, &ws.rhs, scales);
+        }
+        if line_search {
+            ws.rhs_prev.clone_from(&ws.rhs);
+            // (The first iterate's evaluation may be the other guess's.)
+            barrier_before = ws.eval.barrier_pairs > 0;
         }
         // Whether the matrix was formed at this iterate (else it is stale:
         // formed at an earlier iterate or step).
@@ -487,11 +510,15 @@ pub fn step(
             // A matrix formed elsewhere sends the iterate away: drop this
             // correction and form the matrix here.
             refresh = true;
+            slope0 = 0.0;
             continue;
         }
         for i in 0..n {
             let fi = asm.free[i];
             ws.dq[i] = if fi != FIXED { ws.rhs[fi] } else { 0.0 };
+        }
+        if line_search {
+            slope0 = slope_along(asm, &ws.rhs_prev, &ws.dq);
         }
         // Force terms may admit only part of the step (contact: the largest
         // collision-free fraction); the iteration then goes on from there.
@@ -588,11 +615,14 @@ fn residual(
     Ok(())
 }
 
-/// Work-like size of a residual (free DOFs): force times the DOF's scale.
-fn residual_size(asm: &Assembler, rhs: &[f64], scales: &[f64]) -> f64 {
-    (0..asm.free.len())
-        .filter(|&i| asm.free[i] != FIXED)
-        .map(|i| (rhs[asm.free[i]] * scales[i]).powi(2))
+/// Slope `g . dq` of the incremental potential along the correction `dq`
+/// (all DOFs), where `rhs = -g` on the free DOFs.
+fn slope_along(asm: &Assembler, rhs: &[f64], dq: &[f64]) -> f64 {
+    asm.free
+        .iter()
+        .zip(dq)
+        .filter(|&(&fi, _)| fi != FIXED)
+        .map(|(&fi, &d)| -rhs[fi] * d)
         .sum()
 }
 
