@@ -127,9 +127,51 @@ pub struct Evaluation {
     pub friction_power: f64,
     /// Power dissipated by the contact's normal dashpots (W).
     pub contact_damping_power: f64,
+    /// Friction's and the contact dashpots' parts of `force`, all slots
+    /// (left empty without contact): their work over a step is the
+    /// trapezoidal force times the displacement, as the integrator's own
+    /// energy balance has it.
+    pub dissipative_force: DissipativeForce,
     /// Pairs within a barrier's reach (contact): Newton's line search
     /// watches iterates with any.
     pub barrier_pairs: usize,
+}
+
+/// Dissipative parts of an evaluation's internal force (N, all slots).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DissipativeForce {
+    /// Friction.
+    pub friction: Vec<f64>,
+    /// Normal dashpots.
+    pub damping: Vec<f64>,
+}
+
+impl DissipativeForce {
+    /// Zeroed vectors of `n` slots' values.
+    pub fn zeroed(&mut self, n: usize) {
+        for v in [&mut self.friction, &mut self.damping] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+    }
+
+    /// Work of these forces (at the step start) and `end`'s (at its end)
+    /// over the displacement `q1 - q0`, by the trapezoidal rule:
+    /// (friction, dashpots). An empty side counts as zero.
+    pub fn work_to(&self, end: &DissipativeForce, q0: &[f64], q1: &[f64]) -> (f64, f64) {
+        let w = |a: &[f64], b: &[f64]| -> f64 {
+            (0..q0.len())
+                .map(|i| {
+                    0.5 * (a.get(i).copied().unwrap_or(0.0) + b.get(i).copied().unwrap_or(0.0))
+                        * (q1[i] - q0[i])
+                })
+                .sum()
+        };
+        (
+            w(&self.friction, &end.friction),
+            w(&self.damping, &end.damping),
+        )
+    }
 }
 
 /// Coefficients of the requested matrix `k K + m M + c C`.
@@ -548,6 +590,8 @@ impl Assembler {
         out.term_energy = 0.0;
         out.friction_power = 0.0;
         out.contact_damping_power = 0.0;
+        out.dissipative_force.friction.clear();
+        out.dissipative_force.damping.clear();
         out.barrier_pairs = 0;
         if let Some((vals, co)) = matrix.as_mut() {
             for (v, m) in vals.iter_mut().zip(&self.mass_values) {

@@ -420,7 +420,7 @@ fn panel_on_incline_sticks_or_slides_with_coulomb_friction() {
     let moved = (s.last().unwrap().1 - s[0].1).abs();
     let free = 0.5 * g * incline.sin() * 0.3f64.powi(2);
     assert!(moved < 1e-3 * free, "sticking panel moved {moved:.3e} m");
-    assert!(model.contact_work().friction >= 0.0);
+    assert!(model.work().friction >= 0.0);
     // Sliding: fit x = x0 + v0 t + a t^2 / 2 after the first 0.05 s.
     let mu = 0.3;
     let (model, s) = run(mu);
@@ -434,7 +434,7 @@ fn panel_on_incline_sticks_or_slides_with_coulomb_friction() {
         (acc - want).abs() <= 0.02 * want,
         "sliding acceleration {acc:.4} m/s^2, Coulomb {want:.4}"
     );
-    let w = model.contact_work();
+    let w = model.work();
     assert!(w.friction > 0.0, "friction work {:.3e}", w.friction);
 }
 
@@ -570,7 +570,7 @@ fn deployable_closes_its_energy_balance() {
                 worst = worst.max((e - e0).abs() / e0);
             }
         }
-        let w = model.contact_work();
+        let w = model.work();
         eprintln!(
             "deployable mu = {mu}: energy balance within {:.3e}, friction work {:.3e} J, end angle {:.1} deg",
             worst,

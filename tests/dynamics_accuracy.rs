@@ -21,7 +21,7 @@ use nalgebra::{Matrix3x2, Vector3};
 use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid_with;
 use origami_fmu::model::Model;
-use origami_fmu::scene::{Fix, Integrator, NewtonMode, Scene, Support};
+use origami_fmu::scene::{Actuator, ActuatorMode, Fix, Integrator, NewtonMode, Scene, Support};
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -133,6 +133,62 @@ fn energy_conserved_over_1000_periods_with_rho_inf_1() {
         // 2001 crossings span 1000 periods (the step T/20 lengthens the period by 0.8 %).
         assert!(crossings.len() > 2000, "{} zero crossings", crossings.len());
         assert!(drift < 1e-6, "energy drift {drift:.3e}");
+    }
+}
+
+/// The work the inputs do closes the energy balance: the undamped hinge
+/// (rho_inf = 1) folded by a rest-angle ramp over two periods, then a crease
+/// moment, under gravity; kinetic + strain + crease energy less the input
+/// work stays within 1e-3 of the largest input work.
+#[test]
+fn input_work_closes_the_energy_balance() {
+    for &integrator in INTEGRATORS {
+        let mut scene = hinge_scene(integrator);
+        scene.solver.rho_inf = 1.0;
+        scene.gravity = Some([0.0, 0.0, -9.81]);
+        let omega = hinge_omega(&scene, W);
+        let period = 2.0 * PI / omega;
+        scene.solver.max_step = period / 40.0;
+        let push = Actuator {
+            name: "push".into(),
+            mode: ActuatorMode::Torque,
+            start: 0.0,
+            ..scene.actuators[0].clone()
+        };
+        scene.actuators.push(push);
+        // A moment per length that alone would turn the crease by 0.1 rad.
+        let m_push = 0.1 * scene.crease.stiffness(&scene.material, 1.0);
+        let mut m = Model::new(scene).unwrap();
+        m.initialize().unwrap();
+        let fold = input(&m, "fold");
+        let moment = input(&m, "push");
+        let dt = period / 20.0;
+        let mut worst: f64 = 0.0;
+        let mut w_max: f64 = 0.0;
+        for k in 0..200 {
+            let t = k as f64 * dt;
+            let ramp = 2.0 * period;
+            m.set_input(fold, 0.3 * (t / ramp).min(1.0)).unwrap();
+            m.set_input_derivative(fold, 1, if t < ramp { 0.3 / ramp } else { 0.0 })
+                .unwrap();
+            if k == 100 {
+                m.set_input(moment, m_push).unwrap();
+            }
+            m.advance(dt).unwrap();
+            let w = m.work().input;
+            w_max = w_max.max(w.abs());
+            worst = worst.max((total_energy(&m) - w).abs());
+        }
+        println!(
+            "input work {integrator:?}: largest {w_max:.3e} J, balance within {:.3e} of it",
+            worst / w_max
+        );
+        assert!(w_max > 0.0);
+        assert!(
+            worst <= 1e-3 * w_max,
+            "balance off by {:.3e} of {w_max:.3e} J",
+            worst
+        );
     }
 }
 

@@ -750,6 +750,7 @@ impl ForceTerm for ContactTerm {
         let mut v = Vec::new();
         self.surf.positions(st.q, &mut x);
         self.surf.positions(st.v, &mut v);
+        out.dissipative_force.zeroed(out.force.len());
         let active = self.active(&x)?;
         out.barrier_pairs += active.len();
         for (p, _) in active {
@@ -787,6 +788,7 @@ impl ForceTerm for ContactTerm {
                     .copy_from(&((lg.c * rate * lg.w[k]) * lg.normal));
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
+            self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.damping);
             if let Some((vals, co)) = matrix.as_mut() {
                 let k3 = (co.c * lg.c) * lg.normal * lg.normal.transpose();
                 let mut h = SMatrix::<f64, 12, 12>::zeros();
@@ -823,6 +825,7 @@ impl ForceTerm for ContactTerm {
                 g.fixed_rows_mut::<3>(3 * k).copy_from(&(lg.w[k] * fr));
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
+            self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.friction);
             if let Some((vals, co)) = matrix.as_mut() {
                 // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
                 let t = nalgebra::Matrix3x2::from_columns(&lg.basis);

@@ -1,6 +1,7 @@
 //! How input values drive the assembly: rest angles, crease moments,
 //! external forces and prescribed DOFs.
 
+use crate::assembly::Assembler;
 use crate::solver::generalized_alpha::Drive;
 
 /// How input values become rest angles, moments, forces and prescribed
@@ -74,6 +75,32 @@ impl InputMap {
 }
 
 impl DriveValues {
+    /// Work done by the drive over a step from `self` (state `q0`, crease
+    /// angles `theta0`) to `next` (`q1`, `theta1`), by the trapezoidal rule:
+    /// rest angles moved against the springs (`dU/dtheta0 = k (theta0 -
+    /// theta)`), crease moments through the angle change, external forces
+    /// through the displacement.
+    pub(super) fn work_to(
+        &self,
+        next: &DriveValues,
+        asm: &Assembler,
+        (q0, theta0): (&[f64], &[f64]),
+        (q1, theta1): (&[f64], &[f64]),
+    ) -> f64 {
+        let kl = asm.physics.crease_k_per_length;
+        let mut w = 0.0;
+        for (e, ce) in asm.creases.iter().enumerate() {
+            let k = kl * ce.length;
+            let (r0, r1) = (self.theta0[e], next.theta0[e]);
+            w += 0.5 * k * ((r0 - theta0[e]) + (r1 - theta1[e])) * (r1 - r0);
+            w += 0.5 * (self.moment[e] + next.moment[e]) * (theta1[e] - theta0[e]);
+        }
+        for i in 0..q0.len() {
+            w += 0.5 * (self.f_ext[i] + next.f_ext[i]) * (q1[i] - q0[i]);
+        }
+        w
+    }
+
     /// What a stepper takes for a step from crease angles `theta_prev`.
     pub(super) fn stepper_drive<'a>(&'a self, theta_prev: &'a [f64]) -> Drive<'a> {
         Drive {

@@ -35,7 +35,7 @@ mod system;
 mod variables;
 
 pub use physics::{AUTO_DAMPING_RATIO, physics};
-pub use state::{ContactWork, ModelState};
+pub use state::{ModelState, Work};
 pub use step::StepReport;
 pub use variables::{VariableSpec, fold_edges};
 
@@ -149,6 +149,7 @@ impl Model {
             h_next: scene.solver.max_step,
             outputs: Some(outputs.iter().map(|v| v.start).collect()),
             work: Default::default(),
+            dissipative_force: Default::default(),
             extra_pairs: Vec::new(),
         };
         // Build once now so that a bad scene fails at instantiation.
@@ -229,8 +230,9 @@ impl Model {
         Some(c.report(&self.state.dynamics.q, c.mean_side()))
     }
 
-    /// Work dissipated by contact so far (friction and normal dashpots).
-    pub fn contact_work(&self) -> state::ContactWork {
+    /// Work so far: dissipated by contact (friction and normal dashpots)
+    /// and done by the inputs.
+    pub fn work(&self) -> state::Work {
         self.state.work
     }
 

@@ -45,27 +45,33 @@ pub struct ModelState {
     /// pays for its outputs only if the master reads them.
     #[serde(default)]
     pub outputs: Option<Vec<f64>>,
-    /// Work dissipated by contact so far.
+    /// Work done so far.
     #[serde(default)]
-    pub work: ContactWork,
+    pub work: Work,
+    /// Friction's and the contact dashpots' forces at the last accepted
+    /// state (their work over the next step starts from them).
+    #[serde(default)]
+    pub dissipative_force: crate::assembly::DissipativeForce,
     /// Slot pairs the matrix pattern holds beyond the sheet's own (contact
     /// pairs met so far): a restore factors with the same pattern.
     #[serde(default)]
     pub extra_pairs: Vec<(usize, usize)>,
 }
 
-/// Work dissipated by contact (J), and the powers (W) at the last accepted
-/// state (the trapezoidal rule over each step).
+/// Work done so far (J): dissipated by contact, and put in by the inputs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ContactWork {
+pub struct Work {
     /// Friction work.
     pub friction: f64,
     /// Work of the normal dashpots.
     pub contact_damping: f64,
-    /// Friction power at the last accepted state.
-    pub friction_power: f64,
-    /// Dashpot power at the last accepted state.
-    pub contact_damping_power: f64,
+    /// Work done on the sheet by the crease actuators (rest angles moved
+    /// against the springs' moments, applied crease moments) and by external
+    /// forces (gravity, force inputs); prescribed motions not counted.
+    /// Kinetic + strain + crease + contact energy + dissipated work - this
+    /// is constant.
+    #[serde(default)]
+    pub input: f64,
 }
 
 impl Model {

@@ -154,6 +154,8 @@ impl Model {
         let stats0 = sys.solver.stats();
         let mut u = u0.clone();
         let mut d = DriveValues::default();
+        // The drive at the start of the next step (its work over the step).
+        let mut d_start = sys.inputs.drive(&u0);
         if let Some(cd) = sys.cd.as_mut() {
             // Explicit: equal substeps below the stability limit.
             let n_sub = (big_h / cd.stable_step().min(sys.settings.max_step))
@@ -165,18 +167,28 @@ impl Model {
             let h = big_h / n_sub;
             let t_asm = cd.assembly_time;
             let t_solve = cd.solve_time();
+            let mut q_start = Vec::new();
             for k in 1..=n_sub as usize {
                 inputs_at(k as f64 * h, &mut u);
                 sys.inputs.drive_into(&u, &mut d);
                 let gd = d.stepper_drive(&self.state.crease_theta);
                 sys.asm
                     .before_step(&self.state.dynamics.q, &self.state.dynamics.v);
+                q_start.clone_from(&self.state.dynamics.q);
                 cd.step(&sys.asm, &mut self.state.dynamics, h, &gd)
                     .map_err(|reason| Error::StepFailed {
                         time: t0 + (k - 1) as f64 * h,
                         reason,
                     })?;
-                self.state.crease_theta.clone_from(&cd.evaluation().theta);
+                let theta = &cd.evaluation().theta;
+                self.state.work.input += d_start.work_to(
+                    &d,
+                    &sys.asm,
+                    (&q_start, &self.state.crease_theta),
+                    (&self.state.dynamics.q, theta),
+                );
+                self.state.crease_theta.clone_from(theta);
+                std::mem::swap(&mut d_start, &mut d);
             }
             report.steps = n_sub as usize;
             report.min_step = h;
@@ -244,15 +256,25 @@ impl Model {
                     report.line_search_cuts += out.line_search_cuts;
                     let at_min = proposal_at_min || h <= sys.settings.min_step * AT_MIN_STEP;
                     if out.error <= 1.0 || at_min {
-                        self.state.dynamics = next;
+                        self.state.work.input += d_start.work_to(
+                            &d,
+                            &sys.asm,
+                            (&self.state.dynamics.q, &self.state.crease_theta),
+                            (&next.q, sys.ws.crease_angles()),
+                        );
+                        std::mem::swap(&mut d_start, &mut d);
                         if let Some(ev) = sys.ws.evaluation() {
-                            let w = &mut self.state.work;
-                            w.friction += 0.5 * h * (w.friction_power + ev.friction_power);
-                            w.contact_damping +=
-                                0.5 * h * (w.contact_damping_power + ev.contact_damping_power);
-                            w.friction_power = ev.friction_power;
-                            w.contact_damping_power = ev.contact_damping_power;
+                            let st = &mut self.state;
+                            let (wf, wd) = st.dissipative_force.work_to(
+                                &ev.dissipative_force,
+                                &st.dynamics.q,
+                                &next.q,
+                            );
+                            st.work.friction += wf;
+                            st.work.contact_damping += wd;
+                            st.dissipative_force.clone_from(&ev.dissipative_force);
                         }
+                        self.state.dynamics = next;
                         self.state
                             .crease_theta
                             .clone_from_slice(sys.ws.crease_angles());
