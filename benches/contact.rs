@@ -9,6 +9,7 @@
 use origami_fmu::benchmarks::{arg, best_us, fold_by_ramp, miura_scene};
 use origami_fmu::contact::{ContactSettings, ContactTerm};
 use origami_fmu::ids::EdgeId;
+use origami_fmu::mesh::Mesh;
 use origami_fmu::model::Model;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -76,14 +77,37 @@ fn main() {
         "| scene | contact | CPU (s) | steps | rejected | cut by CCD | pattern growths | pairs at end |"
     );
     println!("|---|---|---|---|---|---|---|---|");
-    for (name, path, flat) in [
-        ("diagonal to 180 deg", "diag", true),
+    // Crease targets: the file's own, all to +-180 deg, or the waterbomb
+    // base collapsed (diagonals valley, the x midline mountain, the y
+    // midline unfolded: the file's targets are a 3D waterbomb).
+    let own = |_: &Mesh, _: usize, t: f64| t;
+    let flat = |_: &Mesh, _: usize, t: f64| PI * t.signum();
+    let base = |m: &Mesh, e: usize, _: f64| {
+        let [a, b] = m.edges()[e].v;
+        let d = m.coord(b) - m.coord(a);
+        if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
+            PI
+        } else if d.y.abs() <= 1e-9 {
+            -PI
+        } else {
+            0.0
+        }
+    };
+    let scenes: [(&str, &str, &dyn Fn(&Mesh, usize, f64) -> f64); 4] = [
+        ("diagonal to 180 deg", "diag", &flat),
         (
             "Miura 4x4 to its targets (no touch)",
             "scenes/miura_4x4.fold",
-            false,
+            &own,
         ),
-    ] {
+        (
+            "Miura 4x4 folded flat (+-180 deg)",
+            "scenes/miura_4x4.fold",
+            &flat,
+        ),
+        ("waterbomb base collapsed", "scenes/waterbomb.fold", &base),
+    ];
+    for (name, path, target) in scenes {
         for contact in [false, true] {
             let mut scene = if path == "diag" {
                 origami_fmu::Scene::with_defaults(
@@ -93,13 +117,11 @@ fn main() {
             } else {
                 origami_fmu::scene::load(path).unwrap().0
             };
-            if flat {
-                for e in 0..scene.mesh.edges().len() {
-                    let edge = &scene.mesh.edges()[e];
-                    if edge.kind == origami_fmu::mesh::EdgeKind::Crease {
-                        let target = PI * edge.fold_target.signum();
-                        scene.mesh.set_fold_target(EdgeId(e), target).unwrap();
-                    }
+            for e in 0..scene.mesh.edges().len() {
+                let edge = &scene.mesh.edges()[e];
+                if edge.kind == origami_fmu::mesh::EdgeKind::Crease {
+                    let t = target(&scene.mesh, e, edge.fold_target);
+                    scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
                 }
             }
             if contact {

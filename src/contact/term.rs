@@ -561,15 +561,10 @@ impl ContactTerm {
         }
     }
 
-    fn scatter_matrix(
-        &self,
-        asm: &Assembler,
-        ids: &[usize; 4],
-        h: &SMatrix<f64, 12, 12>,
-        vals: &mut [f64],
-    ) {
-        // The slots of the four points and each point's weight on them,
-        // so that every slot block is summed first and written once.
+    /// Add a pair's 12 x 12 matrix `h` (its four points' coordinates) to
+    /// `batch`, mapped to the slots through the points' weights.
+    fn scatter_matrix(&self, ids: &[usize; 4], h: &SMatrix<f64, 12, 12>, batch: &mut MatrixBatch) {
+        // The slots of the four points and each point's weight on them.
         let mut slots: Vec<usize> = Vec::with_capacity(48);
         for &i in ids {
             slots.extend(self.surf.maps[i].iter().map(|&(s, _)| s));
@@ -584,23 +579,72 @@ impl ContactTerm {
                 w[a][k] += c;
             }
         }
-        let blocks: [[Matrix3<f64>; 4]; 4] = std::array::from_fn(|k| {
-            std::array::from_fn(|l| h.fixed_view::<3, 3>(3 * k, 3 * l).into_owned())
-        });
-        for a in 0..ns {
-            for b in 0..ns {
-                let mut blk = Matrix3::zeros();
-                for k in 0..4 {
-                    if w[a][k] == 0.0 {
-                        continue;
-                    }
-                    for l in 0..4 {
-                        if w[b][l] != 0.0 {
-                            blk += (w[a][k] * w[b][l]) * blocks[k][l];
+        let dense = batch.group(slots);
+        let n3 = 3 * ns;
+        for b in 0..ns {
+            for l in 0..4 {
+                if w[b][l] == 0.0 {
+                    continue;
+                }
+                for a in 0..ns {
+                    for k in 0..4 {
+                        let c = w[a][k] * w[b][l];
+                        if c == 0.0 {
+                            continue;
+                        }
+                        for y in 0..3 {
+                            let col = &mut dense[(3 * b + y) * n3 + 3 * a..][..3];
+                            for x in 0..3 {
+                                col[x] += c * h[(3 * k + x, 3 * l + y)];
+                            }
                         }
                     }
                 }
-                asm.try_add_block(slots[a], slots[b], &blk, vals);
+            }
+        }
+    }
+}
+
+/// Pair matrices summed per set of slots before they reach the sparse
+/// matrix: the many pairs between two facets (stacked layers) share their
+/// slots, so each slot block is looked up in the pattern once per facet
+/// pair instead of once per pair.
+/// Groups are written in the order they were met (the pairs' canonical
+/// order), so the sums do not depend on hashing.
+#[derive(Default)]
+struct MatrixBatch {
+    /// Sorted slots -> index in `groups`.
+    index: std::collections::HashMap<Vec<usize>, usize>,
+    /// Sorted slots and the dense column-major matrix over their coordinates.
+    groups: Vec<(Vec<usize>, Vec<f64>)>,
+}
+
+impl MatrixBatch {
+    /// The (zeroed when new) dense matrix of the group of `slots`.
+    fn group(&mut self, slots: Vec<usize>) -> &mut [f64] {
+        let k = match self.index.get(&slots) {
+            Some(&k) => k,
+            None => {
+                let n3 = 3 * slots.len();
+                self.index.insert(slots.clone(), self.groups.len());
+                self.groups.push((slots, vec![0.0; n3 * n3]));
+                self.groups.len() - 1
+            }
+        };
+        &mut self.groups[k].1
+    }
+
+    /// Add every group to the matrix values `vals` (blocks the pattern
+    /// lacks are left out: the pattern holds every facet pair in reach).
+    fn flush(self, asm: &Assembler, vals: &mut [f64]) {
+        for (slots, dense) in self.groups {
+            let ns = slots.len();
+            let n3 = 3 * ns;
+            for b in 0..ns {
+                for a in 0..ns {
+                    let blk = Matrix3::from_fn(|x, y| dense[(3 * b + y) * n3 + 3 * a + x]);
+                    asm.try_add_block(slots[a], slots[b], &blk, vals);
+                }
             }
         }
     }
@@ -751,6 +795,7 @@ impl ForceTerm for ContactTerm {
         self.surf.positions(st.q, &mut x);
         self.surf.positions(st.v, &mut v);
         out.dissipative_force.zeroed(out.force.len());
+        let mut batch = MatrixBatch::default();
         let active = self.active(&x)?;
         out.barrier_pairs += active.len();
         for (p, _) in active {
@@ -770,8 +815,8 @@ impl ForceTerm for ContactTerm {
             };
             out.term_energy += energy;
             self.scatter_force(&ids, &grad, &mut out.force);
-            if let (Some((vals, co)), Some(h)) = (matrix.as_mut(), hess) {
-                self.scatter_matrix(asm, &ids, &(co.k * h), vals);
+            if let (Some((_, co)), Some(h)) = (matrix.as_ref(), hess) {
+                self.scatter_matrix(&ids, &(co.k * h), &mut batch);
             }
         }
         // Dashpots on the gap rates along the lagged normals, with the
@@ -789,7 +834,7 @@ impl ForceTerm for ContactTerm {
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.damping);
-            if let Some((vals, co)) = matrix.as_mut() {
+            if let Some((_, co)) = matrix.as_ref() {
                 let k3 = (co.c * lg.c) * lg.normal * lg.normal.transpose();
                 let mut h = SMatrix::<f64, 12, 12>::zeros();
                 for a in 0..4 {
@@ -798,7 +843,7 @@ impl ForceTerm for ContactTerm {
                             .copy_from(&(lg.w[a] * lg.w[b] * k3));
                     }
                 }
-                self.scatter_matrix(asm, &lg.ids, &h, vals);
+                self.scatter_matrix(&lg.ids, &h, &mut batch);
             }
         }
         // Friction with the lagged normal forces and bases.
@@ -826,7 +871,7 @@ impl ForceTerm for ContactTerm {
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.friction);
-            if let Some((vals, co)) = matrix.as_mut() {
+            if let Some((_, co)) = matrix.as_ref() {
                 // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
                 let t = nalgebra::Matrix3x2::from_columns(&lg.basis);
                 let inner = nalgebra::Matrix2::identity() * phi + dphi_y * u * u.transpose();
@@ -838,8 +883,11 @@ impl ForceTerm for ContactTerm {
                             .copy_from(&(lg.w[a] * lg.w[b] * k3));
                     }
                 }
-                self.scatter_matrix(asm, &lg.ids, &h, vals);
+                self.scatter_matrix(&lg.ids, &h, &mut batch);
             }
+        }
+        if let Some((vals, _)) = matrix.as_mut() {
+            batch.flush(asm, vals);
         }
         Ok(())
     }
