@@ -88,14 +88,24 @@ pub fn overlapping(a: &[Aabb], b: &[Aabb], same: bool) -> Vec<(usize, usize)> {
             }
         }
     }
+    // Each overlapping pair is taken in one cell only: the one holding the
+    // lower corner of the two boxes' intersection (both boxes cover it), so
+    // there are no repeats to sort out; each box's partners are sorted.
     let mut out = Vec::new();
     for (i, bx) in a.iter().enumerate() {
+        let first = out.len();
         for x in key(bx.lo.x)..=key(bx.hi.x) {
             for y in key(bx.lo.y)..=key(bx.hi.y) {
                 for z in key(bx.lo.z)..=key(bx.hi.z) {
                     if let Some(js) = grid.get(&(x, y, z)) {
                         for &j in js {
-                            if (!same || i < j) && bx.overlaps(&b[j]) {
+                            let o = &b[j];
+                            if (!same || i < j)
+                                && bx.overlaps(o)
+                                && key(bx.lo.x.max(o.lo.x)) == x
+                                && key(bx.lo.y.max(o.lo.y)) == y
+                                && key(bx.lo.z.max(o.lo.z)) == z
+                            {
                                 out.push((i, j));
                             }
                         }
@@ -103,9 +113,8 @@ pub fn overlapping(a: &[Aabb], b: &[Aabb], same: bool) -> Vec<(usize, usize)> {
                 }
             }
         }
+        out[first..].sort_unstable();
     }
-    out.sort_unstable();
-    out.dedup();
     out
 }
 
