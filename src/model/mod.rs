@@ -117,9 +117,19 @@ pub struct Model {
     built_with: Option<Vec<f64>>,
     /// Whether the scene asked for automatic damping.
     auto_damping: bool,
-    /// The energy outputs evaluated from the state when `state.outputs` is
-    /// None (filled on their first read, emptied whenever the state changes).
-    energies_cache: std::sync::OnceLock<[f64; 3]>,
+    /// Outputs evaluated from the state on their first read (emptied
+    /// whenever the state changes).
+    read_cache: ReadCache,
+}
+
+/// Values of the current state evaluated on their first read: a master
+/// pays only for the outputs it reads.
+#[derive(Clone, Debug, Default)]
+struct ReadCache {
+    /// The energy outputs, where `state.outputs` is None.
+    energies: std::sync::OnceLock<[f64; 3]>,
+    /// The contact search's outputs (smallest gap, pairs, normal force).
+    contact: std::sync::OnceLock<crate::contact::ContactReport>,
 }
 
 impl Model {
@@ -164,7 +174,7 @@ impl Model {
             state,
             sys: None,
             built_with: None,
-            energies_cache: Default::default(),
+            read_cache: Default::default(),
         };
         m.build()?;
         Ok(m)
@@ -227,7 +237,12 @@ impl Model {
     pub fn contact(&self) -> Option<crate::contact::ContactReport> {
         let sys = self.sys.as_ref()?;
         let c = sys.asm.term::<crate::contact::ContactTerm>()?;
-        Some(c.report(&self.state.dynamics.q, c.mean_side()))
+        Some(
+            *self
+                .read_cache
+                .contact
+                .get_or_init(|| c.report(&self.state.dynamics.q, c.mean_side())),
+        )
     }
 
     /// Work so far: dissipated by contact (friction and normal dashpots)

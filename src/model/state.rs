@@ -128,7 +128,7 @@ impl Model {
             sys.rebuild_solver().map_err(Error::State)?;
         }
         self.state = s;
-        self.energies_cache = Default::default();
+        self.read_cache = Default::default();
         Ok(())
     }
 
@@ -246,7 +246,7 @@ impl Model {
         let u = self.state.inputs_now.clone();
         if let Err(e) = self.consistent_accelerations(&u, &theta) {
             self.state = saved;
-            self.energies_cache = Default::default();
+            self.read_cache = Default::default();
             return Err(e);
         }
         Ok(())
@@ -305,7 +305,7 @@ impl Model {
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
         self.state.outputs = Some(self.compute_outputs(&ev));
-        self.energies_cache = Default::default();
+        self.read_cache = Default::default();
         Ok(())
     }
 }

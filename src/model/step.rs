@@ -105,7 +105,7 @@ impl Model {
             Ok(r) => Ok(r),
             Err(e) => {
                 self.state = saved;
-                self.energies_cache = Default::default();
+                self.read_cache = Default::default();
                 Err(e)
             }
         }
@@ -331,7 +331,7 @@ impl Model {
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
         self.state.outputs = ev.map(|ev| self.compute_outputs(&ev));
-        self.energies_cache = Default::default();
+        self.read_cache = Default::default();
         let d = &self.state.dynamics;
         let finite = match &self.state.outputs {
             Some(o) => o.iter().all(|x| x.is_finite()),

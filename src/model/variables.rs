@@ -200,7 +200,7 @@ impl Model {
         if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
             self.state.inputs_now[i] = value;
             // The crease energy is read under the rest angles now in force.
-            self.energies_cache = Default::default();
+            self.read_cache = Default::default();
         }
         self.state.input_slopes[i] = 0.0;
         Ok(())
@@ -234,10 +234,7 @@ impl Model {
 
     /// Current values of all outputs, in the order of [`Model::outputs`].
     pub fn output_values(&self) -> Vec<f64> {
-        match &self.state.outputs {
-            Some(o) => o.clone(),
-            None => (0..self.outputs.len()).map(|k| self.output(k)).collect(),
-        }
+        (0..self.outputs.len()).map(|k| self.output(k)).collect()
     }
 
     /// Current value of output `k` (in the order of [`Model::outputs`]).
@@ -246,10 +243,12 @@ impl Model {
     /// energies evaluated from it on their first read: a master pays only
     /// for the outputs it reads. The energies are then those under the
     /// inputs in force (a rest angle set since the step changes the crease
-    /// energy); where the step evaluated the outputs, those of its end.
+    /// energy); where the step evaluated the outputs, those of its end. The
+    /// contact search's outputs (smallest gap, pairs, normal force) are
+    /// likewise searched on their first read of a state.
     pub fn output(&self, k: usize) -> f64 {
         if let Some(o) = &self.state.outputs {
-            return o[k];
+            return self.contact_output(k).unwrap_or(o[k]);
         }
         let sys = match &self.sys {
             Some(sys) if self.state.phase == Phase::Running => sys,
@@ -271,7 +270,10 @@ impl Model {
             i -= sys.angle_ends.len();
         }
         if o.energies && i < 3 {
-            return self.energies_cache.get_or_init(|| self.evaluate_energies())[i];
+            return self
+                .read_cache
+                .energies
+                .get_or_init(|| self.evaluate_energies())[i];
         }
         // Contact outputs: a scene with contact evaluates its outputs in
         // every step, so this is not reached; evaluate in full all the same.
@@ -378,16 +380,41 @@ impl Model {
         if o.energies {
             out.extend([self.kinetic_energy(), ev.strain_energy, ev.crease_energy]);
         }
-        if let Some(r) = self.contact() {
-            out.extend([
-                r.min_gap,
-                r.pairs as f64,
-                r.normal_force,
-                ev.term_energy,
-                self.state.work.friction,
-            ]);
+        if self.contact_outputs().is_some() {
+            // The search's three are read from the state when read
+            // (`contact_output`); zero here keeps the stored list finite.
+            out.extend([0.0, 0.0, 0.0, ev.term_energy, self.state.work.friction]);
         }
         out
+    }
+
+    /// Index of the first contact output (`contact.min_gap`), if any.
+    fn contact_outputs(&self) -> Option<usize> {
+        self.scene.contact?;
+        let o = self.scene.outputs;
+        let sys = self.sys.as_ref()?;
+        let mut k = 0;
+        if o.positions {
+            k += 3 * self.scene.fold_vertex_count;
+        }
+        if o.fold_angles {
+            k += sys.angle_ends.len();
+        }
+        if o.energies {
+            k += 3;
+        }
+        Some(k)
+    }
+
+    /// Output `k` if it is one of the contact search's (smallest gap, pairs,
+    /// normal force): the search runs on the first read of the state.
+    fn contact_output(&self, k: usize) -> Option<f64> {
+        let first = self.contact_outputs()?;
+        if !(first..first + 3).contains(&k) {
+            return None;
+        }
+        let r = self.contact()?;
+        Some([r.min_gap, r.pairs as f64, r.normal_force][k - first])
     }
 }
 
