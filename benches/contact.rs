@@ -14,6 +14,9 @@ use origami_fmu::model::Model;
 use std::f64::consts::PI;
 use std::time::Instant;
 
+/// A crease's target (rad) from the mesh, the edge and the file's target.
+type Target = dyn Fn(&Mesh, usize, f64) -> f64;
+
 fn with_contact(mut scene: origami_fmu::Scene) -> origami_fmu::Scene {
     scene.contact = Some(ContactSettings {
         thickness: scene.material.thickness,
@@ -93,7 +96,7 @@ fn main() {
             0.0
         }
     };
-    let scenes: [(&str, &str, &dyn Fn(&Mesh, usize, f64) -> f64); 4] = [
+    let scenes: [(&str, &str, &Target); 4] = [
         ("diagonal to 180 deg", "diag", &flat),
         (
             "Miura 4x4 to its targets (no touch)",
