@@ -66,6 +66,37 @@ impl InputMap {
             .extend(self.motion.iter().map(|&(k, i)| (i, u[k])));
     }
 
+    /// Work done at once when input `i` jumps from `u[i]` to `new` while
+    /// held: the crease springs of its rest-angle actuators, at the crease
+    /// angles `theta`, change their energy (a moment or a force does no
+    /// work without motion).
+    pub(super) fn jump_work(
+        &self,
+        asm: &Assembler,
+        i: usize,
+        new: f64,
+        u: &[f64],
+        theta: &[f64],
+    ) -> f64 {
+        let pi = std::f64::consts::PI;
+        let kl = asm.physics.crease_k_per_length;
+        let mut w = 0.0;
+        for (e, r) in self.rest.iter().enumerate() {
+            let dr: f64 = r
+                .iter()
+                .filter(|&&(a, _)| a == i)
+                .map(|&(_, tgt)| (new - u[i]) * tgt)
+                .sum();
+            if dr == 0.0 {
+                continue;
+            }
+            let r0 = pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>();
+            let k = kl * asm.creases[e].length;
+            w += 0.5 * k * ((theta[e] - r0 - dr).powi(2) - (theta[e] - r0).powi(2));
+        }
+        w
+    }
+
     /// The drive values for `u`, freshly allocated.
     pub(super) fn drive(&self, u: &[f64]) -> DriveValues {
         let mut d = DriveValues::default();

@@ -198,6 +198,16 @@ impl Model {
         }
         self.state.inputs_next[i] = value;
         if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
+            if let (Some(sys), Phase::Running) = (&self.sys, self.state.phase) {
+                // A held input that jumps does its work at once.
+                self.state.work.input += sys.inputs.jump_work(
+                    &sys.asm,
+                    i,
+                    value,
+                    &self.state.inputs_now,
+                    &self.state.crease_theta,
+                );
+            }
             self.state.inputs_now[i] = value;
             // The crease energy is read under the rest angles now in force.
             self.read_cache = Default::default();
