@@ -519,8 +519,10 @@ fn fold_flat(
     (model, least)
 }
 
+/// The 4x4 Miura-ori folded flat: every crease driven to +-180 deg stacks
+/// the layers (the slowest test of the suite, about 150 s in release: the
+/// layers landing at the end of the ramp take steps of 1e-4 s).
 #[test]
-#[ignore = "work in progress: the flat-folded stack takes steps below 1e-6 s"]
 fn miura_folds_flat_into_a_stack_without_intersection() {
     let (model, least) = fold_flat(
         "scenes/miura_4x4.fold",
