@@ -716,12 +716,29 @@ fn tangent_basis(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
 }
 
 impl ContactTerm {
-    /// Pair energy `kappa m(x) b(s(x))` in the scalar type `T`.
-    fn energy<T: Real>(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> (T, T) {
+    /// Pair energy `kappa m(x) b(s(x))` in the scalar type `T`: the
+    /// squared distance `D` in `T`, then `kappa b(sqrt(D) - xi)` by one
+    /// chain rule in `D` (its derivatives in closed form: fewer dual
+    /// operations than `sqrt`, `ln` and the products through `T`).
+    fn energy<T: Real>(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> T {
         let xs: [V3<T>; 4] = lift(x);
-        let s = distance_sq(&p.kind, &xs).sqrt() - self.xi;
-        let e = barrier(s, self.s_hat) * mollifier(&p.kind, &xs) * self.kappa;
-        (e, s)
+        let d2 = distance_sq(&p.kind, &xs);
+        let dv = d2.val();
+        let r = dv.sqrt();
+        let s = r - self.xi;
+        let (b1, b2) = (db(s, self.s_hat), ddb(s, self.s_hat));
+        // ds/dD and d2s/dD2.
+        let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
+        let k = self.kappa;
+        let f = d2.map(
+            k * barrier(s, self.s_hat),
+            k * b1 * sd,
+            k * (b2 * sd * sd + b1 * sdd),
+        );
+        match p.kind {
+            Kind::PointTriangle { .. } => f,
+            Kind::EdgeEdge { .. } => f * mollifier(&p.kind, &xs),
+        }
     }
 
     /// Closest-point weights (relative velocity `sum w_i v_i`) and the unit
@@ -802,7 +819,7 @@ impl ForceTerm for ContactTerm {
             let ids = p.ids();
             let xs = self.points(&x, &p);
             let (energy, grad, hess) = if let Some((_, co)) = matrix.as_ref() {
-                let (e, _) = self.energy::<Dual2<12>>(&p, &xs);
+                let e = self.energy::<Dual2<12>>(&p, &xs);
                 let h = if co.k != 0.0 {
                     Some(if self.project { project_psd(&e.h) } else { e.h })
                 } else {
@@ -810,7 +827,7 @@ impl ForceTerm for ContactTerm {
                 };
                 (e.v, e.g, h)
             } else {
-                let (e, _) = self.energy::<Dual1<12>>(&p, &xs);
+                let e = self.energy::<Dual1<12>>(&p, &xs);
                 (e.v, e.g, None)
             };
             out.term_energy += energy;
