@@ -12,11 +12,11 @@ use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::prelude::*;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering, factorize_symbolic_cholesky, supernodal,
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
@@ -166,6 +166,63 @@ pub struct SparseSolver {
     stats: SolverStats,
     /// The low-rank part of the matrix in force, if any.
     low_rank: Option<Woodbury>,
+    /// The matrix's lower triangle in the fill-reducing order, gathered
+    /// from its values for the supernodal factorization (so faer need not
+    /// permute it at every factorization).
+    permuted: Option<PermutedLower>,
+}
+
+/// The pattern of `P A P^T`'s lower triangle (rows unsorted within a
+/// column), where each of its values comes from in `A`'s, and a buffer.
+struct PermutedLower {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// Index into `A`'s values of each entry.
+    src: Vec<usize>,
+    values: Vec<f64>,
+}
+
+impl PermutedLower {
+    /// From the full pattern `a` and the inverse permutation (new index of
+    /// each old one): every entry with `old_i >= old_j` goes to
+    /// `(max(new_i, new_j), min(new_i, new_j))`, as faer's own
+    /// `permute_self_adjoint_to_unsorted` places it.
+    fn new(a: &SymbolicSparseColMat<usize>, perm_inv: &[usize]) -> PermutedLower {
+        let n = a.ncols();
+        let (cp, ri) = (a.col_ptr(), a.row_idx());
+        let mut counts = vec![0usize; n + 1];
+        for j in 0..n {
+            for &i in &ri[cp[j]..cp[j + 1]] {
+                if i >= j {
+                    counts[perm_inv[i].min(perm_inv[j]) + 1] += 1;
+                }
+            }
+        }
+        for c in 0..n {
+            counts[c + 1] += counts[c];
+        }
+        let col_ptr = counts.clone();
+        let nnz = col_ptr[n];
+        let mut next = counts;
+        let (mut row_idx, mut src) = (vec![0; nnz], vec![0; nnz]);
+        for j in 0..n {
+            for (p, &i) in ri[cp[j]..cp[j + 1]].iter().enumerate() {
+                if i >= j {
+                    let (a, b) = (perm_inv[i], perm_inv[j]);
+                    let c = a.min(b);
+                    row_idx[next[c]] = a.max(b);
+                    src[next[c]] = cp[j] + p;
+                    next[c] += 1;
+                }
+            }
+        }
+        PermutedLower {
+            col_ptr,
+            row_idx,
+            src,
+            values: vec![0.0; nnz],
+        }
+    }
 }
 
 impl SparseSolver {
@@ -220,7 +277,15 @@ impl SparseSolver {
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(LOW_RANK_MAX, Par::Seq),
         ]));
+        let permuted = match (symbolic.raw(), symbolic.perm()) {
+            (SymbolicCholeskyRaw::Supernodal(_), Some(p)) => {
+                let (_, inv) = p.arrays();
+                Some(PermutedLower::new(&pattern, inv))
+            }
+            _ => None,
+        };
         Ok(SparseSolver {
+            permuted,
             l_values: vec![0.0; symbolic.len_val()],
             a_values: Vec::new(),
             pattern,
@@ -340,18 +405,51 @@ impl SparseSolver {
         if values.iter().any(|v| !v.is_finite()) {
             return Err("matrix has non-finite entries".into());
         }
+        // Not positive definite by the one route: LDLT next.
+        let mut llt_failed = false;
+        if let (Some(pl), SymbolicCholeskyRaw::Supernodal(sn)) =
+            (self.permuted.as_mut(), self.symbolic.raw())
+        {
+            for (v, &k) in pl.values.iter_mut().zip(&pl.src) {
+                *v = values[k];
+            }
+            let n = self.pattern.nrows();
+            let sym =
+                SymbolicSparseColMatRef::new_unsorted_checked(n, n, &pl.col_ptr, None, &pl.row_idx);
+            let lower = SparseColMatRef::new(sym, &pl.values);
+            let stack = MemStack::new(&mut self.mem);
+            let llt = supernodal::factorize_supernodal_numeric_llt(
+                &mut self.l_values,
+                lower,
+                LltRegularization::default(),
+                sn,
+                Par::Seq,
+                stack,
+                Default::default(),
+            );
+            if llt.is_ok() {
+                self.stats.llt += 1;
+                self.kind = Some(FactorKind::Llt);
+                return Ok(());
+            }
+            llt_failed = true;
+        }
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        let stack = MemStack::new(&mut self.mem);
-        let llt = self.symbolic.factorize_numeric_llt(
-            &mut self.l_values,
-            a,
-            Side::Lower,
-            LltRegularization::default(),
-            Par::Seq,
-            stack,
-            Default::default(),
-        );
-        if llt.is_ok() {
+        let llt_ok = !llt_failed && {
+            let stack = MemStack::new(&mut self.mem);
+            self.symbolic
+                .factorize_numeric_llt(
+                    &mut self.l_values,
+                    a,
+                    Side::Lower,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .is_ok()
+        };
+        if llt_ok {
             self.stats.llt += 1;
             self.kind = Some(FactorKind::Llt);
             return Ok(());
