@@ -11,10 +11,9 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::*;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Par, Side};
-use origami_fmu::assembly::{Assembler, Evaluation, MatrixCoeffs, State};
-use origami_fmu::element::ElementOptions;
-use origami_fmu::scene::patterns::Miura;
 use std::time::Instant;
+
+mod common;
 
 fn main() {
     println!(
@@ -22,45 +21,7 @@ fn main() {
     );
     println!("| --- | --- | --- | --- | --- | --- |");
     for p in [4usize, 8, 10, 16] {
-        let miura = Miura {
-            nx: p / 2,
-            ny: p / 2,
-            ..Default::default()
-        };
-        let scene = origami_fmu::scene::from_fold(&miura.generate().unwrap(), None)
-            .unwrap()
-            .0;
-        let physics = origami_fmu::model::physics(&scene);
-        let asm = Assembler::new(&scene.mesh, physics, ElementOptions::default(), &[]).unwrap();
-        let q = asm.layout.reference_state(&scene.mesh);
-        let v = vec![0.0; q.len()];
-        let nc = asm.creases.len();
-        let t0 = vec![3.0; nc];
-        let mom = vec![0.0; nc];
-        let tp = vec![std::f64::consts::PI; nc];
-        let st = State {
-            q: &q,
-            v: &v,
-            theta0: &t0,
-            moment: &mom,
-            theta_prev: &tp,
-        };
-        let mut vals = vec![0.0; asm.nnz()];
-        let mut ev = Evaluation::default();
-        let h = 2e-3;
-        asm.evaluate(
-            &st,
-            &mut ev,
-            Some((
-                &mut vals,
-                MatrixCoeffs {
-                    k: 1.0,
-                    c: 0.6 / (0.3 * h),
-                    m: 1.0 / (0.3 * h * h),
-                },
-            )),
-        )
-        .unwrap();
+        let (asm, vals) = common::flat_iteration_matrix(&common::miura_scene(p));
         let n = asm.n_free;
         let pat =
             SymbolicSparseColMat::new_checked(n, n, asm.col_ptr.clone(), None, asm.row_idx.clone());

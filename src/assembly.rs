@@ -545,6 +545,20 @@ impl Assembler {
         self.row_idx.len()
     }
 
+    /// Where each free slot is (its vertex in the reference sheet, `z = 0`),
+    /// by block of 3 free scalars: what nested dissection cuts by.
+    pub fn free_block_coords(&self, mesh: &Mesh) -> Vec<[f64; 3]> {
+        let mut out = vec![[0.0; 3]; self.n_free / 3];
+        for (s, &v) in self.layout.slot_vertex.iter().enumerate() {
+            let fi = self.free[3 * s];
+            if fi != FIXED {
+                let x = mesh.coord(v);
+                out[fi / 3] = [x.x, x.y, 0.0];
+            }
+        }
+        out
+    }
+
     /// `y = M x` over all slots.
     pub fn mass_mul(&self, x: &[f64], y: &mut [f64]) {
         for (a, w) in self.mass_ptr.windows(2).enumerate() {

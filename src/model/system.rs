@@ -33,6 +33,9 @@ pub(super) struct System {
     /// The scene's solver settings it was built with (step bounds and
     /// the internal step limit).
     pub(super) settings: SolverSettings,
+    /// Where each free slot is in the reference sheet (the ordering of
+    /// large systems cuts by it).
+    pub(super) block_coords: Vec<[f64; 3]>,
 }
 
 impl System {
@@ -45,6 +48,7 @@ impl System {
             self.asm.col_ptr.clone(),
             self.asm.row_idx.clone(),
             3,
+            Some(&self.block_coords),
         )?;
         self.solver.carry_stats(stats);
         self.ws.invalidate_jacobian();
@@ -131,9 +135,15 @@ impl Model {
         asm.rigid
             .set_supports(&supported_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
         // Free scalars come in slots of 3 with one pattern.
-        let solver =
-            SparseSolver::new_blocked(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone(), 3)
-                .map_err(Error::Scene)?;
+        let block_coords = asm.free_block_coords(mesh);
+        let solver = SparseSolver::new_blocked(
+            asm.n_free,
+            asm.col_ptr.clone(),
+            asm.row_idx.clone(),
+            3,
+            Some(&block_coords),
+        )
+        .map_err(Error::Scene)?;
         let nends = asm.creases.len();
         let mut rest = vec![Vec::new(); nends];
         let mut torque = vec![Vec::new(); nends];
@@ -194,6 +204,7 @@ impl Model {
             Integrator::GeneralizedAlpha => None,
         };
         let sys = System {
+            block_coords,
             scales,
             solver,
             coeffs: ga::Coefficients::new(sc.solver.rho_inf),

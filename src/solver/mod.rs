@@ -3,6 +3,7 @@
 pub mod central_difference;
 pub mod generalized_alpha;
 pub mod linear;
+pub mod ordering;
 pub mod statics;
 
-pub use linear::{FactorKind, LowRank, SolverStats, SparseSolver};
+pub use linear::{FactorKind, LowRank, Ordering, SolverStats, SparseSolver};
