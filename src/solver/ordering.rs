@@ -77,7 +77,7 @@ struct Dissection<'g, 'a> {
     x: &'g [[f64; 3]],
     /// `stamp[v] == counter` marks `v` as inside the set being worked on.
     stamp: Vec<u64>,
-    /// Side of the cut (1 below, 2 above) or component mark.
+    /// Side of the cut being made (1 below the median, 2 at or above).
     side: Vec<u8>,
     /// Index of a vertex within the set being ordered by minimum degree.
     local: Vec<usize>,
@@ -95,8 +95,9 @@ impl Dissection<'_, '_> {
         self.counter
     }
 
-    /// The part of the marked set connected to `root` (breadth first).
-    fn component(&mut self, root: usize, mark: u64) -> Vec<usize> {
+    /// The part of the marked set connected to `root` (breadth first), and
+    /// the fresh stamp its vertices now carry.
+    fn component(&mut self, root: usize, mark: u64) -> (Vec<usize>, u64) {
         self.counter += 1;
         let seen_mark = self.counter;
         let mut seen = vec![root];
@@ -112,7 +113,7 @@ impl Dissection<'_, '_> {
                 }
             }
         }
-        seen
+        (seen, seen_mark)
     }
 
     /// Order `set`: push (in reverse) the tasks that order its parts and
@@ -123,7 +124,7 @@ impl Dissection<'_, '_> {
         }
         let mark = self.mark(&set);
         // Connected components are ordered one after the other.
-        let first = self.component(set[0], mark);
+        let (first, connected) = self.component(set[0], mark);
         if first.len() < set.len() {
             let rest: Vec<usize> = set
                 .iter()
@@ -134,12 +135,12 @@ impl Dissection<'_, '_> {
             stack.push(Task::Order(first));
             return Ok(());
         }
-        let mark = self.mark(&set);
-        match self.cut(&set, mark) {
-            Some((below, above, sep)) => {
+        // The whole set is connected and carries the component's stamp.
+        match self.cut(&set, connected) {
+            Some((part, rest, sep)) => {
                 stack.push(Task::Last(sep));
-                stack.push(Task::Order(above));
-                stack.push(Task::Order(below));
+                stack.push(Task::Order(rest));
+                stack.push(Task::Order(part));
                 Ok(())
             }
             None => self.minimum_degree(&set),
