@@ -159,12 +159,15 @@ fn pyramid_row(time: f64, dt: f64, ramp: f64) {
     let sim = steps as f64 * dt;
     println!();
     println!(
-        "| pattern | facets | DOFs | simulated s | CPU s | CPU s per simulated s | steps (rejected) | Newton its | factorizations | assembly % | factorization % | solves % |"
+        "| pattern | facets | DOFs | simulated s | CPU s | CPU s per simulated s | steps (rejected) | Newton its | factorizations (LLT/LDLT) | assembly % | factorization % | solves % |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let kinds = m
+        .solver_stats()
+        .map_or("-".to_string(), |s| format!("{}/{}", s.llt, s.ldlt));
     let pct = |x: f64| 100.0 * x / cpu;
     println!(
-        "| BoxPleatPyramid | {facets} | {} | {sim} | {cpu:.1} | {:.0} | {} ({}) | {} | {} | {:.0} | {:.0} | {:.0} |",
+        "| BoxPleatPyramid | {facets} | {} | {sim} | {cpu:.1} | {:.0} | {} ({}) | {} | {} ({kinds}) | {:.0} | {:.0} | {:.0} |",
         m.n_dofs(),
         cpu / sim,
         total.steps,

@@ -17,6 +17,7 @@
 use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
 pub use crate::scene::NewtonMode;
 use crate::solver::SparseSolver;
+use crate::solver::broyden::Broyden;
 use std::time::{Duration, Instant};
 
 /// The four coefficients of the scheme.
@@ -103,7 +104,7 @@ impl<'a> Drive<'a> {
     }
 }
 
-/// Result of one successful step.
+/// The work of one step and, where it succeeded, its local error.
 #[derive(Clone, Debug, Default)]
 pub struct Outcome {
     /// Newton iterations.
@@ -142,6 +143,8 @@ pub struct Workspace {
     /// Where the factorization in the solver was formed (None: no usable
     /// factorization).
     jacobian: Option<JacobianPoint>,
+    /// Secant updates of the kept matrix within a step.
+    secant: Broyden,
 }
 
 /// Everything the iteration matrix is a function of: the iterate, the
@@ -300,8 +303,18 @@ pub struct Settings {
     pub newton: NewtonMode,
 }
 
-/// Take one step of size `h` from `cur`. Fails with a reason when Newton
-/// does not converge or the state becomes invalid; `cur` is untouched.
+/// A step that failed: why, and the work it took.
+#[derive(Clone, Debug)]
+pub struct Failure {
+    /// What went wrong (Newton did not converge, an invalid state).
+    pub reason: String,
+    /// Newton iterations, factorizations and assembly time spent on it.
+    pub outcome: Outcome,
+}
+
+/// Take one step of size `h` from `cur`. Fails with a reason (and the work
+/// spent) when Newton does not converge or the state becomes invalid;
+/// `cur` is untouched.
 #[allow(clippy::too_many_arguments)]
 pub fn step(
     asm: &Assembler,
@@ -313,7 +326,32 @@ pub fn step(
     scales: &Scales,
     settings: Settings,
     ws: &mut Workspace,
-) -> Result<(Dynamics, Outcome), String> {
+) -> Result<(Dynamics, Outcome), Failure> {
+    let mut out = Outcome::default();
+    match step_inner(
+        asm, solver, co, cur, h, drive, scales, settings, ws, &mut out,
+    ) {
+        Ok(next) => Ok((next, out)),
+        Err(reason) => Err(Failure {
+            reason,
+            outcome: out,
+        }),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn step_inner(
+    asm: &Assembler,
+    solver: &mut SparseSolver,
+    co: Coefficients,
+    cur: &Dynamics,
+    h: f64,
+    drive: &Drive,
+    scales: &Scales,
+    settings: Settings,
+    ws: &mut Workspace,
+    out: &mut Outcome,
+) -> Result<Dynamics, String> {
     let Scales {
         newton: scales,
         error: error_scales,
@@ -321,7 +359,6 @@ pub fn step(
     let n = asm.n_dofs();
     let Coefficients { am, beta, .. } = co;
     let bh2 = beta * h * h;
-    let mut out = Outcome::default();
     // Predictor: of two guesses, the one with the smaller residual. Held
     // positions (q_{n+1} = q_n) suit a folding sheet: extrapolating its
     // motion starts Newton from stretched rotating gradients and from the
@@ -383,14 +420,14 @@ pub fn step(
     };
     let mut size = [f64::INFINITY; 2];
     if skip_held {
-        size[1] = evaluate(1, &mut alt, ws, &mut out);
+        size[1] = evaluate(1, &mut alt, ws, out);
         if !size[1].is_finite() {
-            size[0] = evaluate(0, &mut next, ws, &mut out);
+            size[0] = evaluate(0, &mut next, ws, out);
         }
     } else {
-        size[0] = evaluate(0, &mut next, ws, &mut out);
+        size[0] = evaluate(0, &mut next, ws, out);
         if !(skip_extrapolated && size[0].is_finite()) {
-            size[1] = evaluate(1, &mut alt, ws, &mut out);
+            size[1] = evaluate(1, &mut alt, ws, out);
         }
     }
     // The winner's residual is Newton's first one (the same evaluation, so
@@ -428,6 +465,15 @@ pub fn step(
     // use here: a projected Newton direction need not lower |g|, and the
     // iteration then cycles against the barrier.
     let line_search = asm.limits_steps();
+    // Secant updates where modified Newton keeps a matrix (not near
+    // contact, whose line search needs plain Newton directions).
+    let secant = modified && !line_search;
+    let weights = ws.secant.reset(asm.n_free);
+    for (&fi, &sc) in asm.free.iter().zip(scales) {
+        if fi != FIXED {
+            weights[fi] = 1.0 / (sc * sc);
+        }
+    }
     // Slope g . d at the iterate a correction started from (negative).
     let mut slope0 = 0.0;
     // Whether a barrier acted where the last correction started.
@@ -491,26 +537,41 @@ pub fn step(
             ws.jacobian = Some(jp);
             out.factorizations += 1;
             refresh = false;
+            ws.secant.clear();
         }
         solver.solve_in_place(&mut ws.rhs)?;
         out.iterations = it + 1;
-        let mut norm: f64 = 0.0;
-        for (&fi, &scale) in asm.free.iter().zip(scales) {
-            if fi != FIXED {
-                norm = norm.max(ws.rhs[fi].abs() / scale);
+        let scaled_norm = |x: &[f64]| {
+            let mut norm: f64 = 0.0;
+            for (&fi, &scale) in asm.free.iter().zip(scales) {
+                if fi != FIXED {
+                    norm = norm.max(x[fi].abs() / scale);
+                }
             }
-        }
+            norm
+        };
+        // The plain correction's size against the last correction applied:
+        // the contraction rate of the iteration (modified Newton converges
+        // linearly: the remaining error is about rate / (1 - rate) times
+        // the last correction).
+        let plain = scaled_norm(&ws.rhs);
+        let rate = plain / last_norm;
+        // The correction applied: the plain one through the secant updates.
+        let norm = if secant && stale {
+            ws.secant.correct(&mut ws.rhs);
+            scaled_norm(&ws.rhs)
+        } else {
+            plain
+        };
         if !norm.is_finite() {
             return Err("Newton produced non-finite values".into());
         }
-        // Contraction rate of the iteration (modified Newton converges linearly:
-        // the remaining error is about rate / (1 - rate) times the last correction).
-        let rate = norm / last_norm;
         if modified && stale && rate > 1.0 && it + 1 < settings.max_newton {
             // A matrix formed elsewhere sends the iterate away: drop this
             // correction and form the matrix here.
             refresh = true;
             slope0 = 0.0;
+            ws.secant.clear();
             continue;
         }
         for i in 0..n {
@@ -535,6 +596,9 @@ pub fn step(
             next.q[i] += fraction * ws.dq[i];
         }
         applied = fraction;
+        if secant {
+            ws.secant.applied(&ws.rhs, fraction == 1.0);
+        }
         let remaining = if fraction < 1.0 {
             f64::INFINITY
         } else if modified && stale {
@@ -566,7 +630,7 @@ pub fn step(
             }
             out.assembly_time += t0.elapsed();
             out.error = local_error(&next, cur, asm, h, beta, error_scales, settings.tolerance);
-            return Ok((next, out));
+            return Ok(next);
         }
         // Diverging: the correction grew twice in a row (one growth alone
         // happens in a converging zig-zag between slots).
