@@ -221,6 +221,9 @@ pub struct Assembler {
     pub physics: Physics,
     /// The force terms, in evaluation order.
     terms: Vec<Box<dyn ForceTerm>>,
+    /// Whether the iteration matrix takes the shell's membrane geometric
+    /// stiffness from the step start ([`Assembler::lag_membrane_stiffness`]).
+    lag_membrane: bool,
 }
 
 impl Assembler {
@@ -335,6 +338,7 @@ impl Assembler {
             rigid: RigidModes::default(),
             physics,
             terms: terms::built_in().into_iter().chain(extra).collect(),
+            lag_membrane: false,
         };
         asm.build_pattern();
         asm.set_physics(physics);
@@ -695,6 +699,20 @@ impl Assembler {
         pairs.extend(wanted);
         self.set_extra_pairs(pairs);
         true
+    }
+
+    /// Take the iteration matrix's membrane geometric stiffness from the
+    /// state at each step start (see [`crate::element::ShellElement::eval_lagged`])
+    /// instead of from the iterate: the implicit stepper's modified Newton
+    /// sets it; without it (the default: statics, explicit stepping, full
+    /// Newton) the matrix is the exact tangent.
+    pub fn lag_membrane_stiffness(&mut self, on: bool) {
+        self.lag_membrane = on;
+    }
+
+    /// Whether [`Assembler::lag_membrane_stiffness`] is on.
+    pub fn lags_membrane_stiffness(&self) -> bool {
+        self.lag_membrane
     }
 
     /// Let every term take its lagged data from the step start `(q, v)`

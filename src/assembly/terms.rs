@@ -16,6 +16,7 @@ use super::{
 };
 use crate::crease;
 use crate::dofs::DofLayout;
+use crate::element::MembraneResultants;
 use crate::solver::LowRank;
 use nalgebra::{SMatrix, SVector};
 
@@ -91,18 +92,49 @@ pub trait ForceTerm: Send + Sync {
 /// trait's `add` signature; `duplicates` reports those lines as shared.)
 pub(super) fn built_in() -> Vec<Box<dyn ForceTerm>> {
     vec![
-        Box::new(Shell),
+        Box::new(Shell::default()),
         Box::new(CreaseSprings),
         Box::new(MassDamping),
     ]
 }
 
 /// Membrane and bending of every facet, with stiffness damping `beta K`.
-struct Shell;
+#[derive(Default)]
+struct Shell {
+    /// Each facet's membrane resultants at the step start, for the
+    /// iteration matrix's membrane geometric stiffness where the assembler
+    /// lags it ([`Assembler::lag_membrane_stiffness`]; empty otherwise).
+    lagged: Vec<MembraneResultants>,
+}
+
+impl Shell {
+    fn take_lag(&mut self, asm: &Assembler, q: &[f64]) {
+        self.lagged.clear();
+        if !asm.lags_membrane_stiffness() {
+            return;
+        }
+        let mat = &asm.physics.material;
+        self.lagged.extend(
+            asm.elements
+                .iter()
+                .enumerate()
+                .map(|(f, el)| el.membrane_resultants(mat, &local_vector(&asm.layout.local[f], q))),
+        );
+    }
+}
 
 impl ForceTerm for Shell {
     fn name(&self) -> &str {
         "shell"
+    }
+
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
+        self.take_lag(asm, q);
+        Vec::new()
+    }
+
+    fn lag(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) {
+        self.take_lag(asm, q);
     }
 
     fn add(
@@ -124,11 +156,12 @@ impl ForceTerm for Shell {
         for (f, el) in asm.elements.iter().enumerate() {
             let bm = &asm.face_maps[f];
             let e = local_vector(&asm.layout.local[f], st.q);
-            let en = el.eval(
+            let en = el.eval_lagged(
                 &p.material,
                 &e,
                 &mut fe,
                 if need_tangent { Some(&mut ke) } else { None },
+                self.lagged.get(f),
             );
             out.strain_energy += en.membrane + en.bending;
             if p.beta != 0.0 {

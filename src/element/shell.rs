@@ -39,7 +39,10 @@ use nalgebra::Matrix3;
 use nalgebra::{Matrix2, SMatrix, SVector, Vector2, Vector3};
 
 /// Largest number of quadrature points of any [`Rule`].
-const MAX_QP: usize = 12;
+pub const MAX_QP: usize = 12;
+
+/// Weighted membrane resultants `wa h C eps` (Voigt) at each quadrature point.
+pub type MembraneResultants = [[f64; 3]; MAX_QP];
 
 /// Per-quadrature-point constants: Cartesian shape-function derivatives and
 /// the weight times the area.
@@ -396,11 +399,33 @@ impl ShellElement {
         force: &mut SVector<f64, 27>,
         tangent: Option<&mut SMatrix<f64, 27, 27>>,
     ) -> ShellEnergy {
+        self.eval_lagged(mat, e, force, tangent, None)
+    }
+
+    /// As [`ShellElement::eval`], with the tangent's membrane geometric
+    /// stiffness (the membrane resultants times the second derivatives of
+    /// the strains) taken from `membrane` (per quadrature point, as
+    /// [`ShellElement::membrane_resultants`] gives them at another state)
+    /// instead of from `e`. An iteration matrix, not the exact tangent: a
+    /// Newton iterate that rotates a facet by a linear update stretches it
+    /// by about the square of the angle, and the membrane force of that
+    /// stretch, a million times the bending stiffness on thin sheets, would
+    /// otherwise dominate the matrix's bending part; at a converged state
+    /// the stretch is gone and the lagged resultants (the last converged
+    /// state's) are close to the exact ones.
+    pub fn eval_lagged(
+        &self,
+        mat: &Material,
+        e: &ElemVec,
+        force: &mut SVector<f64, 27>,
+        tangent: Option<&mut SMatrix<f64, 27, 27>>,
+        membrane: Option<&MembraneResultants>,
+    ) -> ShellEnergy {
         match tangent {
-            None => self.accumulate(mat, e, force, None),
+            None => self.accumulate(mat, e, force, None, None),
             Some(kt) => {
                 let mut blocks = [[ZERO3; 9]; 9];
-                let out = self.accumulate(mat, e, force, Some(&mut blocks));
+                let out = self.accumulate(mat, e, force, Some(&mut blocks), membrane);
                 // Write the upper blocks and their mirror images; the
                 // diagonal blocks are symmetrised.
                 for k in 0..9 {
@@ -424,6 +449,18 @@ impl ShellElement {
         }
     }
 
+    /// The weighted membrane resultants `wa h C eps` at each quadrature
+    /// point of the state `e` (unused points zero).
+    pub fn membrane_resultants(&self, mat: &Material, e: &ElemVec) -> MembraneResultants {
+        let pl = Plane::new(mat);
+        let mut out = [[0.0; 3]; MAX_QP];
+        for (o, q) in out.iter_mut().zip(&self.qp[..self.nq]) {
+            let kin = kinematics(q, e);
+            *o = pl.apply(q.wa * mat.thickness, kin.eps);
+        }
+        out
+    }
+
     /// Energy and force, plus the upper tangent blocks `(k, l)`, `k <= l`, if asked.
     #[inline(always)]
     fn accumulate(
@@ -432,13 +469,14 @@ impl ShellElement {
         e: &ElemVec,
         force: &mut SVector<f64, 27>,
         mut blocks: Option<&mut [[M3; 9]; 9]>,
+        membrane: Option<&MembraneResultants>,
     ) -> ShellEnergy {
         let pl = Plane::new(mat);
         let h = mat.thickness;
         let (hm, hb) = (h, h * h * h / 12.0);
         force.fill(0.0);
         let mut out = ShellEnergy::default();
-        for q in &self.qp[..self.nq] {
+        for (iq, q) in self.qp[..self.nq].iter().enumerate() {
             let kin = kinematics(q, e);
             // Weighted stress resultants and moments (Voigt).
             let nm = pl.apply(q.wa * hm, kin.eps);
@@ -467,7 +505,7 @@ impl ShellElement {
 
             if let Some(bl) = blocks.as_deref_mut() {
                 let stress = Stress {
-                    nm,
+                    nm: membrane.map_or(nm, |m| m[iq]),
                     nt: &nt,
                     w,
                     s,
@@ -525,7 +563,7 @@ fn transpose(x: &M3) -> M3 {
 
 /// Per-point stress quantities shared by the force and the tangent.
 struct Stress<'a> {
-    /// Weighted membrane resultants `wa h C eps`.
+    /// Weighted membrane resultants `wa h C eps` (of the iterate, or lagged).
     nm: [f64; 3],
     /// `nt_k = sum_V m_V N_k,V`: the coefficient of `n_hat` in the bending force.
     nt: &'a [f64; 9],
@@ -942,6 +980,59 @@ mod tests {
     /// cost nothing, force and tangent match finite differences of energy and
     /// force, its area and mass are the quadrature's (mass SPD, unit
     /// translation energy rho h area / 2).
+    /// The lagged iteration matrix: with the state's own membrane
+    /// resultants it is the exact tangent; with other resultants the force
+    /// is unchanged and the tangent differs by the membrane geometric
+    /// stiffness only, whose 3x3 blocks are multiples of the identity
+    /// (sum_q N_k,a N_l,b (n_ab - n'_ab) I) and linear in the resultants.
+    #[test]
+    fn lagged_membrane_stiffness_changes_only_the_geometric_part() {
+        let mat = material(0.05);
+        let mut rng = Rng(0x1a99);
+        for rule in [Rule::Dunavant12, Rule::Dunavant7] {
+            let x = triangles()[2];
+            let el = ShellElement::new(x, rule).unwrap();
+            let e = random_deformation(&x, &mut rng);
+            let other = random_deformation(&x, &mut rng);
+            let own = el.membrane_resultants(&mat, &e);
+            let lag = el.membrane_resultants(&mat, &other);
+            let (mut f0, mut f1, mut f2) = (SVector::zeros(), SVector::zeros(), SVector::zeros());
+            let mut k0 = SMatrix::<f64, 27, 27>::zeros();
+            let mut k1 = k0;
+            let mut k2 = k0;
+            el.eval(&mat, &e, &mut f0, Some(&mut k0));
+            el.eval_lagged(&mat, &e, &mut f1, Some(&mut k1), Some(&own));
+            assert_eq!(f0, f1);
+            assert_eq!(k0, k1, "{rule:?}: own resultants give the exact tangent");
+            el.eval_lagged(&mat, &e, &mut f2, Some(&mut k2), Some(&lag));
+            assert_eq!(f0, f2, "the force is the state's own");
+            let diff = k2 - k0;
+            assert!(
+                diff.norm() > 1e-6 * k0.norm(),
+                "{rule:?}: resultants differ"
+            );
+            for k in 0..9 {
+                for l in 0..9 {
+                    let b = diff.fixed_view::<3, 3>(3 * k, 3 * l);
+                    let c = b[(0, 0)];
+                    let tol = 1e-12 * k0.norm();
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            let want = if i == j { c } else { 0.0 };
+                            assert!((b[(i, j)] - want).abs() < tol, "{rule:?} block ({k},{l})");
+                        }
+                    }
+                }
+            }
+            // Linear in the resultants: halfway resultants, halfway matrix.
+            let mid: MembraneResultants =
+                std::array::from_fn(|q| std::array::from_fn(|v| 0.5 * (own[q][v] + lag[q][v])));
+            let mut km = k0;
+            el.eval_lagged(&mat, &e, &mut f2, Some(&mut km), Some(&mid));
+            assert!((km - (k0 + k2) * 0.5).norm() < 1e-12 * k0.norm());
+        }
+    }
+
     #[test]
     fn curved_sided_facet() {
         let (m1, m2) = (material(1.0), material(2.0));

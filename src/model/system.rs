@@ -110,6 +110,12 @@ impl Model {
             ..ElementOptions::default()
         };
         let mut asm = Assembler::new(mesh, physics, element, &fixed).map_err(Error::Scene)?;
+        // Modified Newton's matrix takes the membrane geometric stiffness
+        // from each step start (full Newton keeps the exact tangent).
+        asm.lag_membrane_stiffness(
+            sc.solver.integrator == Integrator::GeneralizedAlpha
+                && sc.solver.newton == crate::scene::NewtonMode::Modified,
+        );
         if let Some(c) = &sc.contact {
             if sc.solver.integrator == Integrator::CentralDifference {
                 return Err(Error::Scene(
