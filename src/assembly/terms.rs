@@ -290,15 +290,16 @@ impl ForceTerm for MassDamping {
         }
         let n = asm.n_dofs();
         let mut mv = vec![0.0; n];
-        asm.mass_mul(st.v, &mut mv);
         let mut pv = vec![0.0; n];
         // A clamped sheet has no rigid motion: nothing to project.
         if asm.rigid.n_allowed() > 0 {
             let mut mq = vec![0.0; n];
-            asm.mass_mul(st.q, &mut mq);
+            asm.mass_mul_n([st.v, st.q], [&mut mv, &mut mq]);
             if asm.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
                 pv.fill(0.0);
             }
+        } else {
+            asm.mass_mul(st.v, &mut mv);
         }
         for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {
             *f += alpha * (x - r);
