@@ -8,8 +8,9 @@
 //!
 //! Then Origami Simulator's BoxPleatPyramid (tests/data/origami-simulator,
 //! 5202 facets) at default settings, its fold input ramped 0 -> 1 over
-//! 0.5 s: CPU for the first `--pyramid` seconds (0 skips it) and the CPU per
-//! simulated second that makes.
+//! 0.5 s: CPU for the first `--pyramid` seconds (0 skips it), the CPU per
+//! simulated second that makes, and (from 0.2 s on) a row per tenth of a
+//! second: where along the fold the CPU goes.
 //!
 //! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0] [--pyramid 0.01]
 //! [--tolerance T] [--max-step H] [--rho-inf R] [--quadrature 7]` (the last
@@ -24,8 +25,8 @@ use nalgebra::Vector3;
 use origami_fmu::ids::VertexId;
 mod common;
 use common::cpu_seconds;
-use origami_fmu::benchmarks::{aligned_max_distance, fold_by_ramp, fold_by_ramp_with};
-use origami_fmu::model::Model;
+use origami_fmu::benchmarks::{aligned_max_distance, fold_by_ramp_with};
+use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::patterns::Miura;
 
 fn main() {
@@ -153,10 +154,38 @@ fn pyramid_row(time: f64, dt: f64, ramp: f64) {
     let mut m = Model::new(scene).expect("model");
     m.initialize().expect("initialize");
     let steps = (time / dt).round().max(1.0) as usize;
+    // Where the CPU goes over the fold: a row per tenth of a second.
+    let per = ((0.1 / dt).round() as usize).max(1);
+    let mut rows: Vec<(f64, f64, StepReport)> = Vec::new();
+    let mut k = 0;
     let c0 = cpu_seconds();
-    let total = fold_by_ramp(&mut m, steps, dt, ramp);
+    let total = fold_by_ramp_with(&mut m, steps, dt, ramp, true, |_, total| {
+        k += 1;
+        if k % per == 0 || k == steps {
+            rows.push((k as f64 * dt, cpu_seconds() - c0, total.clone()));
+        }
+    });
     let cpu = cpu_seconds() - c0;
     let sim = steps as f64 * dt;
+    if rows.len() > 1 {
+        println!();
+        println!(
+            "| BoxPleatPyramid, until t s | CPU s in the interval | steps (rejected) | Newton its | factorizations |"
+        );
+        println!("| --- | --- | --- | --- | --- |");
+        let mut last = (0.0, StepReport::default());
+        for (t, c, r) in &rows {
+            println!(
+                "| {t:.2} | {:.1} | {} ({}) | {} | {} |",
+                c - last.0,
+                r.steps - last.1.steps,
+                r.rejected - last.1.rejected,
+                r.newton_iterations - last.1.newton_iterations,
+                r.factorizations - last.1.factorizations,
+            );
+            last = (*c, r.clone());
+        }
+    }
     println!();
     println!(
         "| pattern | facets | DOFs | simulated s | CPU s | CPU s per simulated s | steps (rejected) | Newton its | factorizations (LLT/LDLT) | assembly % | factorization % | solves % |"
