@@ -209,14 +209,20 @@ impl Model {
             ),
             Integrator::GeneralizedAlpha => None,
         };
+        let coeffs = ga::Coefficients::new(sc.solver.rho_inf);
+        let stick_bound = match &sc.contact {
+            Some(c) if c.friction > 0.0 => ga::stick_bound(coeffs, c.stick_velocity, length),
+            _ => f64::INFINITY,
+        };
         let sys = System {
             block_coords,
             scales,
             solver,
-            coeffs: ga::Coefficients::new(sc.solver.rho_inf),
+            coeffs,
             newton: ga::Settings {
                 tolerance: sc.solver.tolerance,
                 newton_tolerance: sc.solver.newton_tolerance(sc.material.thickness / length),
+                stick_bound,
                 max_newton: sc.solver.max_newton,
                 newton: sc.solver.newton,
             },

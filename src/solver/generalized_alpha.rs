@@ -306,10 +306,31 @@ pub struct Settings {
     pub tolerance: f64,
     /// Newton stops when every scaled correction is below this.
     pub newton_tolerance: f64,
+    /// And below this times the step (1/s; infinite without friction):
+    /// see [`stick_bound`].
+    pub stick_bound: f64,
     /// Maximum Newton iterations.
     pub max_newton: usize,
     /// Full or modified Newton.
     pub newton: NewtonMode,
+}
+
+/// Newton's velocity error against friction's stick velocity: a position
+/// correction `d` left over moves the velocity by `gamma / (beta h) d`,
+/// and regularized friction reads velocities below `stick_velocity` as
+/// stick, so an iteration error near it lets a sticking contact creep.
+const STICK_FRACTION: f64 = 1.0;
+
+/// [`Settings::stick_bound`] of a scene whose contact has friction: scaled
+/// corrections (positions over the sheet size `length`) stay below this
+/// times the step, i.e. the velocity left to the iteration below
+/// [`STICK_FRACTION`] of `stick_velocity`. Measured (tests/contact.rs, a
+/// panel held by mu = 0.8 on a 30 degree incline, 0.3 s, creep allowed
+/// 2.2e-4 m): at tolerance 1e-2 (Newton 1e-5) it crept 1.4e-3 m without
+/// this bound, 9.5e-5 m with it. With Newton at 1e-6 the fraction was
+/// varied: creep 1.4e-5 m at 0.1 and 1, 1.7e-5 m at 10, 1.5e-3 m at 100.
+pub fn stick_bound(co: Coefficients, stick_velocity: f64, length: f64) -> f64 {
+    STICK_FRACTION * stick_velocity * co.beta / (co.gamma * length)
 }
 
 /// A step that failed: why, and the work it took.
@@ -368,6 +389,7 @@ fn step_inner(
     let n = asm.n_dofs();
     let Coefficients { am, beta, .. } = co;
     let bh2 = beta * h * h;
+    let newton_tolerance = settings.newton_tolerance.min(settings.stick_bound * h);
     // Predictor: of two guesses, the one with the smaller residual. Held
     // positions (q_{n+1} = q_n) suit a folding sheet: extrapolating its
     // motion starts Newton from stretched rotating gradients and from the
@@ -624,8 +646,8 @@ fn step_inner(
         // A fresh matrix that stops contracting this close to the tolerance
         // has reached the round-off floor of an ill-conditioned (thin,
         // membrane-stiff) system: as converged as it gets.
-        let floor = !stale && it >= 2 && rate > 0.5 && norm <= 100.0 * settings.newton_tolerance;
-        if remaining <= settings.newton_tolerance || floor {
+        let floor = !stale && it >= 2 && rate > 0.5 && norm <= 100.0 * newton_tolerance;
+        if remaining <= newton_tolerance || floor {
             // Final consistent update. The converged state is evaluated in
             // full only where a term's powers are integrated over the step
             // (contact's friction work); otherwise only its crease angles
@@ -659,7 +681,7 @@ fn step_inner(
         // contractions there get up to NEAR_CHANCES more iterations first;
         // a diverging iterate refreshes as soon as it leaves the band.
         let slow = rate > MAX_RATE;
-        let near = norm <= NEAR_FACTOR * settings.newton_tolerance;
+        let near = norm <= NEAR_FACTOR * newton_tolerance;
         let let_through = slow && near && near_chances_used < NEAR_CHANCES;
         if modified && stale && slow && !let_through && it + 1 < settings.max_newton {
             refresh = true;
