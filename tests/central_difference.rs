@@ -43,8 +43,7 @@ fn free_vibration(h_factor: f64, steps: usize) -> f64 {
         v: vec![0.0; n],
         qdd: vec![0.0; n],
         abar: vec![0.0; n],
-        extrapolation_streak: 0,
-        held_streak: 0,
+        ..Default::default()
     };
     let zeros = vec![0.0; n];
     let moment = vec![0.0; asm.creases.len()];

@@ -223,6 +223,8 @@ impl Model {
             abar: vec![0.0; n],
             extrapolation_streak: 0,
             held_streak: 0,
+            kept_second_grew: false,
+            early_forms: 0,
         };
         self.consistent_accelerations(&u, &theta_prev)?;
         self.state.h_next = self.sys.as_ref().expect("built").settings.max_step;
