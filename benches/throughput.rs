@@ -6,7 +6,8 @@
 //! steps.
 //!
 //! `cargo bench --bench throughput -- [--sizes 2,4,8,16] [--time 1.0]
-//! [--tolerance 1e-3] [--newton modified|full] [--max-step 1e-3]`
+//! [--tolerance 1e-3] [--newton modified|full] [--max-step 1e-3]
+//! [--quadrature 7|12]`
 //!
 //! The last column compares simulated time with CPU time (> 1: faster than
 //! real time). The cost-growth exponent fits cost per step ~ n^p between
@@ -23,6 +24,7 @@ struct Options {
     tolerance: f64,
     newton: NewtonMode,
     max_step: f64,
+    quadrature: origami_fmu::element::Rule,
 }
 
 fn options() -> Options {
@@ -32,6 +34,7 @@ fn options() -> Options {
         tolerance: 1e-3,
         newton: NewtonMode::Modified,
         max_step: 1e-3,
+        quadrature: origami_fmu::element::Rule::default(),
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -42,6 +45,13 @@ fn options() -> Options {
             "--time" => o.time = val.parse().expect("time"),
             "--tolerance" => o.tolerance = val.parse().expect("tolerance"),
             "--max-step" => o.max_step = val.parse().expect("max step"),
+            "--quadrature" => {
+                o.quadrature = match val.as_str() {
+                    "7" => origami_fmu::element::Rule::Dunavant7,
+                    "12" => origami_fmu::element::Rule::Dunavant12,
+                    _ => panic!("--quadrature 7|12"),
+                }
+            }
             "--newton" => {
                 o.newton = match val.as_str() {
                     "full" => NewtonMode::Full,
@@ -63,8 +73,8 @@ fn options() -> Options {
 fn main() {
     let o = options();
     println!(
-        "Miura-ori folding, {} s simulated, tolerance {:.0e}, max step {:.0e} s, {:?} Newton",
-        o.time, o.tolerance, o.max_step, o.newton
+        "Miura-ori folding, {} s simulated, tolerance {:.0e}, max step {:.0e} s, {:?} Newton, {:?} quadrature",
+        o.time, o.tolerance, o.max_step, o.newton, o.quadrature
     );
     println!(
         "| cells | DOFs | steps | steps/s | Newton its/step | factorizations/step | assembly % | factorization % | solves % | LLT/LDLT/LU | CPU s | sim/CPU | cost/step exponent |"
@@ -76,6 +86,7 @@ fn main() {
         sc.solver.tolerance = o.tolerance;
         sc.solver.newton = o.newton;
         sc.solver.max_step = o.max_step;
+        sc.solver.quadrature = o.quadrature;
         let mut m = Model::new(sc).expect("model");
         m.initialize().expect("initialize");
         let dt = 0.01;
