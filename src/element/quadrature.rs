@@ -5,32 +5,37 @@
 //! offered. Points are area coordinates `(xi, eta, zeta)`; weights sum to 1
 //! and are multiplied by the triangle area.
 //!
-//! The 12-point rule is the default. The 7-point rule's errors equal the
-//! 12-point rule's to two digits on every mesh family and study of
-//! `benches/element_families.rs`, with full rank 21 at the reference and
-//! the same lowest tangent eigenvalues to three digits under 0.1-1 %
-//! compression and tension, at 0.60x the cost (605 against 999 ns force,
-//! 2990 against 5088 ns force + tangent per element). It is not the
-//! default because, measured 2026-12-02 on the undamped free square of
-//! `tests/fmpy/test_second_client.py` (two facets, fold ramped to 90 deg
-//! in 0.1 s, fixed 0.25 ms steps), the two rules differ by 3 % of the
-//! outputs within 10 ms on such coarse meshes, and a last-bit change of
-//! the input grows 10x per 10 ms under the 7-point rule against 10x per
-//! 40 ms under the 12-point rule (both chaotic: the two masters' last-bit
-//! step differences reach 3.5e-9 m at 0.1 s against the 1e-9 the test
-//! asks; the same calls give bit-identical outputs under either rule).
-//! Which rule's coarse-mesh dynamics is closer to the converged sheet is
-//! the open question.
+//! The 7-point rule is the default (since 2026-12-04; the 12-point rule
+//! before). Its errors equal the 12-point rule's to two digits on every
+//! mesh family and study of `benches/element_families.rs`, with full rank
+//! 21 at the reference and the same lowest tangent eigenvalues to three
+//! digits under 0.1-1 % compression and tension, at 0.60x the cost (605
+//! against 999 ns force, 2990 against 5088 ns force + tangent per element).
+//!
+//! It was not the default while one question was open: on coarse meshes
+//! the two rules' dynamics differ (the undamped free square of
+//! `tests/fmpy/test_second_client.py`, two facets: 3 % of the outputs
+//! within 10 ms, and last-bit differences grew faster under the 7-point
+//! rule), so which is closer to the converged sheet?
+//! `cargo bench --bench quadrature_fidelity` answers it: against the
+//! 128-facet 12-point run, the corners of the 2-facet square are off by
+//! 2.8e-3, 5.6e-3, 3.6e-4, 5.9e-3 m (7-point) and 3.9e-3, 6.8e-3, 2.6e-3,
+//! 6.7e-4 m (12-point) at 0.02, 0.05, 0.1, 0.2 s (0.1 m sheet); at 8
+//! facets 2.9e-3 .. 6.4e-3 against 2.7e-3 .. 7.6e-3 m, at 32 facets equal
+//! to two digits, and at 128 facets the rules agree within 6e-6 .. 6e-5
+//! m. The mesh error dominates and the 7-point rule is no further from
+//! the converged sheet (closer at 6 of the 8 coarse samples). The
+//! two-masters agreement test (1e-9) passes under it today.
 
 use serde::{Deserialize, Serialize};
 
 /// A quadrature rule for the shell energy.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Rule {
-    /// 7 points, exact for polynomials of degree 5: the cheap option.
-    Dunavant7,
-    /// 12 points, exact for polynomials of degree 6: the default.
+    /// 7 points, exact for polynomials of degree 5: the default.
     #[default]
+    Dunavant7,
+    /// 12 points, exact for polynomials of degree 6.
     Dunavant12,
 }
 
@@ -121,7 +126,7 @@ mod tests {
                 assert!(l.iter().all(|&x| x > 0.0) && *w > 0.0);
             }
         }
-        assert_eq!(Rule::default(), Rule::Dunavant12);
+        assert_eq!(Rule::default(), Rule::Dunavant7);
         assert_eq!(Rule::Dunavant7.points().len(), 7);
         assert_eq!(Rule::Dunavant12.points().len(), 12);
     }

@@ -876,7 +876,7 @@ mod tests {
         }
         let el = ShellElement::new(triangles()[2], Rule::default()).unwrap();
         assert!((el.area() - 0.5 * (1.2 * 1.3 - 0.45 * 0.3)).abs() < 1e-15);
-        assert_eq!(el.rule(), Rule::Dunavant12);
+        assert_eq!(el.rule(), Rule::Dunavant7);
     }
 
     #[test]

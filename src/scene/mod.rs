@@ -336,9 +336,10 @@ pub struct SolverSettings {
     /// How an input set before a step acts over it.
     #[serde(default)]
     pub input_timing: InputTiming,
-    /// Quadrature of the shell energy: the 12-point rule (default) or the
-    /// 7-point rule, 0.6x the element's cost with errors equal to two digits
-    /// on refined meshes (`src/element/quadrature.rs` says where they differ).
+    /// Quadrature of the shell energy: the 7-point rule (default since
+    /// 2026-12-04) or the 12-point rule, 1.7x the element's cost with errors
+    /// equal to two digits on refined meshes (`src/element/quadrature.rs`
+    /// says where they differ).
     #[serde(default)]
     pub quadrature: crate::element::Rule,
 }
@@ -416,7 +417,7 @@ impl Default for SolverSettings {
             stop_time: 1.0,
             max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
             input_timing: InputTiming::Hold,
-            quadrature: crate::element::Rule::Dunavant12,
+            quadrature: crate::element::Rule::Dunavant7,
         }
     }
 }
