@@ -13,7 +13,7 @@
 //! second: where along the fold the CPU goes.
 //!
 //! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0] [--pyramid 0.01]
-//! [--tolerance T] [--max-step H] [--rho-inf R] [--quadrature 7]` (the last
+//! [--tolerance T] [--max-step H] [--rho-inf R] [--quadrature 7|12]` (the last
 //! four to compare with the defaults)
 //!
 //! Also: the exponent p of total CPU ~ DOFs^p from the first sheet, steps,
@@ -46,7 +46,11 @@ fn main() {
     let tolerance: Option<f64> = value("--tolerance").map(|v| v.parse().expect("tolerance"));
     let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
     let rho_inf: Option<f64> = value("--rho-inf").map(|v| v.parse().expect("rho_inf"));
-    let seven_point = value("--quadrature").is_some_and(|v| v == "7");
+    let quadrature = value("--quadrature").map(|v| match v.as_str() {
+        "7" => origami_fmu::element::Rule::Dunavant7,
+        "12" => origami_fmu::element::Rule::Dunavant12,
+        _ => panic!("--quadrature 7|12"),
+    });
     let (ramp, dt) = (0.5, 0.01);
     println!(
         "Miura full fold at default settings: ramp 0 -> 1 over {ramp} s, {dt} s communication steps, {stop} s simulated"
@@ -80,8 +84,8 @@ fn main() {
         if let Some(h) = max_step {
             scene.solver.max_step = h;
         }
-        if seven_point {
-            scene.solver.quadrature = origami_fmu::element::Rule::Dunavant7;
+        if let Some(rule) = quadrature {
+            scene.solver.quadrature = rule;
         }
         if let Some(r) = rho_inf {
             scene.solver.rho_inf = r;
