@@ -46,11 +46,7 @@ fn main() {
     let tolerance: Option<f64> = value("--tolerance").map(|v| v.parse().expect("tolerance"));
     let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
     let rho_inf: Option<f64> = value("--rho-inf").map(|v| v.parse().expect("rho_inf"));
-    let quadrature = value("--quadrature").map(|v| match v.as_str() {
-        "7" => origami_fmu::element::Rule::Dunavant7,
-        "12" => origami_fmu::element::Rule::Dunavant12,
-        _ => panic!("--quadrature 7|12"),
-    });
+    let quadrature = value("--quadrature").map(|v| common::quadrature_rule(&v));
     let (ramp, dt) = (0.5, 0.01);
     println!(
         "Miura full fold at default settings: ramp 0 -> 1 over {ramp} s, {dt} s communication steps, {stop} s simulated"

@@ -18,6 +18,8 @@ use origami_fmu::model::Model;
 use origami_fmu::scene::NewtonMode;
 use std::time::Instant;
 
+mod common;
+
 struct Options {
     sizes: Vec<usize>,
     time: f64,
@@ -45,13 +47,7 @@ fn options() -> Options {
             "--time" => o.time = val.parse().expect("time"),
             "--tolerance" => o.tolerance = val.parse().expect("tolerance"),
             "--max-step" => o.max_step = val.parse().expect("max step"),
-            "--quadrature" => {
-                o.quadrature = match val.as_str() {
-                    "7" => origami_fmu::element::Rule::Dunavant7,
-                    "12" => origami_fmu::element::Rule::Dunavant12,
-                    _ => panic!("--quadrature 7|12"),
-                }
-            }
+            "--quadrature" => o.quadrature = common::quadrature_rule(&val),
             "--newton" => {
                 o.newton = match val.as_str() {
                     "full" => NewtonMode::Full,

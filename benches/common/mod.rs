@@ -14,6 +14,16 @@ pub fn cpu_seconds() -> f64 {
     ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
 
+/// The quadrature rule a bench's `--quadrature 7|12` names.
+#[allow(dead_code)]
+pub fn quadrature_rule(arg: &str) -> origami_fmu::element::Rule {
+    match arg {
+        "7" => origami_fmu::element::Rule::Dunavant7,
+        "12" => origami_fmu::element::Rule::Dunavant12,
+        _ => panic!("--quadrature 7|12, not {arg}"),
+    }
+}
+
 /// The m x m panel Miura-ori scene of the benches (20 mm, 60 degree sectors).
 #[allow(dead_code)]
 pub fn miura_scene(panels: usize) -> origami_fmu::scene::Scene {
