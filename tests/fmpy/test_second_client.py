@@ -25,10 +25,13 @@ def fmi_sim():
     return str(cargo_bin) if cargo_bin.is_file() else None
 
 
-def ramp_fmu(scene, tmp_path):
-    """The FMU of tests/fmpy/scenes/SCENE.json with "input_timing": "Ramp"."""
+def ramp_fmu(scene, tmp_path, auto_damping=False):
+    """The FMU of tests/fmpy/scenes/SCENE.json with "input_timing": "Ramp"
+    (and the automatic damping a scene without ancf:damping gets, if asked)."""
     data = json.loads(scene_path(scene).read_text())
     data["solver"]["input_timing"] = "Ramp"
+    if auto_damping:
+        data["auto_damping"] = True
     src = tmp_path / f"{scene}.json"
     src.write_text(json.dumps(data))
     out = tmp_path / f"{scene}_ramp.fmu"
@@ -67,8 +70,17 @@ def test_fmi_sim_agrees_with_fmpy(fmu, tmp_path, scene):
     of communication points, 0.009999999999999998), and held (staircase)
     inputs into the undamped square turn such differences into 1e-4 of the
     sheet size by 0.1 s through the step controller's accept/reject
-    decisions (measured), while a continuous input keeps them at round-off."""
-    path = ramp_fmu(scene, tmp_path)
+    decisions (measured), while a continuous input keeps them at round-off.
+    Both scenes run with the automatic damping a user's scene gets: the
+    undamped square (its test scene's setting, for energy balances) is
+    chaotic, its x/y asymmetry grows about 30x per 10 ms from round-off
+    (2026-12-04, the two masters' step sizes emulated on the Model API:
+    1.3e-9 m apart at 0.1 s with that morning's stepper, 2.2e-9 m once the
+    step no longer grows right after a rejection, both above this
+    tolerance; damped, 2e-12 m), so agreement to round-off is no property
+    it has; the same calls give bit-identical outputs undamped too (the
+    next test)."""
+    path = ramp_fmu(scene, tmp_path, auto_damping=True)
     md = read_model_description(str(path))
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     stop, dt = 0.1, 0.01
