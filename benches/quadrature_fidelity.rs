@@ -10,28 +10,19 @@
 
 use origami_fmu::element::Rule;
 use origami_fmu::ids::VertexId;
-use origami_fmu::model::Model;
-use origami_fmu::scene::InputTiming;
 use origami_fmu::scene::refine::refine;
-use std::path::Path;
+mod common;
 
 const TIMES: [f64; 4] = [0.02, 0.05, 0.1, 0.2];
 
 /// Corner positions at [`TIMES`] of the square refined `levels` times.
 fn run(levels: usize, rule: Rule) -> Vec<[[f64; 3]; 4]> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fmpy/scenes/square.json");
-    let scene = origami_fmu::fmi::resources::load_scene_file(&path).expect("square scene");
-    let mut scene = refine(&scene, levels).expect("refined square");
-    scene.solver.quadrature = rule;
-    scene.solver.tolerance = 1e-7;
-    scene.solver.input_timing = InputTiming::Ramp;
-    let mut m = Model::new(scene).expect("model");
-    m.initialize().expect("initialize");
-    let fold = m
-        .inputs()
-        .iter()
-        .position(|v| v.name == "fold")
-        .expect("fold input");
+    let (mut m, fold) = common::square_model(|scene| {
+        let mut scene = refine(&scene, levels).expect("refined square");
+        scene.solver.quadrature = rule;
+        scene.solver.tolerance = 1e-7;
+        scene
+    });
     let dt = 0.01;
     let mut out = Vec::new();
     for k in 1..=20 {

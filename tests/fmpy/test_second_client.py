@@ -74,8 +74,9 @@ def test_fmi_sim_agrees_with_fmpy(fmu, tmp_path, scene):
     Both scenes run with the automatic damping a user's scene gets: the
     undamped square (its test scene's setting, for energy balances) is
     chaotic, its x/y asymmetry grows about 30x per 10 ms from round-off
-    (2026-12-04, the two masters' step sizes emulated on the Model API:
-    1.3e-9 m apart at 0.1 s with that morning's stepper, 2.2e-9 m once the
+    (2026-12-04, the two masters' step sizes emulated on the Model API,
+    `cargo bench --bench two_masters`: 1.3e-9 m apart at 0.1 s with that
+    morning's stepper, 2.2e-9 m once the
     step no longer grows right after a rejection, both above this
     tolerance; damped, 2e-12 m), so agreement to round-off is no property
     it has; the same calls give bit-identical outputs undamped too (the
