@@ -19,13 +19,14 @@
 //! rule), so which is closer to the converged sheet?
 //! `cargo bench --bench quadrature_fidelity` answers it: against the
 //! 128-facet 12-point run, the corners of the 2-facet square are off by
-//! 2.8e-3, 5.6e-3, 3.6e-4, 5.9e-3 m (7-point) and 3.9e-3, 6.8e-3, 2.6e-3,
-//! 6.7e-4 m (12-point) at 0.02, 0.05, 0.1, 0.2 s (0.1 m sheet); at 8
+//! 2.8e-3, 5.6e-3, 3.6e-4, 6.05e-3 m (7-point) and 3.9e-3, 6.8e-3, 2.6e-3,
+//! 6.75e-4 m (12-point) at 0.02, 0.05, 0.1, 0.2 s (0.1 m sheet); at 8
 //! facets 2.9e-3 .. 6.4e-3 against 2.7e-3 .. 7.6e-3 m, at 32 facets equal
 //! to two digits, and at 128 facets the rules agree within 6e-6 .. 6e-5
 //! m. The mesh error dominates and the 7-point rule is no further from
 //! the converged sheet (closer at 6 of the 8 coarse samples). The
-//! two-masters agreement test (1e-9) passes under it today.
+//! two-masters agreement test (1e-9) runs its scenes damped: undamped, the
+//! square is chaotic under either rule (`cargo bench --bench two_masters`).
 
 use serde::{Deserialize, Serialize};
 
