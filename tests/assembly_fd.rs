@@ -92,6 +92,7 @@ fn eval_with(
                     k: 1.0,
                     m: 0.0,
                     c: 0.0,
+                    exact: false,
                 },
             )
         }),
@@ -398,6 +399,7 @@ fn check_damping(asm: &Assembler, q: &[f64], rank: usize) {
         k: 0.0,
         m: 0.0,
         c: 1.0,
+        exact: false,
     };
     let force = |v: &[f64], m: Option<&mut Vec<f64>>| {
         let st = State {
@@ -462,4 +464,61 @@ fn check_damping(asm: &Assembler, q: &[f64], rank: usize) {
     assert!(worst < 1e-8, "damping matrix error {worst}");
     // The low-rank part is no round-off correction.
     assert!(low_size > 1e-2, "low-rank part only {low_size}");
+}
+
+/// Where the assembler lags the membrane's geometric stiffness, a matrix
+/// requested `exact` is the exact tangent (that of an assembler that does
+/// not lag, bit for bit), and the lagged one differs from it; the force is
+/// the same either way.
+#[test]
+fn an_exact_request_overrides_the_lagged_membrane_stiffness() {
+    let (mut asm, q) = folded_miura();
+    let mut start = q.clone();
+    perturb(&asm, &mut start);
+    let nc = asm.creases.len();
+    let theta0 = vec![PI; nc];
+    let moment = vec![0.0; nc];
+    let mut theta_prev = Vec::new();
+    asm.crease_angles(&q, &vec![PI; nc], &mut theta_prev)
+        .unwrap();
+    let v = vec![0.0; q.len()];
+    let matrix = |asm: &Assembler, exact: bool| {
+        let st = State {
+            q: &q,
+            v: &v,
+            theta0: &theta0,
+            moment: &moment,
+            theta_prev: &theta_prev,
+        };
+        let co = MatrixCoeffs {
+            k: 1.0,
+            m: 0.0,
+            c: 0.0,
+            exact,
+        };
+        let mut out = Evaluation::default();
+        let mut vals = vec![0.0; asm.nnz()];
+        asm.evaluate(&st, &mut out, Some((&mut vals[..], co)))
+            .unwrap();
+        (vals, out.force)
+    };
+    let (tangent, force) = matrix(&asm, false);
+    asm.lag_membrane_stiffness(true);
+    asm.lag(&start, &v);
+    let (exact, f_exact) = matrix(&asm, true);
+    let (lagged, f_lagged) = matrix(&asm, false);
+    assert_eq!(exact, tangent);
+    assert_eq!(f_exact, force);
+    assert_eq!(f_lagged, force);
+    let diff: f64 = lagged
+        .iter()
+        .zip(&tangent)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let size: f64 = tangent.iter().map(|a| a * a).sum::<f64>().sqrt();
+    assert!(
+        diff > 1e-8 * size,
+        "the lagged matrix differs: {diff:.3e} of {size:.3e}"
+    );
 }

@@ -64,6 +64,7 @@ impl CentralDifference {
                     k: 1.0,
                     m: 0.0,
                     c: 0.0,
+                    exact: false,
                 },
             )),
         )?;

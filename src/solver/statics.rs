@@ -276,6 +276,7 @@ impl<'a> Newton<'a> {
                 k: 1.0,
                 m: 0.0,
                 c: 0.0,
+                exact: false,
             };
             self.asm
                 .evaluate(&st, &mut self.ev, Some((&mut self.mat, co)))?;
