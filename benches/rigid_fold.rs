@@ -7,14 +7,15 @@
 //! rigid motion, in panel edges) stays below 1e-3 and 1e-4 until the end.
 //!
 //! Then Origami Simulator's BoxPleatPyramid (tests/data/origami-simulator,
-//! 5202 facets) at default settings, its fold input ramped 0 -> 1 over
+//! 5202 facets) at the same settings, its fold input ramped 0 -> 1 over
 //! 0.5 s: CPU for the first `--pyramid` seconds (0 skips it), the CPU per
 //! simulated second that makes, and (from 0.2 s on) a row per tenth of a
 //! second: where along the fold the CPU goes.
 //!
 //! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0] [--pyramid 0.01]
 //! [--tolerance T] [--max-step H] [--rho-inf R] [--quadrature 7|12]` (the last
-//! four to compare with the defaults)
+//! four, for the Miura sheets and the pyramid alike, to compare with the
+//! defaults)
 //!
 //! Also: the exponent p of total CPU ~ DOFs^p from the first sheet, steps,
 //! Newton iterations, factorizations and where the CPU went (assembly,
@@ -27,6 +28,7 @@ mod common;
 use common::cpu_seconds;
 use origami_fmu::benchmarks::{aligned_max_distance, fold_by_ramp_with};
 use origami_fmu::model::{Model, StepReport};
+use origami_fmu::scene::Scene;
 use origami_fmu::scene::patterns::Miura;
 
 fn main() {
@@ -47,6 +49,20 @@ fn main() {
     let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
     let rho_inf: Option<f64> = value("--rho-inf").map(|v| v.parse().expect("rho_inf"));
     let quadrature = value("--quadrature").map(|v| common::quadrature_rule(&v));
+    let settings = |scene: &mut Scene| {
+        if let Some(t) = tolerance {
+            scene.solver.tolerance = t;
+        }
+        if let Some(h) = max_step {
+            scene.solver.max_step = h;
+        }
+        if let Some(rule) = quadrature {
+            scene.solver.quadrature = rule;
+        }
+        if let Some(r) = rho_inf {
+            scene.solver.rho_inf = r;
+        }
+    };
     let (ramp, dt) = (0.5, 0.01);
     println!(
         "Miura full fold at default settings: ramp 0 -> 1 over {ramp} s, {dt} s communication steps, {stop} s simulated"
@@ -74,18 +90,7 @@ fn main() {
         let mut scene = origami_fmu::scene::from_fold(&fold, None)
             .expect("Miura scene")
             .0;
-        if let Some(t) = tolerance {
-            scene.solver.tolerance = t;
-        }
-        if let Some(h) = max_step {
-            scene.solver.max_step = h;
-        }
-        if let Some(rule) = quadrature {
-            scene.solver.quadrature = rule;
-        }
-        if let Some(r) = rho_inf {
-            scene.solver.rho_inf = r;
-        }
+        settings(&mut scene);
         let mut m = Model::new(scene).expect("model");
         m.initialize().expect("initialize");
         let steps = (stop / dt).round() as usize;
@@ -139,17 +144,19 @@ fn main() {
         );
     }
     if pyramid > 0.0 {
-        pyramid_row(pyramid, dt, ramp);
+        pyramid_row(pyramid, dt, ramp, settings);
     }
 }
 
-/// The BoxPleatPyramid row: CPU for the first `time` seconds of its fold.
-fn pyramid_row(time: f64, dt: f64, ramp: f64) {
+/// The BoxPleatPyramid row: CPU for the first `time` seconds of its fold,
+/// with the bench's `settings` applied to its scene.
+fn pyramid_row(time: f64, dt: f64, ramp: f64, settings: impl Fn(&mut Scene)) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/origami-simulator/BoxPleatPyramid.fold"
     );
-    let (scene, _) = origami_fmu::scene::load(path).expect("BoxPleatPyramid loads");
+    let (mut scene, _) = origami_fmu::scene::load(path).expect("BoxPleatPyramid loads");
+    settings(&mut scene);
     let facets = scene.mesh.triangles().len();
     let mut m = Model::new(scene).expect("model");
     m.initialize().expect("initialize");
