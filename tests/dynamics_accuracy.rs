@@ -424,3 +424,25 @@ fn newton_converges_on_a_moderate_hinge_step() {
     println!("{angles:?}; {}", work.line());
     assert!(angles.iter().all(|a| a.abs() <= 0.1 * 1.01));
 }
+
+/// A step that cannot be shortened (min_step = max_step) keeps Newton's
+/// whole budget: a quarter-period step of a hinge swinging 1 rad converges
+/// only at the 20th full-Newton iteration, after a correction more than 3x
+/// each of the two before it, where a step that may be shortened is given
+/// up (measured: "Newton diverged (the matrix formed at iteration 10 ...").
+#[test]
+fn a_step_that_cannot_be_shortened_keeps_newtons_whole_budget() {
+    let period = 2.0 * PI / hinge_omega(&hinge_scene(Integrator::GeneralizedAlpha), W);
+    let mut scene = hinge_scene(Integrator::GeneralizedAlpha);
+    scene.solver.newton = NewtonMode::Full;
+    scene.solver.max_step = period / 4.0;
+    scene.solver.min_step = period / 4.0;
+    let omega = hinge_omega(&scene, W);
+    let mut m = Model::new(scene).unwrap();
+    m.initialize().unwrap();
+    hinge_velocity(&mut m, W, omega);
+    let report = m.advance(period / 4.0).expect("the whole budget converges");
+    assert_eq!((report.steps, report.rejected), (1, 0), "{report:?}");
+    assert!(report.newton_iterations <= 20, "{report:?}");
+    assert!(crease_angle(&m).is_finite());
+}

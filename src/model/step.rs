@@ -275,7 +275,11 @@ impl Model {
                 h,
                 &gd,
                 &sys.scales,
-                sys.newton,
+                ga::Settings {
+                    // A failure is retried at FACTOR_FAILED times the step.
+                    may_shorten: h * FACTOR_FAILED >= sys.settings.min_step,
+                    ..sys.newton
+                },
                 &mut sys.ws,
             );
             // Keep the step within [min_step, max_step] (max wins, so a bad

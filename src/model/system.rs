@@ -225,6 +225,7 @@ impl Model {
                 stick_bound,
                 max_newton: sc.solver.max_newton,
                 newton: sc.solver.newton,
+                may_shorten: true,
             },
             settings: sc.solver,
             inputs: InputMap {
