@@ -194,7 +194,7 @@ pub struct JacobianPoint {
     /// Velocities at the step start.
     #[serde(default)]
     pub v_start: Vec<f64>,
-    /// Whether the matrix is the exact tangent (see [`EXACT_AFTER_RATE`])
+    /// Whether the matrix is the exact tangent (see `EXACT_AFTER_RATE`)
     /// rather than the one with the membrane stiffness lagged.
     #[serde(default)]
     pub exact: bool,
@@ -320,25 +320,26 @@ const NEAR_CHANCES: u32 = 3;
 /// Newton iterations, 4 % less CPU side by side).
 const EXACT_AFTER_RATE: f64 = 0.5;
 
-/// A matrix formed at the iterate (from the third iteration on) whose
-/// correction is more than this times each of the last two corrections
-/// applied: even Newton's own tangent sends the iterate away, so the step
-/// is given up at once and retried shorter, instead of spending the rest
-/// of the iteration budget (where a shorter step is allowed, see
-/// [`Settings::may_shorten`]: such an iteration may still converge, a
-/// quarter-period step of a hinge swinging 1 rad takes all 20 iterations).
-/// (Smaller growths happen in converging
-/// zig-zags between two gradient slots: `newton_converges_on_a_moderate_hinge_step`
-/// meets 5.2e-4, 2.9e-4, 1.2e-3, then converges.) Traced over the
-/// BoxPleatPyramid's first 0.5 s (its snaps), 34 of the 41 attempts that
-/// failed (after 20 iterations and about 10 factorizations each) showed
+/// Newton gives up a step early (where it may be retried shorter, see
+/// [`Settings::may_shorten`]) when a matrix formed at the iterate, from
+/// the third iteration on, corrects by more than this times each of the
+/// last two corrections applied: even Newton's own tangent sends the
+/// iterate away, and the rest of the 20-iteration budget is mostly spent
+/// in vain. Traced over the BoxPleatPyramid's first 0.5 s (its snaps): 34
+/// of the 41 attempts that failed (about 10 factorizations each) showed
 /// such a growth, 16 of them by the 7th iteration; 4 of the 568 attempts
-/// that converged did too, and are now retried shorter. Its second from
-/// flat: 1654 -> 1459 factorizations, 5626 -> 5245 Newton iterations,
-/// 603 (63) -> 607 (67) steps, 321.6 -> 269.3 CPU s (variants, one run
-/// each: 3x the last correction alone 1449 factorizations but it fails
-/// the hinge test above; 5x alone 1471; 2x alone 1620). The Miura folds
-/// never meet it (rigid_fold and throughput benches: the same counts).
+/// that converged did too, and are now retried shorter. Smaller growths
+/// happen in converging zig-zags between two gradient slots
+/// (`newton_converges_on_a_moderate_hinge_step`: 5.2e-4, 2.9e-4, 1.2e-3,
+/// then converged), and a large one can still converge (a quarter-period
+/// step of a hinge swinging 1 rad takes all 20 iterations), hence no
+/// early give-up where the step cannot be shortened. The pyramid's second
+/// from flat: 1654 -> 1459 factorizations, 5626 -> 5245 Newton
+/// iterations, 603 (63) -> 607 (67) steps, 321.6 -> 246.4 CPU s on the
+/// idle machine. Variants, one run each: growth over the last correction
+/// alone at 3x, 1449 factorizations, but it gives up the hinge's
+/// zig-zags; at 5x 1471; at 2x 1620. The Miura folds never meet it
+/// (rigid_fold and throughput benches: the same counts).
 const DIVERGED_FRESH_RATE: f64 = 3.0;
 
 /// Sufficient-decrease constant of Newton's line search near contact.
@@ -375,7 +376,7 @@ pub struct Settings {
     pub newton: NewtonMode,
     /// Whether a failed attempt will be retried with a shorter step: only
     /// then does Newton give up early on an iteration that diverges
-    /// ([`DIVERGED_FRESH_RATE`]) rather than spend its whole budget.
+    /// (`DIVERGED_FRESH_RATE`) rather than spend its whole budget.
     pub may_shorten: bool,
 }
 
