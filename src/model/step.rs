@@ -28,9 +28,13 @@ const FACTOR_FAILED: f64 = 0.25;
 /// twice back to h and fail again. Measured (BoxPleatPyramid's 1 s,
 /// `cargo bench --bench rigid_fold -- --pyramid 1`): 2027 -> 1766
 /// factorizations, 6389 -> 5938 Newton iterations, 422.6 -> 350.1 CPU s
-/// (the latter with another job on the machine; the run's own spread: at
-/// a tolerance 1e-4 larger 1990 and 410 s); Miura full folds the same
-/// steps, and the same counts but at 4x4 (787/154 against 791/155).
+/// (the latter with another job on the machine); Miura full folds the
+/// same steps, and the same counts but at 4x4 (787/154 against 791/155).
+/// The path through the snaps is chaotic; its spread, measured later
+/// (2026-12-04, with Newton's early give-up): at tolerances 1.0001e-4 and
+/// 1.01e-4 1470 and 1420 factorizations against 1459 at 1e-4. (An earlier
+/// figure here, 1990 at a slightly larger tolerance, came from a bench
+/// whose tolerance flag did not reach the pyramid then.)
 const MAX_GROWTH_AFTER_REJECTION: f64 = 1.0;
 /// A rest of the advance shorter than this fraction of the step joins it.
 const JOIN_FRACTION: f64 = 1e-3;
