@@ -42,7 +42,7 @@ pub struct CreaseCurves {
 impl CreaseCurves {
     /// Find the curved crease vertices of a validated mesh: interior
     /// vertices with exactly two creases that turn by more than round-off and
-    /// at most [`MAX_CURVE_TURN`]. (On the boundary the sectors between a
+    /// at most `MAX_CURVE_TURN`. (On the boundary the sectors between a
     /// crease and the boundary are free, so two creases there fold without it.)
     pub fn new(mesh: &Mesh) -> CreaseCurves {
         let nv = mesh.n_vertices();

@@ -389,7 +389,7 @@ const STICK_FRACTION: f64 = 1.0;
 /// [`Settings::stick_bound`] of a scene whose contact has friction: scaled
 /// corrections (positions over the sheet size `length`) stay below this
 /// times the step, i.e. the velocity left to the iteration below
-/// [`STICK_FRACTION`] of `stick_velocity`. Measured (tests/contact.rs, a
+/// `STICK_FRACTION` of `stick_velocity`. Measured (tests/contact.rs, a
 /// panel held by mu = 0.8 on a 30 degree incline, 0.3 s, creep allowed
 /// 2.2e-4 m): at tolerance 1e-2 (Newton 1e-5) it crept 1.4e-3 m without
 /// this bound, 9.5e-5 m with it. With Newton at 1e-6 the fraction was

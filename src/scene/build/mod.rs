@@ -2,7 +2,7 @@
 //!
 //! In order: the `ancf:` keys ([`super::keys`]); the size budget; the
 //! listed edges; the faces (given, or traced from the edges by
-//! [`super::planar`]); the reference coordinates (flatness, orientation:
+//! `super::planar`); the reference coordinates (flatness, orientation:
 //! a sheet whose faces are all clockwise is mirrored, a mix of orientations
 //! is a folded state); the size (unit or scale, see [`DEFAULT_SIZE`]); face
 //! areas; edge sharing (non-manifold, overlapping faces); the edges with
