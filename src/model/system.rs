@@ -225,6 +225,8 @@ impl Model {
                 stick_bound,
                 max_newton: sc.solver.max_newton,
                 newton: sc.solver.newton,
+                // Decided per attempt by the stepper (`Model::advance`),
+                // which knows the step and its lower bound.
                 may_shorten: true,
             },
             settings: sc.solver,
