@@ -13,9 +13,9 @@
 //! second: where along the fold the CPU goes.
 //!
 //! `cargo bench --bench rigid_fold -- [--panels 4,8,10,16] [--stop 2.0] [--pyramid 0.01]
-//! [--tolerance T] [--max-step H] [--rho-inf R] [--quadrature 7|12]` (the last
-//! four, for the Miura sheets and the pyramid alike, to compare with the
-//! defaults)
+//! [--tolerance T] [--max-step H] [--rho-inf R] [--quadrature 7|12] [--contact]` (the last
+//! five, for the Miura sheets and the pyramid alike, to compare with the
+//! defaults; `--contact` turns self-contact on with its default settings)
 //!
 //! Also: the exponent p of total CPU ~ DOFs^p from the first sheet, steps,
 //! Newton iterations, factorizations and where the CPU went (assembly,
@@ -49,7 +49,15 @@ fn main() {
     let max_step: Option<f64> = value("--max-step").map(|v| v.parse().expect("max step"));
     let rho_inf: Option<f64> = value("--rho-inf").map(|v| v.parse().expect("rho_inf"));
     let quadrature = value("--quadrature").map(|v| common::quadrature_rule(&v));
+    let contact = args.iter().any(|a| a == "--contact");
     let settings = |scene: &mut Scene| {
+        if contact {
+            // As `"ancf:contact": {"enabled": true}` gives it: the sheet's thickness.
+            scene.contact = Some(origami_fmu::contact::ContactSettings {
+                thickness: scene.material.thickness,
+                ..Default::default()
+            });
+        }
         if let Some(t) = tolerance {
             scene.solver.tolerance = t;
         }
@@ -169,7 +177,15 @@ fn pyramid_row(time: f64, dt: f64, ramp: f64, settings: impl Fn(&mut Scene)) {
     let total = fold_by_ramp_with(&mut m, steps, dt, ramp, true, |_, total| {
         k += 1;
         if k % per == 0 || k == steps {
-            rows.push((k as f64 * dt, cpu_seconds() - c0, total.clone()));
+            let c = cpu_seconds() - c0;
+            // Progress on stderr (a pyramid second takes minutes).
+            eprintln!(
+                "pyramid at {:.2} s: {c:.1} CPU s, {} steps, {} factorizations",
+                k as f64 * dt,
+                total.steps,
+                total.factorizations
+            );
+            rows.push((k as f64 * dt, c, total.clone()));
         }
     });
     let cpu = cpu_seconds() - c0;
