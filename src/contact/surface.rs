@@ -44,9 +44,6 @@ pub struct ContactSurface {
     /// Facets that share a mesh vertex with each facet, itself included
     /// (sorted).
     pub neighbours: Vec<Vec<usize>>,
-    /// Slots each facet's samples depend on (sorted): the pattern blocks a
-    /// pair of facets in contact needs.
-    pub facet_slots: Vec<Vec<usize>>,
     /// Contact vertices of each facet (its samples).
     pub facet_vertices: Vec<Vec<usize>>,
 }
@@ -70,17 +67,9 @@ impl ContactSurface {
         let mut maps: Vec<VertexMap> = Vec::new();
         let mut vertex_facets: Vec<Vec<usize>> = Vec::new();
         let mut fine_tris = Vec::new();
-        let mut facet_slots = Vec::with_capacity(mesh.triangles().len());
         for (f, tri) in mesh.triangles().iter().enumerate() {
             let shape = elements[f].shape();
             let local = &layout.local[f];
-            let mut slots: Vec<usize> = local
-                .iter()
-                .flat_map(|c| c.terms().map(|(s, _)| s))
-                .collect();
-            slots.sort_unstable();
-            slots.dedup();
-            facet_slots.push(slots);
             // Lattice (i, j): area coordinates ((n-i-j), i, j) / n.
             let mut id = vec![vec![0usize; n + 1]; n + 1];
             for i in 0..=n {
@@ -201,7 +190,6 @@ impl ContactSurface {
             fine_edges,
             coarse_edges,
             neighbours,
-            facet_slots,
             facet_vertices,
         }
     }

@@ -434,12 +434,7 @@ impl ContactTerm {
         let mut out = Vec::new();
         let mut slots: Vec<usize> = Vec::with_capacity(48);
         for p in &self.cache.pairs {
-            slots.clear();
-            for &i in &p.ids() {
-                slots.extend(self.surf.maps[i].iter().map(|&(s, _)| s));
-            }
-            slots.sort_unstable();
-            slots.dedup();
+            self.pair_slots(&p.ids(), &mut slots);
             for &a in &slots {
                 for &b in &slots {
                     if a < b && !asm.has_pair(a, b) {
@@ -564,16 +559,23 @@ impl ContactTerm {
         }
     }
 
-    /// Add a pair's 12 x 12 matrix `h` (its four points' coordinates) to
-    /// `batch`, mapped to the slots through the points' weights.
-    fn scatter_matrix(&self, ids: &[usize; 4], h: &SMatrix<f64, 12, 12>, batch: &mut MatrixBatch) {
-        // The slots of the four points and each point's weight on them.
-        let mut slots: Vec<usize> = Vec::with_capacity(48);
+    /// The slots a pair's four points `ids` depend on, sorted, into `slots`
+    /// (cleared first): the blocks its matrix touches.
+    fn pair_slots(&self, ids: &[usize; 4], slots: &mut Vec<usize>) {
+        slots.clear();
         for &i in ids {
             slots.extend(self.surf.maps[i].iter().map(|&(s, _)| s));
         }
         slots.sort_unstable();
         slots.dedup();
+    }
+
+    /// Add a pair's 12 x 12 matrix `h` (its four points' coordinates) to
+    /// `batch`, mapped to the slots through the points' weights.
+    fn scatter_matrix(&self, ids: &[usize; 4], h: &SMatrix<f64, 12, 12>, batch: &mut MatrixBatch) {
+        // The slots of the four points and each point's weight on them.
+        let mut slots: Vec<usize> = Vec::with_capacity(48);
+        self.pair_slots(ids, &mut slots);
         let ns = slots.len();
         let mut w = vec![[0.0; 4]; ns];
         for (k, &i) in ids.iter().enumerate() {
