@@ -432,12 +432,12 @@ fn newton_converges_on_a_moderate_hinge_step() {
 /// up (measured: "Newton diverged (the matrix formed at iteration 10 ...").
 #[test]
 fn a_step_that_cannot_be_shortened_keeps_newtons_whole_budget() {
-    let period = 2.0 * PI / hinge_omega(&hinge_scene(Integrator::GeneralizedAlpha), W);
     let mut scene = hinge_scene(Integrator::GeneralizedAlpha);
+    let omega = hinge_omega(&scene, W);
+    let period = 2.0 * PI / omega;
     scene.solver.newton = NewtonMode::Full;
     scene.solver.max_step = period / 4.0;
     scene.solver.min_step = period / 4.0;
-    let omega = hinge_omega(&scene, W);
     let mut m = Model::new(scene).unwrap();
     m.initialize().unwrap();
     hinge_velocity(&mut m, W, omega);
