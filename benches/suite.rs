@@ -31,7 +31,6 @@
 //! those of `IntegrationParameters::rules`). CPU is this thread's CPU time.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod test_common;
 
 use nalgebra::Vector3;
@@ -208,7 +207,12 @@ fn extreme(tweak: &dyn Fn(&mut Scene)) -> Row {
         let mut m = Model::new(scene).unwrap();
         m.initialize().unwrap();
         let c0 = cpu_seconds();
-        drive(&mut m, &mut work, &[(2.0 * t, 1.0), (12.0 * t, 1.0)], t / 10.0);
+        drive(
+            &mut m,
+            &mut work,
+            &[(2.0 * t, 1.0), (12.0 * t, 1.0)],
+            t / 10.0,
+        );
         cpu += cpu_seconds() - c0;
         worst = worst.max((crease_angle(&m) - PI / 2.0).abs());
     }

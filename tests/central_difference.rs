@@ -9,7 +9,7 @@ use origami_fmu::mesh::builders::grid;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{Fix, Integrator, Material, NewtonMode, Scene, Support};
 use origami_fmu::solver::central_difference::{CentralDifference, SAFETY};
-use origami_fmu::solver::generalized_alpha::{Drive, Dynamics};
+use origami_fmu::solver::stepper::{Drive, Dynamics, Stepper};
 use std::f64::consts::PI;
 
 /// Free vibration from a rough initial displacement for `steps` steps of
@@ -43,7 +43,6 @@ fn free_vibration(h_factor: f64, steps: usize) -> f64 {
         v: vec![0.0; n],
         qdd: vec![0.0; n],
         abar: vec![0.0; n],
-        ..Default::default()
     };
     let zeros = vec![0.0; n];
     let moment = vec![0.0; asm.creases.len()];
@@ -58,10 +57,10 @@ fn free_vibration(h_factor: f64, steps: usize) -> f64 {
             prescribed: &[],
             theta_prev: &theta_prev,
         };
-        if cd.step(&asm, &mut s, h, &drive).is_err() {
+        if cd.step_in_place(&asm, &mut s, h, &drive).is_err() {
             return f64::INFINITY;
         }
-        theta_prev.clone_from(&cd.evaluation().theta);
+        theta_prev.copy_from_slice(cd.crease_angles());
         let d =
             s.q.iter()
                 .zip(&q_ref)

@@ -389,7 +389,10 @@ fn restores_repeat_bit_for_bit_with_the_kept_matrix() {
     a.initialize().unwrap();
     drive(&mut a, 0, 15);
     let saved = a.save_state();
-    assert!(saved.jacobian.is_some(), "modified Newton keeps a matrix");
+    assert!(
+        saved.memory.jacobian.is_some(),
+        "modified Newton keeps a matrix"
+    );
     let first = drive(&mut a, 15, 15);
     a.restore_state(&saved).unwrap();
     assert_eq!(drive(&mut a, 15, 15), first, "same instance");

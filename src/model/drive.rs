@@ -2,7 +2,7 @@
 //! external forces and prescribed DOFs.
 
 use crate::assembly::Assembler;
-use crate::solver::generalized_alpha::Drive;
+use crate::solver::stepper::Drive;
 
 /// How input values become rest angles, moments, forces and prescribed
 /// DOFs of the assembly.

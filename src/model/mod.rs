@@ -40,7 +40,7 @@ pub use step::StepReport;
 pub use variables::{VariableSpec, fold_edges};
 
 use crate::scene::Scene;
-use crate::solver::generalized_alpha::Dynamics;
+use crate::solver::stepper::{Dynamics, StepperMemory};
 use parameters::Parameter;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -153,10 +153,12 @@ impl Model {
             inputs_next: inputs.iter().map(|v| v.start).collect(),
             input_slopes: vec![0.0; inputs.len()],
             damping_set: false,
-            jacobian: None,
+            memory: StepperMemory {
+                h_next: scene.solver.max_step,
+                ..Default::default()
+            },
             parameters: parameters.iter().map(|v| v.start).collect(),
             phase: Phase::Setup,
-            h_next: scene.solver.max_step,
             outputs: Some(outputs.iter().map(|v| v.start).collect()),
             work: Default::default(),
             dissipative_force: Default::default(),
@@ -221,13 +223,10 @@ impl Model {
             v: vec![0.0; n],
             qdd: vec![0.0; n],
             abar: vec![0.0; n],
-            extrapolation_streak: 0,
-            held_streak: 0,
-            kept_second_grew: false,
-            early_forms: 0,
         };
+        self.state.memory.newton = Default::default();
         self.consistent_accelerations(&u, &theta_prev)?;
-        self.state.h_next = self.sys.as_ref().expect("built").settings.max_step;
+        self.state.memory.h_next = self.sys.as_ref().expect("built").settings.max_step;
         self.state.phase = Phase::Running;
         Ok(())
     }

@@ -6,7 +6,7 @@
 use super::{Error, Model, Phase};
 use crate::assembly::{Evaluation, State};
 use crate::ids::VertexId;
-use crate::solver::generalized_alpha::{self as ga, Dynamics};
+use crate::solver::stepper::{Dynamics, StepperMemory};
 use serde::{Deserialize, Serialize};
 
 /// A saved model state (see [`Model::save_state`]); serde-serializable.
@@ -29,16 +29,14 @@ pub struct ModelState {
     /// Whether a damping parameter was set (automatic damping is then off).
     #[serde(default)]
     pub damping_set: bool,
-    /// Where the implicit stepper's iteration matrix was formed (kept across
-    /// advances by modified Newton; None: the next step forms one).
-    #[serde(default)]
-    pub jacobian: Option<ga::JacobianPoint>,
+    /// What the stepper carries from one advance to the next: the step it
+    /// proposes, the predictor's memory, where its iteration matrix was
+    /// formed.
+    pub memory: StepperMemory,
     /// Parameter values.
     pub parameters: Vec<f64>,
     /// Phase.
     pub phase: Phase,
-    /// Internal step size the controller proposes next.
-    pub h_next: f64,
     /// Output values at `time` where the last step evaluated them (its
     /// state was evaluated in full); None: they are evaluated from this
     /// state when read ([`Model::output_values`]), so a communication step
@@ -286,8 +284,8 @@ impl Model {
                 rhs[fi] = d.f_ext[i] - ev.force[i];
             }
         }
-        sys.ws.invalidate_jacobian();
-        self.state.jacobian = None;
+        sys.stepper.invalidate_matrix();
+        self.state.memory.jacobian = None;
         let mvals = sys.asm.mass_values().to_vec();
         sys.solver
             .factor(&mvals)

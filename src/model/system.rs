@@ -7,10 +7,11 @@ use crate::assembly::Assembler;
 use crate::contact::ContactTerm;
 use crate::element::ElementOptions;
 use crate::ids::FoldEdgeId;
-use crate::scene::{ActuatorMode, Fix, Integrator, SolverSettings};
+use crate::scene::{ActuatorMode, Fix, Integrator as SceneIntegrator, SolverSettings};
 use crate::solver::SparseSolver;
 use crate::solver::central_difference::CentralDifference;
-use crate::solver::generalized_alpha as ga;
+use crate::solver::generalized_alpha::{self as ga, GeneralizedAlpha};
+use crate::solver::stepper::Stepper;
 use std::collections::HashMap;
 
 /// Everything built from the scene and parameters: by [`Model::new`], and
@@ -18,20 +19,16 @@ use std::collections::HashMap;
 /// parameters differ from the ones it was built with.
 pub(super) struct System {
     pub(super) asm: Assembler,
+    /// The solver of the implicit stepper's iteration matrix (and of the
+    /// mass matrix for consistent accelerations).
     pub(super) solver: SparseSolver,
-    pub(super) coeffs: ga::Coefficients,
-    /// The Newton iteration and error estimate of generalized-alpha.
-    pub(super) newton: ga::Settings,
-    pub(super) scales: ga::Scales,
+    /// The time integrator the scene asks for.
+    pub(super) stepper: Box<dyn Stepper + Send>,
     pub(super) inputs: InputMap,
     /// For each `crease[e]` output: the crease ends averaged.
     pub(super) angle_ends: Vec<Vec<usize>>,
-    pub(super) ws: ga::Workspace,
-    /// The explicit stepper when the scene asks for central differences
-    /// (made at initialization).
-    pub(super) cd: Option<CentralDifference>,
-    /// The scene's solver settings it was built with (step bounds and
-    /// the internal step limit).
+    /// The scene's solver settings it was built with (step bounds, the
+    /// internal step limit, the numerical constants).
     pub(super) settings: SolverSettings,
     /// Where each free slot is in the reference sheet (the ordering of
     /// large systems cuts by it).
@@ -51,7 +48,7 @@ impl System {
             Some(&self.block_coords),
         )?;
         self.solver.carry_stats(stats);
-        self.ws.invalidate_jacobian();
+        self.stepper.invalidate_matrix();
         Ok(())
     }
 }
@@ -113,11 +110,12 @@ impl Model {
         // Modified Newton's matrix takes the membrane geometric stiffness
         // from each step start (full Newton keeps the exact tangent).
         asm.lag_membrane_stiffness(
-            sc.solver.integrator == Integrator::GeneralizedAlpha
-                && sc.solver.newton == crate::scene::NewtonMode::Modified,
+            sc.solver.integrator == SceneIntegrator::GeneralizedAlpha
+                && sc.solver.newton == crate::scene::NewtonMode::Modified
+                && sc.solver.integration.lag_membrane_stiffness,
         );
         if let Some(c) = &sc.contact {
-            if sc.solver.integrator == Integrator::CentralDifference {
+            if sc.solver.integrator == SceneIntegrator::CentralDifference {
                 return Err(Error::Scene(
                     "ancf:contact needs the implicit integrator (its Newton steps are \
                      collision-checked); remove \"integrator\": \"central_difference\""
@@ -197,38 +195,11 @@ impl Model {
             }
         }
         let length = mesh.size().max(f64::MIN_POSITIVE);
-        let scales = ga::Scales {
-            newton: asm.scales(length),
-            error: crate::assembly::error_scales(&asm.layout, mesh, length),
-        };
-        // The explicit stepper's stable step, estimated on the unstressed sheet.
-        let cd = match sc.solver.integrator {
-            Integrator::CentralDifference => Some(
-                CentralDifference::new(&asm, &q_ref, &vec![std::f64::consts::PI; nends])
-                    .map_err(Error::Scene)?,
-            ),
-            Integrator::GeneralizedAlpha => None,
-        };
-        let coeffs = ga::Coefficients::new(sc.solver.rho_inf);
-        let stick_bound = match &sc.contact {
-            Some(c) if c.friction > 0.0 => ga::stick_bound(coeffs, c.stick_velocity, length),
-            _ => f64::INFINITY,
-        };
+        let stepper = self.stepper(&asm, &q_ref, length)?;
         let sys = System {
             block_coords,
-            scales,
             solver,
-            coeffs,
-            newton: ga::Settings {
-                tolerance: sc.solver.tolerance,
-                newton_tolerance: sc.solver.newton_tolerance(sc.material.thickness / length),
-                stick_bound,
-                max_newton: sc.solver.max_newton,
-                newton: sc.solver.newton,
-                // Decided per attempt by the stepper (`Model::advance`),
-                // which knows the step and its lower bound.
-                may_shorten: true,
-            },
+            stepper,
             settings: sc.solver,
             inputs: InputMap {
                 rest,
@@ -240,13 +211,55 @@ impl Model {
                 force,
                 n_dofs: asm.n_dofs(),
             },
-            cd,
             angle_ends,
-            ws: ga::Workspace::default(),
             asm,
         };
         self.sys = Some(sys);
         self.built_with = Some(self.state.parameters.clone());
         Ok(())
+    }
+}
+
+impl Model {
+    /// The time integrator the scene asks for: generalized-alpha with its
+    /// Newton settings and DOF scales, or central differences with the
+    /// stable step estimated on the unstressed sheet `q_ref`.
+    fn stepper(
+        &self,
+        asm: &Assembler,
+        q_ref: &[f64],
+        length: f64,
+    ) -> Result<Box<dyn Stepper + Send>, Error> {
+        let sc = &self.scene;
+        let s = &sc.solver;
+        Ok(match s.integrator {
+            SceneIntegrator::CentralDifference => Box::new(
+                CentralDifference::new(asm, q_ref, &vec![std::f64::consts::PI; asm.creases.len()])
+                    .map_err(Error::Scene)?,
+            ),
+            SceneIntegrator::GeneralizedAlpha => {
+                let params = s.integration;
+                let coeffs = ga::Coefficients::new(s.rho_inf);
+                let stick_bound = match &sc.contact {
+                    Some(c) if c.friction > 0.0 => {
+                        ga::stick_bound(coeffs, &params, c.stick_velocity, length)
+                    }
+                    _ => f64::INFINITY,
+                };
+                let settings = ga::Settings {
+                    tolerance: s.tolerance,
+                    newton_tolerance: params
+                        .newton_tolerance(s.tolerance, sc.material.thickness / length),
+                    stick_bound,
+                    max_newton: s.max_newton,
+                    newton: s.newton,
+                };
+                let scales = ga::Scales {
+                    newton: asm.scales(length),
+                    error: crate::assembly::error_scales(&asm.layout, &sc.mesh, length),
+                };
+                Box::new(GeneralizedAlpha::new(s.rho_inf, settings, params, scales))
+            }
+        })
     }
 }

@@ -307,8 +307,7 @@ pub enum NewtonMode {
 
 /// Solver settings: the scene's `ancf:solver` keys and the FMU's `solver.*`
 /// parameters. The one place of the solver's defaults is its [`Default`];
-/// the Newton tolerance follows from the tolerance
-/// ([`SolverSettings::newton_tolerance`]).
+/// the numerical constants behind them are [`SolverSettings::integration`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverSettings {
     /// Integrator.
@@ -320,7 +319,8 @@ pub struct SolverSettings {
     /// Smallest internal step before the advance fails, in s.
     pub min_step: f64,
     /// Relative tolerance of the local error control; Newton's tolerance
-    /// follows from it ([`SolverSettings::newton_tolerance`]).
+    /// follows from it
+    /// ([`crate::solver::IntegrationParameters::newton_tolerance`]).
     pub tolerance: f64,
     /// Maximum Newton iterations per step.
     pub max_newton: usize,
@@ -342,6 +342,9 @@ pub struct SolverSettings {
     /// says where they differ).
     #[serde(default)]
     pub quadrature: crate::element::Rule,
+    /// The stepper's numerical constants (Rust API only, not a scene key).
+    #[serde(skip)]
+    pub integration: crate::solver::IntegrationParameters,
 }
 
 /// Default of [`SolverSettings::max_internal_steps`].
@@ -349,46 +352,6 @@ pub const DEFAULT_MAX_INTERNAL_STEPS: usize = 100_000;
 
 fn default_max_internal_steps() -> usize {
     DEFAULT_MAX_INTERNAL_STEPS
-}
-
-/// Newton's tolerance as a fraction of [`SolverSettings::tolerance`]. Tried
-/// looser on 2026-12-04 (Hairer & Wanner suggest 1e-1 .. 3e-2 of the
-/// tolerance): 1e-2 saves 9-13 % of the Miura full fold's CPU with the same
-/// steps, but the input-work energy balance of `tests/dynamics_accuracy.rs`
-/// closes to 5.5e-3 of the work (1.4e-3 at 3e-3, 6.9e-4 at 1e-3; the test
-/// asks 1e-3), so it stays 1e-3.
-pub const NEWTON_TOLERANCE_RATIO: f64 = 1e-3;
-
-/// Newton's tolerance as a fraction of the sheet's thickness ratio h / L
-/// (L the sheet size, the scale of the corrections). A correction small
-/// against the sheet may still be large against its thickness, and then
-/// carries membrane force far above the bending and crease forces. Measured
-/// on the two-panel fold of `tests/dynamics_extreme.rs` (h/L = 1e-4, 1e-5)
-/// at tolerances 3e-3 .. 1e-1: without this bound (Newton tolerance 1e-3 x
-/// the tolerance) the held energy rises 1 % to 20-fold and the panel ends
-/// 3e-4 .. 1.5 w off; at 0.3 h/L still 1 % and 1.5e-3 w; at 0.1 h/L every
-/// case passes. 1e-2 keeps a factor 10 from that edge. It was 1e-4 (set
-/// with an older stepper); since h/L falls as the sheet grows, that cost
-/// large paper sheets iterations the error never asked for: 16 % of the
-/// CPU of 16x16 Miura panels at the default tolerance, 31 % of 8x8 cells
-/// at 1e-3, with the same steps and final error.
-pub const NEWTON_THICKNESS_RATIO: f64 = 1e-2;
-
-/// Smallest Newton tolerance (near the round-off of a scaled correction).
-pub const NEWTON_TOLERANCE_FLOOR: f64 = 1e-13;
-
-impl SolverSettings {
-    /// Newton stops when every scaled correction is below this:
-    /// [`NEWTON_TOLERANCE_RATIO`] times the tolerance, so that the iteration
-    /// error stays well below the local error the step control accepts,
-    /// and [`NEWTON_THICKNESS_RATIO`] times the sheet's thickness ratio
-    /// `thickness_ratio` (h / L), whichever is smaller; at least
-    /// [`NEWTON_TOLERANCE_FLOOR`].
-    pub fn newton_tolerance(&self, thickness_ratio: f64) -> f64 {
-        (NEWTON_TOLERANCE_RATIO * self.tolerance)
-            .min(NEWTON_THICKNESS_RATIO * thickness_ratio)
-            .max(NEWTON_TOLERANCE_FLOOR)
-    }
 }
 
 /// How an input value set before a step acts over that step.
@@ -418,6 +381,7 @@ impl Default for SolverSettings {
             max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
             input_timing: InputTiming::Hold,
             quadrature: crate::element::Rule::Dunavant7,
+            integration: Default::default(),
         }
     }
 }

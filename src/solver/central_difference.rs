@@ -17,7 +17,10 @@
 
 use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
 use crate::solver::SparseSolver;
-use crate::solver::generalized_alpha::{Drive, Dynamics};
+use crate::solver::stepper::{
+    Attempt, Drive, Dynamics, Failure, Mechanics, Outcome, StepError, StepPolicy, Stepper,
+    StepperMemory,
+};
 use std::time::{Duration, Instant};
 
 /// Fraction of the estimated stability limit `2 / omega_max` used as step.
@@ -32,8 +35,6 @@ pub struct CentralDifference {
     rhs: Vec<f64>,
     accel_p: Vec<f64>,
     m_accel_p: Vec<f64>,
-    /// Time spent evaluating forces.
-    pub assembly_time: Duration,
 }
 
 impl CentralDifference {
@@ -87,7 +88,6 @@ impl CentralDifference {
             rhs: vec![0.0; asm.n_free],
             accel_p: vec![0.0; n],
             m_accel_p: vec![0.0; n],
-            assembly_time: Duration::ZERO,
         })
     }
 
@@ -96,25 +96,16 @@ impl CentralDifference {
         SAFETY * self.critical_step
     }
 
-    /// Time spent in mass-matrix solves so far.
-    pub fn solve_time(&self) -> Duration {
-        self.mass.stats().solve_time
-    }
-
-    /// The evaluation at the last state reached.
-    pub fn evaluation(&self) -> &Evaluation {
-        &self.eval
-    }
-
     /// Advance `s` by one step of size `h` in place. Prescribed DOFs move to
-    /// their values at the end of the step.
-    pub fn step(
+    /// their values at the end of the step. Returns the time spent
+    /// evaluating forces.
+    pub fn step_in_place(
         &mut self,
         asm: &Assembler,
         s: &mut Dynamics,
         h: f64,
         drive: &Drive,
-    ) -> Result<(), String> {
+    ) -> Result<Duration, StepError> {
         let n = asm.n_dofs();
         for i in 0..n {
             s.v[i] += 0.5 * h * s.qdd[i];
@@ -137,8 +128,9 @@ impl CentralDifference {
             coupled |= a != 0.0;
         }
         let t0 = Instant::now();
-        asm.evaluate(&drive.at(s), &mut self.eval, None)?;
-        self.assembly_time += t0.elapsed();
+        asm.evaluate(&drive.at(s), &mut self.eval, None)
+            .map_err(StepError::Assembly)?;
+        let assembly_time = t0.elapsed();
         if coupled {
             asm.mass_mul(&self.accel_p, &mut self.m_accel_p);
         }
@@ -152,7 +144,9 @@ impl CentralDifference {
                 self.rhs[fi] = r;
             }
         }
-        self.mass.solve_in_place(&mut self.rhs)?;
+        self.mass
+            .solve_in_place(&mut self.rhs)
+            .map_err(StepError::Linear)?;
         for i in 0..n {
             let fi = asm.free[i];
             s.qdd[i] = if fi != FIXED {
@@ -164,9 +158,62 @@ impl CentralDifference {
         }
         s.abar.copy_from_slice(&s.qdd);
         if s.q.iter().chain(&s.v).any(|x| !x.is_finite()) {
-            return Err("central differences produced non-finite values (unstable step)".into());
+            return Err(StepError::Unstable);
         }
+        Ok(assembly_time)
+    }
+}
+
+impl Stepper for CentralDifference {
+    fn policy(&self) -> StepPolicy {
+        StepPolicy::Fixed(self.stable_step())
+    }
+
+    fn begin_advance(
+        &mut self,
+        _: &mut Assembler,
+        _: &mut SparseSolver,
+        _: &StepperMemory,
+    ) -> Result<(), StepError> {
         Ok(())
+    }
+
+    fn step(
+        &mut self,
+        mech: Mechanics,
+        cur: &Dynamics,
+        next: &mut Dynamics,
+        attempt: &Attempt,
+    ) -> Result<Outcome, Failure> {
+        next.clone_from(cur);
+        match self.step_in_place(mech.asm, next, attempt.h, attempt.drive) {
+            Ok(assembly_time) => Ok(Outcome {
+                assembly_time,
+                memory: attempt.memory,
+                ..Outcome::default()
+            }),
+            Err(reason) => Err(Failure {
+                reason,
+                outcome: Outcome::default(),
+            }),
+        }
+    }
+
+    fn end_advance(&self, _: &mut StepperMemory) {}
+
+    fn evaluation(&self) -> Option<&Evaluation> {
+        Some(&self.eval)
+    }
+
+    fn crease_angles(&self) -> &[f64] {
+        &self.eval.theta
+    }
+
+    fn invalidate_matrix(&mut self) {}
+
+    fn linear_times(&self, _: &SparseSolver) -> (Duration, Duration) {
+        let s = self.mass.stats();
+        (s.factor_time, s.solve_time)
     }
 }
 
