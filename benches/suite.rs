@@ -26,9 +26,10 @@
 //! rules' end state (in the sheet's size), so a rule's effect on the
 //! answer shows beside its cost.
 //!
-//! `cargo bench --bench suite -- [--scenes a,b,...] [--rules default,name,...]`
+//! `cargo bench --bench suite -- [--scenes a,b,...] [--rules default,name,...] [--tau T]`
 //! (`--rules all`: the defaults, then each rule off in turn; the names are
-//! those of `IntegrationParameters::rules`). CPU is this thread's CPU time.
+//! those of `IntegrationParameters::rules`; `--tau`: the actuators' time
+//! constant in s, 0 for ideal actuators). CPU is this thread's CPU time.
 
 #[path = "../tests/common/mod.rs"]
 mod test_common;
@@ -39,6 +40,7 @@ use origami_fmu::ids::VertexId;
 use origami_fmu::model::{Model, StepReport};
 use origami_fmu::scene::Scene;
 use origami_fmu::scene::patterns::Miura;
+use origami_fmu::solver::{IntegrationParameters, Rule};
 use std::f64::consts::PI;
 
 /// CPU time of this thread so far, s.
@@ -332,6 +334,76 @@ fn scenes() -> Vec<(&'static str, SceneFn)> {
     ]
 }
 
+/// One configuration's rows (None: the scene failed).
+type Rows = Vec<Option<Row>>;
+
+fn run_config(
+    chosen: &[(&'static str, SceneFn)],
+    params: IntegrationParameters,
+    tau: Option<f64>,
+) -> Rows {
+    chosen
+        .iter()
+        .map(|(_, f)| {
+            let tweak = move |s: &mut Scene| {
+                s.solver.integration = params;
+                if tau.is_some() {
+                    s.actuator_time_constant = tau;
+                }
+            };
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&tweak))).ok()
+        })
+        .collect()
+}
+
+fn print_rows(chosen: &[(&'static str, SceneFn)], rows: &Rows, base: Option<&Rows>) {
+    println!(
+        "| scene | CPU s | steps (rejected) | Newton its | factorizations | quality | off the defaults' end |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    for (i, ((name, _), r)) in chosen.iter().zip(rows).enumerate() {
+        let Some(r) = r else {
+            println!("| {name} | failed | | | | | |");
+            continue;
+        };
+        let off = match base.and_then(|b| b[i].as_ref()) {
+            Some(b) => format!(
+                "{:.1e}",
+                r.end
+                    .iter()
+                    .zip(&b.end)
+                    .map(|(x, y)| (x - y).norm())
+                    .fold(0.0, f64::max)
+                    / r.size
+            ),
+            None => "-".into(),
+        };
+        println!(
+            "| {name} | {:.2} | {} ({}) | {} | {} | {:.3e} | {off} |",
+            r.cpu,
+            r.work.steps,
+            r.work.rejected,
+            r.work.newton_iterations,
+            r.work.factorizations,
+            r.quality
+        );
+    }
+}
+
+/// The geometric mean over the scenes of `f(rule off) / f(defaults)`
+/// (None where a scene failed with the rule off).
+fn mean_ratio(base: &Rows, rows: &Rows, f: impl Fn(&Row) -> f64) -> Option<f64> {
+    let mut log = 0.0;
+    let mut n = 0;
+    for (b, r) in base.iter().zip(rows) {
+        let (Some(b), r) = (b, r) else { continue };
+        let r = r.as_ref()?;
+        log += (f(r).max(1e-9) / f(b).max(1e-9)).ln();
+        n += 1;
+    }
+    Some((log / n.max(1) as f64).exp())
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let value = |name: &str| {
@@ -342,27 +414,67 @@ fn main() {
     };
     let wanted: Option<Vec<String>> =
         value("--scenes").map(|v| v.split(',').map(String::from).collect());
-    let all = scenes();
-    let chosen: Vec<_> = all
+    let chosen: Vec<_> = scenes()
         .into_iter()
         .filter(|(n, _)| wanted.as_ref().is_none_or(|w| w.iter().any(|x| x == n)))
         .collect();
-    println!("| scene | CPU s | steps (rejected) | Newton its | factorizations | quality |");
-    println!("| --- | --- | --- | --- | --- | --- |");
-    let mut total = 0.0;
-    for (name, f) in &chosen {
-        let r = f(&|_| {});
-        total += r.cpu;
-        println!(
-            "| {name} | {:.2} | {} ({}) | {} | {} | {:.3e} |",
-            r.cpu,
-            r.work.steps,
-            r.work.rejected,
-            r.work.newton_iterations,
-            r.work.factorizations,
-            r.quality
-        );
-        let _ = (r.end, r.size);
+    let rules: Vec<&Rule> = match value("--rules").as_deref() {
+        None | Some("default") => vec![],
+        Some("all") => IntegrationParameters::rules().iter().collect(),
+        Some(list) => list
+            .split(',')
+            .filter(|n| *n != "default")
+            .map(|n| {
+                IntegrationParameters::rules()
+                    .iter()
+                    .find(|r| r.name == n)
+                    .unwrap_or_else(|| panic!("no rule {n}"))
+            })
+            .collect(),
+    };
+    let defaults = IntegrationParameters::default();
+    println!("## defaults");
+    // The actuators' time constant (default: the scenes' own, automatic).
+    let tau: Option<f64> = value("--tau").map(|v| v.parse().expect("a time constant (s)"));
+    let base = run_config(&chosen, defaults, tau);
+    print_rows(&chosen, &base, None);
+    let total = |rows: &Rows| rows.iter().flatten().map(|r| r.cpu).sum::<f64>();
+    println!("\nsuite CPU {:.2} s", total(&base));
+    let mut summary = Vec::new();
+    for rule in rules {
+        println!("\n## {} off ({})", rule.name, rule.what);
+        let rows = run_config(&chosen, (rule.off)(defaults), tau);
+        print_rows(&chosen, &rows, Some(&base));
+        summary.push((rule, rows));
     }
-    println!("| total | {total:.2} | | | | |");
+    if summary.is_empty() {
+        return;
+    }
+    println!(
+        "\n| rule | what it does | suite CPU off / on | mean CPU ratio off / on | mean Newton its ratio | mean factorizations ratio | scenes failed off |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    for (rule, rows) in &summary {
+        let show = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.3}"));
+        let failed: Vec<&str> = chosen
+            .iter()
+            .zip(rows)
+            .filter(|(_, r)| r.is_none())
+            .map(|((n, _), _)| *n)
+            .collect();
+        println!(
+            "| {} | {} | {:.3} | {} | {} | {} | {} |",
+            rule.name,
+            rule.what,
+            total(rows) / total(&base),
+            show(mean_ratio(&base, rows, |r| r.cpu)),
+            show(mean_ratio(&base, rows, |r| r.work.newton_iterations as f64)),
+            show(mean_ratio(&base, rows, |r| r.work.factorizations as f64)),
+            if failed.is_empty() {
+                "-".into()
+            } else {
+                failed.join(", ")
+            }
+        );
+    }
 }

@@ -1,8 +1,51 @@
 //! How input values drive the assembly: rest angles, crease moments,
 //! external forces and prescribed DOFs.
 
+use super::Model;
 use crate::assembly::Assembler;
 use crate::solver::stepper::Drive;
+
+/// Below this time constant (s) an actuator follows its input at once.
+const INSTANT: f64 = 1e-12;
+
+/// An actuator's value and rate `e` seconds after `start` (value, rate)
+/// under the input `u0 + slope t`: the critically damped response of
+/// natural frequency 1 / `tau`, in closed form,
+/// `a'' + 2 a' / tau + a / tau^2 = u / tau^2`. With `tau` 0 the input itself.
+pub(super) fn actuator_response(
+    tau: f64,
+    start: [f64; 2],
+    u0: f64,
+    slope: f64,
+    e: f64,
+) -> [f64; 2] {
+    if tau.is_nan() || tau <= INSTANT {
+        return [u0 + slope * e, slope];
+    }
+    // Deviation from the particular solution u0 + slope (t - 2 tau) and its rate.
+    let d0 = start[0] - u0 + 2.0 * slope * tau;
+    let r0 = start[1] - slope;
+    let x = (-e / tau).exp();
+    let (dev, rate) = if x > 0.0 {
+        let k = e / tau;
+        ((d0 + r0 * e + k * d0) * x, (r0 - k * r0 - k * d0 / tau) * x)
+    } else {
+        (0.0, 0.0)
+    };
+    [u0 + slope * (e - 2.0 * tau) + dev, slope + rate]
+}
+
+impl Model {
+    /// The inputs as they act on the sheet now: each actuator's value in
+    /// place of its input, the other inputs as set.
+    pub(super) fn drive_inputs(&self) -> Vec<f64> {
+        let mut u = self.state.inputs_now.clone();
+        for (x, a) in u.iter_mut().zip(&self.state.actuators) {
+            *x = a[0];
+        }
+        u
+    }
+}
 
 /// How input values become rest angles, moments, forces and prescribed
 /// DOFs of the assembly.
@@ -141,5 +184,37 @@ impl DriveValues {
             prescribed: &self.prescribed,
             theta_prev,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::actuator_response;
+
+    /// The closed form solves tau^2 a'' + 2 tau a' + a = u0 + s t from its
+    /// start, its rate is the derivative of its value, a ramp is followed
+    /// with the lag 2 tau, and tau = 0 gives the input itself.
+    #[test]
+    fn actuator_response_solves_its_equation() {
+        let (tau, start, u0, s) = (0.02, [0.3, -1.5], 1.0, 2.0);
+        let at = |t: f64| actuator_response(tau, start, u0, s, t);
+        let [a0, r0] = at(0.0);
+        assert!((a0 - start[0]).abs() < 1e-15 && (r0 - start[1]).abs() < 1e-15);
+        let d = 1e-6;
+        for t in [0.001, 0.01, 0.05] {
+            let [a, r] = at(t);
+            let rate = (at(t + d)[0] - at(t - d)[0]) / (2.0 * d);
+            let acc = (at(t + d)[1] - at(t - d)[1]) / (2.0 * d);
+            assert!(
+                (rate - r).abs() < 1e-6 * (1.0 + r.abs()),
+                "rate {rate} vs {r}"
+            );
+            let residual = tau * tau * acc + 2.0 * tau * r + a - (u0 + s * t);
+            assert!(residual.abs() < 1e-6, "residual {residual} at {t}");
+        }
+        let [a, r] = at(2.0);
+        assert!((a - (u0 + s * (2.0 - 2.0 * tau))).abs() < 1e-12);
+        assert!((r - s).abs() < 1e-12);
+        assert_eq!(actuator_response(0.0, start, u0, s, 0.5), [u0 + s * 0.5, s]);
     }
 }

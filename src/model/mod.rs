@@ -34,7 +34,7 @@ mod step;
 mod system;
 mod variables;
 
-pub use physics::{AUTO_DAMPING_RATIO, physics};
+pub use physics::{AUTO_ACTUATOR_BANDWIDTH, AUTO_DAMPING_RATIO, actuator_time_constant, physics};
 pub use state::{ModelState, Work};
 pub use step::StepReport;
 pub use variables::{VariableSpec, fold_edges};
@@ -117,6 +117,8 @@ pub struct Model {
     built_with: Option<Vec<f64>>,
     /// Whether the scene asked for automatic damping.
     auto_damping: bool,
+    /// Whether the scene left the actuators' time constant automatic.
+    auto_actuator: bool,
     /// Outputs evaluated from the state on their first read (emptied
     /// whenever the state changes).
     read_cache: ReadCache,
@@ -153,6 +155,8 @@ impl Model {
             inputs_next: inputs.iter().map(|v| v.start).collect(),
             input_slopes: vec![0.0; inputs.len()],
             damping_set: false,
+            actuator_set: false,
+            actuators: scene.actuators.iter().map(|a| [a.start, 0.0]).collect(),
             memory: StepperMemory {
                 h_next: scene.solver.max_step,
                 ..Default::default()
@@ -168,6 +172,7 @@ impl Model {
         let auto_damping = scene.auto_damping;
         let mut m = Model {
             auto_damping,
+            auto_actuator: scene.actuator_time_constant.is_none(),
             scene,
             parameter_kinds,
             parameters,
@@ -209,6 +214,10 @@ impl Model {
         // Model::new built the system; build again only for changed parameters.
         if self.sys.is_none() || self.built_with.as_deref() != Some(&self.state.parameters[..]) {
             self.build()?;
+        }
+        // The actuators start at rest at their inputs.
+        for (a, &x) in self.state.actuators.iter_mut().zip(&self.state.inputs_now) {
+            *a = [x, 0.0];
         }
         let sys = self.sys.as_mut().expect("built");
         let n = sys.asm.n_dofs();

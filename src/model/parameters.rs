@@ -68,6 +68,12 @@ parameters! {
     ),
     /// Only in scenes with contact.
     ContactFriction => ("contact.friction", "", "Coulomb friction coefficient of self-contact"),
+    /// Only in scenes with actuators.
+    ActuatorTimeConstant => (
+        "actuator.time_constant",
+        "s",
+        "time constant of the actuators' critically damped response to their inputs, 0 for none"
+    ),
 }
 
 use Parameter::*;
@@ -95,7 +101,8 @@ impl Parameter {
             | MaxStep
             | Tolerance
             | MaxInternalSteps
-            | ContactFriction => false,
+            | ContactFriction
+            | ActuatorTimeConstant => false,
         }
     }
 
@@ -129,6 +136,9 @@ impl Parameter {
             Tolerance => Some(s.tolerance),
             MaxInternalSteps => Some(s.max_internal_steps as f64),
             ContactFriction => sc.contact.map(|c| c.friction),
+            ActuatorTimeConstant => {
+                (!sc.actuators.is_empty()).then(|| super::actuator_time_constant(sc))
+            }
         }
     }
 
@@ -164,14 +174,17 @@ impl Parameter {
                     c.friction = x;
                 }
             }
+            ActuatorTimeConstant => sc.actuator_time_constant = Some(x),
         }
     }
 
     /// The variable of the FMU.
-    fn spec(self, start: f64, auto_damping: bool) -> VariableSpec {
+    fn spec(self, start: f64, sc: &Scene) -> VariableSpec {
         let (name, unit, description) = self.info();
-        let auto = if auto_damping && self.is_damping() {
+        let auto = if sc.auto_damping && self.is_damping() {
             " (automatic damping until a damping parameter is set)"
+        } else if self == ActuatorTimeConstant && sc.actuator_time_constant.is_none() {
+            "; automatic (from the sheet's folding frequency) until set"
         } else {
             ""
         };
@@ -190,7 +203,7 @@ pub(super) fn parameter_table(scene: &Scene) -> (Vec<Parameter>, Vec<VariableSpe
     ALL.iter()
         .filter_map(|&p| {
             let start = p.value(scene, &ph)?;
-            Some((p, p.spec(start, scene.auto_damping)))
+            Some((p, p.spec(start, scene)))
         })
         .unzip()
 }
@@ -236,6 +249,9 @@ impl Model {
         if kind.is_damping() {
             self.state.damping_set = true;
         }
+        if kind == ActuatorTimeConstant {
+            self.state.actuator_set = true;
+        }
         self.state.parameters[i] = value;
         Ok(())
     }
@@ -249,14 +265,17 @@ impl Model {
         for (p, &x) in self.parameter_kinds.iter().zip(&self.state.parameters) {
             p.apply(sc, x);
         }
-        if sc.auto_damping {
-            let ph = physics(sc);
-            for (p, x) in self.parameter_kinds.iter().zip(&mut self.state.parameters) {
-                if p.is_damping()
-                    && let Some(v) = p.value(sc, &ph)
-                {
-                    *x = v;
-                }
+        let auto_actuator = self.auto_actuator && !self.state.actuator_set;
+        if auto_actuator {
+            sc.actuator_time_constant = None;
+        }
+        // Automatic values shown for the material now in the scene.
+        let ph = physics(sc);
+        for (p, x) in self.parameter_kinds.iter().zip(&mut self.state.parameters) {
+            let shows_auto = (sc.auto_damping && p.is_damping())
+                || (auto_actuator && *p == ActuatorTimeConstant);
+            if shows_auto && let Some(v) = p.value(sc, &ph) {
+                *x = v;
             }
         }
     }

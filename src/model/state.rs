@@ -29,6 +29,13 @@ pub struct ModelState {
     /// Whether a damping parameter was set (automatic damping is then off).
     #[serde(default)]
     pub damping_set: bool,
+    /// Whether `actuator.time_constant` was set (the automatic one is then off).
+    #[serde(default)]
+    pub actuator_set: bool,
+    /// Each actuator's value and rate: what its input has moved it to
+    /// ([`crate::model::actuator_time_constant`]).
+    #[serde(default)]
+    pub actuators: Vec<[f64; 2]>,
     /// What the stepper carries from one advance to the next: the step it
     /// proposes, the predictor's memory, where its iteration matrix was
     /// formed.
@@ -97,7 +104,14 @@ impl Model {
             // A state saved before inputs had slopes.
             s.input_slopes = vec![0.0; s.inputs_now.len()];
         }
+        let n_act = self.scene.actuators.len();
+        if s.actuators.is_empty() && n_act > 0 {
+            // A state saved before actuators had a response: at rest at their inputs.
+            s.actuators = s.inputs_now.iter().take(n_act).map(|&x| [x, 0.0]).collect();
+        }
         let ok = dyn_ok
+            && s.actuators.len() == n_act
+            && s.actuators.iter().flatten().all(|x| x.is_finite())
             && s.input_slopes.len() == self.inputs.len()
             && s.inputs_now.len() == self.inputs.len()
             && s.inputs_next.len() == self.inputs.len()
@@ -241,7 +255,7 @@ impl Model {
     /// back and fail.
     fn accelerations_or_roll_back(&mut self, saved: ModelState) -> Result<(), Error> {
         let theta = self.state.crease_theta.clone();
-        let u = self.state.inputs_now.clone();
+        let u = self.drive_inputs();
         if let Err(e) = self.consistent_accelerations(&u, &theta) {
             self.state = saved;
             self.read_cache = Default::default();

@@ -3,7 +3,7 @@
 //! size the step control proposes ([`crate::solver::step_control`]), and
 //! what it reports.
 
-use super::drive::DriveValues;
+use super::drive::{DriveValues, actuator_response};
 use super::system::System;
 use super::{Error, Model, ModelState, Phase};
 use crate::solver::step_control::{StepController, Verdict, equal_substeps};
@@ -119,8 +119,11 @@ impl Model {
         // The outputs now, where the last step evaluated its state in full;
         // else they are evaluated from the state when read.
         let ev = sys.stepper.evaluation().cloned();
+        for (k, a) in state.actuators.iter_mut().enumerate() {
+            *a = adv.actuator(k, big_h);
+        }
         let mut u = std::mem::take(&mut adv.u);
-        adv.inputs_at(big_h, &mut u);
+        adv.commands_at(big_h, &mut u);
         let report = adv.report;
         self.state.time = t0 + big_h;
         self.state.inputs_now.clone_from(&u);
@@ -167,7 +170,10 @@ struct Advance {
     u0: Vec<f64>,
     u1: Vec<f64>,
     slopes: Vec<f64>,
-    /// Inputs at the step at hand's end.
+    /// The actuators' time constant, and their values and rates at the start.
+    tau: f64,
+    act0: Vec<[f64; 2]>,
+    /// Inputs acting at the step at hand's end.
     u: Vec<f64>,
     /// The drive at the start of the step at hand (its work over the step) ...
     d_start: DriveValues,
@@ -182,15 +188,16 @@ struct Advance {
 
 impl Advance {
     fn new(sys: &System, state: &ModelState, big_h: f64) -> Advance {
-        let u0 = state.inputs_now.clone();
-        Advance {
+        let mut adv = Advance {
             big_h,
             t0: state.time,
             u1: state.inputs_next.clone(),
             slopes: state.input_slopes.clone(),
-            u: u0.clone(),
-            d_start: sys.inputs.drive(&u0),
-            u0,
+            tau: sys.actuator_tau,
+            act0: state.actuators.clone(),
+            u: state.inputs_now.clone(),
+            d_start: DriveValues::default(),
+            u0: state.inputs_now.clone(),
             d: DriveValues::default(),
             next: Dynamics::default(),
             report: StepReport {
@@ -198,14 +205,45 @@ impl Advance {
                 ..Default::default()
             },
             linear_times: sys.stepper.linear_times(&sys.solver),
+        };
+        let mut u = std::mem::take(&mut adv.u);
+        adv.inputs_at(0.0, &mut u);
+        sys.inputs.drive_into(&u, &mut adv.d_start);
+        adv.u = u;
+        adv
+    }
+
+    /// The inputs as the master set them at elapsed time `e` of this
+    /// advance (held, ramped, with their slopes).
+    fn commands_at(&self, e: f64, u: &mut [f64]) {
+        for (k, x) in u.iter_mut().enumerate() {
+            *x = self.command(k, e);
         }
     }
 
-    /// The inputs at elapsed time `e` of this advance.
+    /// Input `k` as the master set it at elapsed time `e`.
+    fn command(&self, k: usize, e: f64) -> f64 {
+        self.u0[k] + (self.u1[k] - self.u0[k]) * (e / self.big_h) + self.slopes[k] * e
+    }
+
+    /// The inputs acting on the sheet at elapsed time `e`: the commands,
+    /// each actuator's replaced by its response.
     fn inputs_at(&self, e: f64, u: &mut [f64]) {
-        let frac = e / self.big_h;
-        for (k, x) in u.iter_mut().enumerate() {
-            *x = self.u0[k] + (self.u1[k] - self.u0[k]) * frac + self.slopes[k] * e;
+        self.commands_at(e, u);
+        if self.tau > 0.0 {
+            for (k, x) in u.iter_mut().enumerate().take(self.act0.len()) {
+                *x = self.actuator(k, e)[0];
+            }
+        }
+    }
+
+    /// Actuator `k`'s value and rate at elapsed time `e`.
+    fn actuator(&self, k: usize, e: f64) -> [f64; 2] {
+        let slope = (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k];
+        if self.tau > 0.0 {
+            actuator_response(self.tau, self.act0[k], self.u0[k], slope, e)
+        } else {
+            [self.command(k, e), slope]
         }
     }
 

@@ -27,6 +27,8 @@ pub(super) struct System {
     pub(super) inputs: InputMap,
     /// For each `crease[e]` output: the crease ends averaged.
     pub(super) angle_ends: Vec<Vec<usize>>,
+    /// The actuators' time constant (s; 0: they follow their inputs at once).
+    pub(super) actuator_tau: f64,
     /// The scene's solver settings it was built with (step bounds, the
     /// internal step limit, the numerical constants).
     pub(super) settings: SolverSettings,
@@ -212,6 +214,7 @@ impl Model {
                 n_dofs: asm.n_dofs(),
             },
             angle_ends,
+            actuator_tau: super::actuator_time_constant(sc),
             asm,
         };
         self.sys = Some(sys);

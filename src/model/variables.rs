@@ -198,19 +198,25 @@ impl Model {
         }
         self.state.inputs_next[i] = value;
         if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
-            if let (Some(sys), Phase::Running) = (&self.sys, self.state.phase) {
-                // A held input that jumps does its work at once.
-                self.state.work.input += sys.inputs.jump_work(
-                    &sys.asm,
-                    i,
-                    value,
-                    &self.state.inputs_now,
-                    &self.state.crease_theta,
-                );
+            // An actuator follows its input at once where its time constant
+            // is 0 (and before initialization, where it starts at rest).
+            let at_once = match (&self.sys, self.state.phase) {
+                (Some(sys), Phase::Running) => sys.actuator_tau == 0.0,
+                _ => true,
+            };
+            if i < self.state.actuators.len() && at_once {
+                if let (Some(sys), Phase::Running) = (&self.sys, self.state.phase) {
+                    // A held input that jumps does its work at once.
+                    let u = self.drive_inputs();
+                    self.state.work.input +=
+                        sys.inputs
+                            .jump_work(&sys.asm, i, value, &u, &self.state.crease_theta);
+                }
+                self.state.actuators[i] = [value, 0.0];
+                // The crease energy is read under the rest angles now in force.
+                self.read_cache = Default::default();
             }
             self.state.inputs_now[i] = value;
-            // The crease energy is read under the rest angles now in force.
-            self.read_cache = Default::default();
         }
         self.state.input_slopes[i] = 0.0;
         Ok(())
@@ -293,7 +299,7 @@ impl Model {
     /// Kinetic, strain and crease energy of the current state.
     fn evaluate_energies(&self) -> [f64; 3] {
         let sys = self.sys.as_ref().expect("running");
-        let d = sys.inputs.drive(&self.state.inputs_now);
+        let d = sys.inputs.drive(&self.drive_inputs());
         let q = &self.state.dynamics.q;
         let (strain, crease) = sys.asm.energies(q, &self.state.crease_theta, &d.theta0);
         [self.kinetic_energy(), strain, crease]
@@ -312,7 +318,7 @@ impl Model {
     /// the inputs in force.
     fn evaluate_outputs(&self) -> Vec<f64> {
         let sys = self.sys.as_ref().expect("running");
-        let d = sys.inputs.drive(&self.state.inputs_now);
+        let d = sys.inputs.drive(&self.drive_inputs());
         let dynm = &self.state.dynamics;
         let mut ev = Evaluation::default();
         let st = crate::assembly::State {

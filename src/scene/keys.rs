@@ -7,6 +7,7 @@
 //! | `ancf:crease` | `{length_scale}` or `{stiffness_per_length}`, optional `damping_per_length` |
 //! | `ancf:damping` | `{alpha, beta}` or `"auto"` |
 //! | `ancf:actuators` | `[{name, edges, mode, start}]` |
+//! | `ancf:actuation` | `{time_constant}` (s, or `"auto"`) |
 //! | `ancf:supports` | `[{vertices, fix}]` |
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
@@ -40,6 +41,7 @@ pub const KEYS: &[&str] = &[
     "ancf:crease",
     "ancf:damping",
     "ancf:actuators",
+    "ancf:actuation",
     "ancf:supports",
     "ancf:loads",
     "ancf:motions",
@@ -114,6 +116,8 @@ pub struct PhysicsKeys {
     pub damping: Option<(f64, f64)>,
     /// `ancf:actuators`; `None`: the default actuator `fold`.
     pub actuators: Option<Vec<ActuatorSpec>>,
+    /// `ancf:actuation.time_constant`; `None`: automatic.
+    pub actuator_time_constant: Option<f64>,
     /// `ancf:supports`.
     pub supports: Vec<SupportSpec>,
     /// `ancf:loads.gravity`.
@@ -361,6 +365,7 @@ pub fn parse(
         crease_damping: None,
         damping: None,
         actuators: None,
+        actuator_time_constant: None,
         supports: vec![],
         gravity: None,
         vertex_forces: vec![],
@@ -509,6 +514,13 @@ pub fn parse(
             });
         }
         p.actuators = Some(list);
+    }
+
+    if let Some(v) = ancf.get("ancf:actuation") {
+        let o = Obj::new("ancf:actuation", v, &["time_constant"])?;
+        if o.get("time_constant").and_then(Value::as_str) != Some("auto") {
+            p.actuator_time_constant = o.num_limited("time_constant", "actuator.time_constant")?;
+        }
     }
 
     if let Some(v) = ancf.get("ancf:supports") {

@@ -101,6 +101,7 @@ pub const LIMITS: &[Limit] = &[
     ),
     lim("solver.stop_time", Range::Positive, "s"),
     lim("contact.friction", Range::NonNegative, ""),
+    lim("actuator.time_constant", Range::NonNegative, "s"),
 ];
 
 /// The limit of `name`, if it has one.
@@ -183,6 +184,9 @@ pub fn check_scene(s: &Scene) -> Result<(), String> {
             ("gravity.y", g[1]),
             ("gravity.z", g[2]),
         ]);
+    }
+    if let Some(t) = s.actuator_time_constant {
+        values.push(("actuator.time_constant", t));
     }
     for (name, x) in values {
         check(name, x).map_err(|e| format!("{name}: {e}"))?;

@@ -454,6 +454,13 @@ pub struct Scene {
     pub auto_damping: bool,
     /// Actuators (one input each).
     pub actuators: Vec<Actuator>,
+    /// Time constant of the actuators' response to their inputs (s): each
+    /// actuator follows its input as a critically damped second-order
+    /// system of natural frequency 1 / time_constant (0: at once). `None`:
+    /// automatic, from the sheet's folding frequency
+    /// ([`crate::model::actuator_time_constant`]).
+    #[serde(default)]
+    pub actuator_time_constant: Option<f64>,
     /// Supports.
     pub supports: Vec<Support>,
     /// Gravity in m/s^2, `None` when absent.
@@ -499,6 +506,7 @@ impl Scene {
                 mode: ActuatorMode::RestAngle,
                 start: 0.0,
             }],
+            actuator_time_constant: None,
             supports: vec![],
             gravity: None,
             contact: None,

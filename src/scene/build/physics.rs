@@ -30,6 +30,7 @@ pub(super) fn apply_physics(
         crease: p.crease_damping.unwrap_or(0.0),
     };
     scene.auto_damping = p.damping.is_none();
+    scene.actuator_time_constant = p.actuator_time_constant;
     scene.gravity = p.gravity;
     scene.contact = p.contact.map(|mut c| {
         if c.thickness == 0.0 {
