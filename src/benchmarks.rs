@@ -714,12 +714,12 @@ pub fn arg(name: &str, default: usize) -> usize {
         .unwrap_or(default)
 }
 
-/// Best-of-`repeats` wall time of `f` in microseconds (the machine is
-/// shared: the best run is the least disturbed).
+/// Best-of-`repeats` CPU time of `f` on this thread in microseconds (the
+/// machine is shared: the best run is the least disturbed).
 pub fn best_us(repeats: usize, mut f: impl FnMut()) -> f64 {
     let mut best = f64::INFINITY;
     for _ in 0..repeats {
-        let t = std::time::Instant::now();
+        let t = crate::cpu_time::CpuInstant::now();
         f();
         best = best.min(t.elapsed().as_secs_f64() * 1e6);
     }

@@ -12,7 +12,8 @@
 //! (the plain Rust API that the FMU and the CLI drive; it runs the
 //! [`solver`]s), with [`fmi`] on top: the FMI 2.0 co-simulation functions
 //! exported from the cdylib. `unsafe` code is denied everywhere but in two
-//! files of [`fmi`] (the pointer helpers and the exports).
+//! files of [`fmi`] (the pointer helpers and the exports) and the one
+//! clock call of [`cpu_time`].
 //!
 //! The names a user of the Rust API needs most are re-exported here:
 //! [`Scene`] (read one with [`scene::load`] or [`scene::from_str`], or build

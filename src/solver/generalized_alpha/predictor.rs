@@ -9,7 +9,8 @@
 use super::{StepContext, Workspace};
 use crate::assembly::FIXED;
 use crate::solver::stepper::{Dynamics, Outcome};
-use std::time::Instant;
+// Phase times are CPU time: the calling thread's clock, not the wall.
+use crate::cpu_time::CpuInstant as Instant;
 
 /// Which guess.
 #[derive(Clone, Copy, PartialEq)]
