@@ -48,6 +48,7 @@ pub mod assembly;
 pub mod benchmarks;
 pub mod cli;
 pub mod contact;
+pub mod cpu_time;
 pub mod crease;
 pub mod curves;
 pub mod dofs;

@@ -7,7 +7,14 @@
 
 use super::{Error, Model, Phase, VariableSpec, physics};
 use crate::assembly::Physics;
-use crate::scene::{CreaseStiffness, Scene};
+use crate::scene::{ActuatorMode, CreaseStiffness, RampShape as RampShapeKind, Scene};
+
+/// Whether `sc` has an actuator that the built-in ramp drives.
+fn has_rest_angle_actuator(sc: &Scene) -> bool {
+    sc.actuators
+        .iter()
+        .any(|a| a.mode == ActuatorMode::RestAngle)
+}
 
 /// Declares [`Parameter`], [`ALL`] and `Parameter::info` from one row per
 /// parameter, in the FMU's order: `Variant => (name, unit, description)`.
@@ -68,6 +75,14 @@ parameters! {
     ),
     /// Only in scenes with contact.
     ContactFriction => ("contact.friction", "", "Coulomb friction coefficient of self-contact"),
+    /// Only in scenes with a rest-angle actuator.
+    RampTime => (
+        "ramp.time",
+        "s",
+        "built-in signal: when > 0, every rest-angle actuator (fold) goes from 0 to 1 over this time and holds 1, and values set on those inputs are not used; 0 = off, the master drives them"
+    ),
+    /// Only in scenes with a rest-angle actuator.
+    RampShape => ("ramp.shape", "", "shape of the built-in signal: 0 linear, 1 smooth (zero slope at both ends)"),
 }
 
 use Parameter::*;
@@ -95,7 +110,9 @@ impl Parameter {
             | MaxStep
             | Tolerance
             | MaxInternalSteps
-            | ContactFriction => false,
+            | ContactFriction
+            | RampTime
+            | RampShape => false,
         }
     }
 
@@ -129,6 +146,12 @@ impl Parameter {
             Tolerance => Some(s.tolerance),
             MaxInternalSteps => Some(s.max_internal_steps as f64),
             ContactFriction => sc.contact.map(|c| c.friction),
+            RampTime | RampShape if !has_rest_angle_actuator(sc) => None,
+            RampTime => Some(sc.ramp.time),
+            RampShape => Some(match sc.ramp.shape {
+                RampShapeKind::Linear => 0.0,
+                RampShapeKind::Smooth => 1.0,
+            }),
         }
     }
 
@@ -162,6 +185,14 @@ impl Parameter {
             ContactFriction => {
                 if let Some(c) = sc.contact.as_mut() {
                     c.friction = x;
+                }
+            }
+            RampTime => sc.ramp.time = x,
+            RampShape => {
+                sc.ramp.shape = if x == 0.0 {
+                    RampShapeKind::Linear
+                } else {
+                    RampShapeKind::Smooth
                 }
             }
         }

@@ -23,7 +23,7 @@ pub struct StepReport {
     pub factorizations: usize,
     /// Smallest internal step used, s.
     pub min_step: f64,
-    /// CPU time assembling forces and matrices, s.
+    /// CPU time (the stepping thread's clock) assembling forces and matrices, s.
     pub assembly_time: f64,
     /// CPU time in sparse numeric factorizations, s.
     pub factor_time: f64,
@@ -100,6 +100,11 @@ impl Model {
     }
 
     fn advance_inner(&mut self, big_h: f64) -> Result<StepReport, Error> {
+        // Inputs the built-in ramp drives follow it, whatever was set.
+        let ramped: Vec<usize> = (0..self.inputs.len())
+            .filter(|&k| self.is_ramped(k))
+            .collect();
+        let ramp = (self.scene.ramp, ramped);
         let sys = self.sys.as_mut().expect("initialized");
         let state = &mut self.state;
         let t0 = state.time;
@@ -109,7 +114,7 @@ impl Model {
                 time: t0,
                 reason: e.to_string(),
             })?;
-        let mut adv = Advance::new(sys, state, big_h);
+        let mut adv = Advance::new(sys, state, big_h, ramp);
         adv.run(sys, state)?;
         let (factor_time, solve_time) = sys.stepper.linear_times(&sys.solver);
         adv.report.factor_time = (factor_time - adv.linear_times.0).as_secs_f64();
@@ -178,16 +183,29 @@ struct Advance {
     report: StepReport,
     /// The integrator's linear-solver times at the start.
     linear_times: (std::time::Duration, std::time::Duration),
+    /// The built-in ramp and the inputs it drives.
+    ramp: (crate::scene::InputRamp, Vec<usize>),
 }
 
 impl Advance {
-    fn new(sys: &System, state: &ModelState, big_h: f64) -> Advance {
-        let u0 = state.inputs_now.clone();
+    fn new(
+        sys: &System,
+        state: &ModelState,
+        big_h: f64,
+        ramp: (crate::scene::InputRamp, Vec<usize>),
+    ) -> Advance {
+        let mut u0 = state.inputs_now.clone();
+        let mut u1 = state.inputs_next.clone();
+        let mut slopes = state.input_slopes.clone();
+        for &k in &ramp.1 {
+            (u0[k], u1[k], slopes[k]) = (ramp.0.value(state.time), ramp.0.value(state.time), 0.0);
+        }
         Advance {
             big_h,
             t0: state.time,
-            u1: state.inputs_next.clone(),
-            slopes: state.input_slopes.clone(),
+            u1,
+            slopes,
+            ramp,
             u: u0.clone(),
             d_start: sys.inputs.drive(&u0),
             u0,
@@ -206,6 +224,9 @@ impl Advance {
         let frac = e / self.big_h;
         for (k, x) in u.iter_mut().enumerate() {
             *x = self.u0[k] + (self.u1[k] - self.u0[k]) * frac + self.slopes[k] * e;
+        }
+        for &k in &self.ramp.1 {
+            u[k] = self.ramp.0.value(self.t0 + e);
         }
     }
 
