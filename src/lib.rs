@@ -59,6 +59,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod paraview;
+pub mod pictures;
 pub mod rigid;
 pub mod rng;
 pub mod scene;
