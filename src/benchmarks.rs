@@ -422,7 +422,7 @@ impl PlateCase {
         let (a, e, nu) = (1.0, 1.0e7, 0.3);
         let h = a / self.slenderness;
         let n = self.n;
-        if n < 2 || n % 2 != 0 || n > 1000 {
+        if n < 2 || !n.is_multiple_of(2) || n > 1000 {
             return Err(format!("plate: cells per side must be even, got {n}"));
         }
         let d = e * h * h * h / (12.0 * (1.0 - nu * nu));

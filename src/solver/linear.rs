@@ -290,7 +290,7 @@ impl SparseSolver {
         block: usize,
         coords: Option<&[[f64; 3]]>,
     ) -> Result<Self, String> {
-        let blocked = block > 1 && n % block == 0;
+        let blocked = block > 1 && n.is_multiple_of(block);
         let ordering = match coords {
             Some(coords) if blocked && n >= NESTED_DISSECTION_MIN => {
                 Ordering::BlockNestedDissection { block, coords }
