@@ -1,10 +1,10 @@
 //! # origami-fmu
 //!
 //! Origami folding dynamics with the iso-parametric ANCF shell model (Tao & Li
-//! 2019, as corrected in the project's MATH notes): every facet is a cubic
-//! triangular Kirchhoff shell with Green-Lagrange membrane strain, creases are
-//! rotational springs at the crease end nodes, and the mass matrix is
-//! constant. The model is packed as an FMI 2.0 co-simulation FMU.
+//! 2019, with the paper's sign and scaling errors corrected; docs/model.md):
+//! every facet is a cubic triangular Kirchhoff shell with Green-Lagrange
+//! membrane strain, creases are rotational springs at the crease end nodes,
+//! and the mass matrix is constant. The model is packed as an FMI 2.0 co-simulation FMU.
 //!
 //! Layers, bottom up: [`mesh`] (crease pattern as data) and [`material`]
 //! (the sheet), the shell [`element`], the [`crease`] springs and the

@@ -42,6 +42,8 @@ pub struct Sheet {
     lines: Vec<[usize; 2]>,
     /// For each line that is a crease, its `crease[e].angle` output.
     line_output: Vec<Option<usize>>,
+    /// The facets on each line (a line is drawn right after them).
+    line_facets: Vec<Vec<usize>>,
     /// The face (group of facets joined across smooth edges) of each facet.
     face: Vec<usize>,
     /// For each face, the lines (crease lines) around it.
@@ -139,6 +141,7 @@ impl Sheet {
             triangles,
             lines,
             line_output,
+            line_facets: line_faces,
             face,
             face_lines,
             angle_outputs,
@@ -292,27 +295,34 @@ fn draw_sheet(
         let n = dot(l, l).sqrt();
         [l[0] / n, l[1] / n, l[2] / n]
     };
-    // Facets and lines in one painter's list: (depth, item); lines are
-    // nudged toward the viewer so that a crease shows on its own facets.
+    // Facets and lines in one painter's list: (depth, item); a line comes
+    // right after the nearest of its own facets, so it shows on them and
+    // hides behind the facets in front of it.
     enum Item {
         Facet(usize),
         Line(usize),
     }
     let depth = |p: [f64; 3]| fit.view.project(p).2;
     let x = &frame.points;
-    let mut items: Vec<(f64, Item)> = Vec::with_capacity(sheet.triangles.len() + sheet.lines.len());
-    let mut size = 0.0f64;
-    for (t, tri) in sheet.triangles.iter().enumerate() {
-        let d = tri.iter().map(|&v| depth(x[v])).sum::<f64>() / 3.0;
-        size = size.max(dot(sub(x[tri[1]], x[tri[0]]), sub(x[tri[1]], x[tri[0]])).sqrt());
-        items.push((d, Item::Facet(t)));
+    let mut items: Vec<(f64, u8, Item)> =
+        Vec::with_capacity(sheet.triangles.len() + sheet.lines.len());
+    let facet_depth: Vec<f64> = sheet
+        .triangles
+        .iter()
+        .map(|tri| tri.iter().map(|&v| depth(x[v])).sum::<f64>() / 3.0)
+        .collect();
+    for (t, &d) in facet_depth.iter().enumerate() {
+        items.push((d, 0, Item::Facet(t)));
     }
     for (l, line) in sheet.lines.iter().enumerate() {
-        let d = 0.5 * (depth(x[line[0]]) + depth(x[line[1]])) + 1e-3 * size;
-        items.push((d, Item::Line(l)));
+        let d = sheet.line_facets[l]
+            .iter()
+            .map(|&t| facet_depth[t])
+            .fold(0.5 * (depth(x[line[0]]) + depth(x[line[1]])), f64::max);
+        items.push((d, 1, Item::Line(l)));
     }
-    items.sort_by(|a, b| a.0.total_cmp(&b.0));
-    for (_, item) in &items {
+    items.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    for (_, _, item) in &items {
         match *item {
             Item::Facet(t) => {
                 let tri = sheet.triangles[t];
