@@ -23,7 +23,7 @@ def run_ramp(fmu, md, actuators, outputs, stop_time, dt, ramp):
     (fmi2SetRealInputDerivatives), so the FMU sees the continuous ramp.
     (fmpy 0.3.32's simulate_fmu cannot hand derivatives to this FMU, and
     without them a sampled ramp is a staircase whose every step rings the
-    sheet: about 45x the CPU on the 4x4 Miura fold, benches/cosim.rs.)
+    sheet: 17x the CPU on the 4x4 Miura fold at 10 ms steps, benches/cosim.rs.)
     Returns the outputs at every communication point as a structured array
     (up to a failed step) and the failure's reason (None when the run ends)."""
     from fmpy import extract
