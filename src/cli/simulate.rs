@@ -466,3 +466,21 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         )),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Past its first second the bar draws to standard error, but only to
+    /// a terminal: under `cargo test` (and in CI logs, pipes) it stays hidden.
+    #[test]
+    fn progress_is_hidden_off_a_terminal() {
+        use std::io::IsTerminal;
+        let mut p = Progress::new(10, 1.0);
+        p.started -= std::time::Duration::from_secs(2);
+        p.update(5, 0.5, 42);
+        assert!(p.shown);
+        assert_eq!(p.bar.is_hidden(), !std::io::stderr().is_terminal());
+        p.finish();
+    }
+}
