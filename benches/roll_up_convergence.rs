@@ -1,4 +1,4 @@
-//! Case A (BENCHMARKS.md, Sze, Liu & Lo 2004) under mesh refinement: prints
+//! Case A (docs/validation.md, Sze, Liu & Lo 2004) under mesh refinement: prints
 //! a markdown table of the tip errors at M/M_max = 0.25, 0.5, 0.75 and 1,
 //! the observed orders and the Newton iterations.
 //! Run with `cargo bench --bench roll_up_convergence`.

@@ -8,7 +8,7 @@
 //!   ramp (0 -> 1 rad over 50 ms, held to 100 ms); error: largest vertex
 //!   position difference from a reference run (generalized-alpha, full
 //!   Newton, 3.9 us steps) over the run, relative to the sheet size.
-//! - `cantilever`: a clamped strip (BENCHMARKS.md case B) set vibrating by a
+//! - `cantilever`: a clamped strip (docs/validation.md case B) set vibrating by a
 //!   tip force applied at t = 0; error: its first frequency (mean period
 //!   between upward crossings of the tip deflection through the middle of
 //!   its range) against 1.875104^2 sqrt(EI/(rho A L^4)). The error has a

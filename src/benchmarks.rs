@@ -1,4 +1,4 @@
-//! Benchmark setups with known answers (BENCHMARKS.md), shared by the
+//! Benchmark setups with known answers (docs/validation.md), shared by the
 //! integration tests and the cargo benches so both solve the same problem.
 //!
 //! Case A (Sze, Liu & Lo 2004): a cantilever strip L = 12, b = 1, h = 0.1,
@@ -379,7 +379,7 @@ pub fn pressure_load(asm: &Assembler, p: f64, h: f64) -> Vec<f64> {
 /// scale `q a^4 / D`); centre deflection against the series solutions
 /// (Timoshenko & Woinowsky-Krieger, to five digits: alpha = 0.0040624 /
 /// 0.0012653 uniform, beta = 0.011601 / 0.0056120 point load, simply
-/// supported / clamped; BENCHMARKS.md prints them to three).
+/// supported / clamped; docs/validation.md prints them to three).
 #[derive(Clone, Copy, Debug)]
 pub struct PlateCase {
     /// Cells per side (even, so a vertex sits at the centre).

@@ -62,7 +62,7 @@ fn strip() -> Scene {
     s
 }
 
-/// BENCHMARKS case C: two 1 mm thick triangular panels on one crease of
+/// docs/validation.md case C: two 1 mm thick triangular panels on one crease of
 /// stiffness 1e-3 N/rad per metre, panel 0 held (vertex 1 clamped, the
 /// crease ends pinned), a torque input per unit crease length, damped near
 /// critically (period about 1 s). Static angle = torque / 1e-3.
