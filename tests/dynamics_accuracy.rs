@@ -107,7 +107,7 @@ fn energy_run(integrator: Integrator, rho_inf: f64) -> (Model, f64, f64) {
 /// the total energy within 1e-6 of the initial kinetic energy. Steps are
 /// capped at T/20 and the controller never needs smaller ones, so Newton
 /// converges fully in every step (with the error controller cutting steps
-/// instead, the energy random-walks by ~1e-5: README, "Stiff and extreme cases").
+/// instead, the energy random-walks by ~1e-5: docs/validation.md, "Stiff and extreme cases").
 #[test]
 fn energy_conserved_over_1000_periods_with_rho_inf_1() {
     for &integrator in INTEGRATORS {
