@@ -1,18 +1,18 @@
 //! What contact costs. Part 1: the contact search (broad phase, pair
 //! filters, distances) on n x n Miura sheets folded half-way, against
 //! the facet count: near-linear growth means a flat time per facet.
-//! Part 2: whole folds with and without contact (CPU time, steps,
+//! Part 2: whole folds with and without contact (process CPU and wall time, steps,
 //! rejections, Newton steps cut by the collision check, pattern growths).
 //!
 //! `cargo bench --bench contact -- [--repeats 5] [--search 0]`
 
 use origami_fmu::benchmarks::{arg, best_us, fold_by_ramp, miura_scene};
 use origami_fmu::contact::{ContactSettings, ContactTerm};
+use origami_fmu::cpu_time::Stopwatch;
 use origami_fmu::ids::EdgeId;
 use origami_fmu::mesh::Mesh;
 use origami_fmu::model::Model;
 use std::f64::consts::PI;
-use std::time::Instant;
 
 /// A crease's target (rad) from the mesh, the edge and the file's target.
 type Target = dyn Fn(&Mesh, usize, f64) -> f64;
@@ -28,7 +28,9 @@ fn with_contact(mut scene: origami_fmu::Scene) -> origami_fmu::Scene {
 fn main() {
     let repeats = arg("--repeats", 5);
     println!("## Contact search against facet count (Miura n x n, folded to 0.5 of its targets)");
-    println!("| n | facets | contact vertices | search (ms) | per facet (us) |");
+    println!(
+        "| n | facets | contact vertices | search (CPU ms, best of repeats) | per facet (us) |"
+    );
     println!("|---|---|---|---|---|");
     // `--search 0` skips part 1 (its 16 x 16 fold takes minutes).
     let sizes: &[usize] = if arg("--search", 1) == 1 {
@@ -77,9 +79,9 @@ fn main() {
     println!();
     println!("## Folds with and without contact (defaults, 10 ms communication steps)");
     println!(
-        "| scene | contact | CPU (s) | steps | rejected | cut by CCD | pattern growths | pairs at end |"
+        "| scene | contact | CPU (s) | wall (s) | steps | rejected | cut by CCD | pattern growths | pairs at end |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     // Crease targets: the file's own, all to +-180 deg, or the waterbomb
     // base collapsed (diagonals valley, the x midline mountain, the y
     // midline unfolded: the file's targets are a 3D waterbomb).
@@ -132,12 +134,12 @@ fn main() {
             }
             let mut model = Model::new(scene).unwrap();
             model.initialize().unwrap();
-            let t = Instant::now();
+            let clock = Stopwatch::start();
             let r = fold_by_ramp(&mut model, 80, 0.01, 0.5);
-            let cpu = t.elapsed().as_secs_f64();
+            let (cpu, wall) = (clock.cpu(), clock.wall());
             let pairs = model.contact().map(|c| c.pairs).unwrap_or(0);
             println!(
-                "| {name} | {} | {cpu:.2} | {} | {} | {} | {} | {pairs} |",
+                "| {name} | {} | {cpu:.2} | {wall:.2} | {} | {} | {} | {} | {pairs} |",
                 if contact { "on" } else { "off" },
                 r.steps,
                 r.rejected,

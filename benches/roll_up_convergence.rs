@@ -1,10 +1,11 @@
-//! Case A (BENCHMARKS.md, Sze, Liu & Lo 2004) under mesh refinement: prints
+//! Case A (docs/validation.md, Sze, Liu & Lo 2004) under mesh refinement: prints
 //! a markdown table of the tip errors at M/M_max = 0.25, 0.5, 0.75 and 1,
 //! the observed orders and the Newton iterations.
 //! Run with `cargo bench --bench roll_up_convergence`.
 
 use origami_fmu::benchmarks::{ROLL_UP_L, RollUp, roll_up_exact};
-use std::time::Instant;
+// Times are CPU time (this thread's clock; the benches run on one thread).
+use origami_fmu::cpu_time::CpuInstant as Instant;
 
 const RATIOS: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
 /// Cells along x; each doubles the previous one.
@@ -43,7 +44,7 @@ fn main() {
                         .collect(),
                 ));
                 info.push((run.dofs, its, secs));
-                eprintln!("{nx} x 1 cells: {secs:.2} s");
+                eprintln!("{nx} x 1 cells: {secs:.2} CPU s");
             }
             Err(e) => {
                 eprintln!("{nx} x 1 cells failed: {e}");

@@ -12,14 +12,15 @@
 use origami_fmu::fmi;
 use origami_fmu::model::Model;
 use origami_fmu::scene::{self, patterns::Miura};
-use std::time::Instant;
+// Times are CPU time (this thread's clock; the benches run on one thread).
+use origami_fmu::cpu_time::CpuInstant as Instant;
 
 use origami_fmu::benchmarks::arg;
 
 fn main() {
     let max = arg("--max", 128);
     println!(
-        "| Miura n x n | facets | DOFs | read + scene s | model s | check s | FMU description s | build s |"
+        "| Miura n x n | facets | DOFs | read + scene CPU s | model CPU s | check CPU s | FMU description CPU s | build CPU s |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut n = 16;

@@ -1,4 +1,4 @@
-//! Benchmark setups with known answers (BENCHMARKS.md), shared by the
+//! Benchmark setups with known answers (docs/validation.md), shared by the
 //! integration tests and the cargo benches so both solve the same problem.
 //!
 //! Case A (Sze, Liu & Lo 2004): a cantilever strip L = 12, b = 1, h = 0.1,
@@ -379,7 +379,7 @@ pub fn pressure_load(asm: &Assembler, p: f64, h: f64) -> Vec<f64> {
 /// scale `q a^4 / D`); centre deflection against the series solutions
 /// (Timoshenko & Woinowsky-Krieger, to five digits: alpha = 0.0040624 /
 /// 0.0012653 uniform, beta = 0.011601 / 0.0056120 point load, simply
-/// supported / clamped; BENCHMARKS.md prints them to three).
+/// supported / clamped; docs/validation.md prints them to three).
 #[derive(Clone, Copy, Debug)]
 pub struct PlateCase {
     /// Cells per side (even, so a vertex sits at the centre).
@@ -422,7 +422,7 @@ impl PlateCase {
         let (a, e, nu) = (1.0, 1.0e7, 0.3);
         let h = a / self.slenderness;
         let n = self.n;
-        if n < 2 || n % 2 != 0 || n > 1000 {
+        if n < 2 || !n.is_multiple_of(2) || n > 1000 {
             return Err(format!("plate: cells per side must be even, got {n}"));
         }
         let d = e * h * h * h / (12.0 * (1.0 - nu * nu));
@@ -714,12 +714,12 @@ pub fn arg(name: &str, default: usize) -> usize {
         .unwrap_or(default)
 }
 
-/// Best-of-`repeats` wall time of `f` in microseconds (the machine is
-/// shared: the best run is the least disturbed).
+/// Best-of-`repeats` CPU time of `f` on this thread in microseconds (the
+/// machine is shared: the best run is the least disturbed).
 pub fn best_us(repeats: usize, mut f: impl FnMut()) -> f64 {
     let mut best = f64::INFINITY;
     for _ in 0..repeats {
-        let t = std::time::Instant::now();
+        let t = crate::cpu_time::CpuInstant::now();
         f();
         best = best.min(t.elapsed().as_secs_f64() * 1e6);
     }

@@ -1,4 +1,4 @@
-//! Reference geometry of crease curves (MATH.md section 4, corrected rule).
+//! Reference geometry of crease curves (docs/model.md, "Curved creases").
 //!
 //! Where exactly two crease edges meet at a vertex and they are not
 //! collinear, the polyline stands for a smooth curve (or a kink): the two

@@ -1,10 +1,10 @@
 //! # origami-fmu
 //!
 //! Origami folding dynamics with the iso-parametric ANCF shell model (Tao & Li
-//! 2019, as corrected in the project's MATH notes): every facet is a cubic
-//! triangular Kirchhoff shell with Green-Lagrange membrane strain, creases are
-//! rotational springs at the crease end nodes, and the mass matrix is
-//! constant. The model is packed as an FMI 2.0 co-simulation FMU.
+//! 2019, with the paper's sign and scaling errors corrected; docs/model.md):
+//! every facet is a cubic triangular Kirchhoff shell with Green-Lagrange
+//! membrane strain, creases are rotational springs at the crease end nodes,
+//! and the mass matrix is constant. The model is packed as an FMI 2.0 co-simulation FMU.
 //!
 //! Layers, bottom up: [`mesh`] (crease pattern as data) and [`material`]
 //! (the sheet), the shell [`element`], the [`crease`] springs and the
@@ -12,7 +12,8 @@
 //! (the plain Rust API that the FMU and the CLI drive; it runs the
 //! [`solver`]s), with [`fmi`] on top: the FMI 2.0 co-simulation functions
 //! exported from the cdylib. `unsafe` code is denied everywhere but in two
-//! files of [`fmi`] (the pointer helpers and the exports).
+//! files of [`fmi`] (the pointer helpers and the exports) and the one
+//! clock call of [`cpu_time`].
 //!
 //! The names a user of the Rust API needs most are re-exported here:
 //! [`Scene`] (read one with [`scene::load`] or [`scene::from_str`], or build
@@ -47,6 +48,7 @@ pub mod assembly;
 pub mod benchmarks;
 pub mod cli;
 pub mod contact;
+pub mod cpu_time;
 pub mod crease;
 pub mod curves;
 pub mod dofs;
@@ -57,6 +59,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod paraview;
+pub mod pictures;
 pub mod rigid;
 pub mod rng;
 pub mod scene;

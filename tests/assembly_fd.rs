@@ -115,7 +115,7 @@ fn global_tangent_matches_finite_differences() {
 /// exactly planar) the tangent must match too.
 #[test]
 fn global_tangent_at_flat_reference() {
-    // The case A strip (BENCHMARKS.md) on 4 cells.
+    // The case A strip (docs/validation.md) on 4 cells.
     let mesh = origami_fmu::mesh::builders::strip(12.0, 1.0, 4, 1);
     let physics = origami_fmu::benchmarks::roll_up_physics();
     let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();

@@ -1,4 +1,4 @@
-//! BENCHMARKS.md case A (Sze, Liu & Lo 2004, case 3.2): a cantilever strip
+//! docs/validation.md case A (Sze, Liu & Lo 2004, case 3.2): a cantilever strip
 //! rolled up by an end moment. L = 12, b = 1, h = 0.1, E = 1.2e6, nu = 0
 //! (EI = 100), clamped at x = 0; M_max = 2 pi EI / L rolls it into a full
 //! circle. Exact tip: -u = L (1 - sin t / t), w = L (1 - cos t) / t, t = M L / EI.

@@ -1,4 +1,4 @@
-//! BENCHMARKS.md case B (small-deflection plate and beam values) and the
+//! docs/validation.md case B (small-deflection plate and beam values) and the
 //! static solver's convergence on fine and thin plates.
 //!
 //! Case B: cantilever strip, tip force P: w = P L^3 / (3 EI); square plate

@@ -169,7 +169,7 @@ fn every_scene_command_takes_frame_size_unit_and_f_edges() {
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(r.status.success(), "{err}");
     assert!(
-        err.contains("(wall-clock time)") && !err.contains("CPU wall"),
+        err.contains("s of CPU (") && err.contains("s wall)"),
         "{err}"
     );
     assert!(err.contains("size: 0.1 m x 0.1 m"), "{err}");

@@ -1,4 +1,4 @@
-//! Curved creases fold (MATH.md section 4, corrected rule): the shipped
+//! Curved creases fold (docs/model.md, "Curved creases"): the shipped
 //! curved-crease scene folds every segment, and a circular-arc crease obeys
 //! the geometry of curved folding. For an isometric sheet the crease keeps
 //! its planar curvature kappa as geodesic curvature on each side, so where

@@ -3,9 +3,9 @@
 //! A: undamped, unforced linear vibration: rho_inf = 1 keeps the total
 //!    energy within 1e-6 over 1000 periods; rho_inf < 1 makes it decay.
 //! B: first bending frequency of a cantilever strip within 1 % of
-//!    BENCHMARKS.md case B, omega_1 = 1.875104^2 sqrt(EI / (rho A L^4)).
+//!    docs/validation.md case B, omega_1 = 1.875104^2 sqrt(EI / (rho A L^4)).
 //! C: small-oscillation frequency of a panel on a crease within 1 % of
-//!    BENCHMARKS.md case C, omega = sqrt(k / I), I = m w^2 / 3.
+//!    docs/validation.md case C, omega = sqrt(k / I), I = m w^2 / 3.
 //! D: generalized-alpha converges with order 2 +- 0.2 at fixed steps.
 //!
 //! The oscillations start from an initial velocity field (a rigid hinge
@@ -28,7 +28,7 @@ use std::time::Instant;
 /// Panel width (m) of the two-panel scenes: a 20 mm x 20 mm paper panel.
 const W: f64 = 0.02;
 /// Crease stiffness over panel bending stiffness, k w / D: small, so the
-/// panels move as rigid bodies on the crease (BENCHMARKS.md case C).
+/// panels move as rigid bodies on the crease (docs/validation.md case C).
 const SOFT_CREASE: f64 = 1e-3;
 
 /// The two-panel scene with a soft crease, undamped, for oscillation tests.
@@ -107,7 +107,7 @@ fn energy_run(integrator: Integrator, rho_inf: f64) -> (Model, f64, f64) {
 /// the total energy within 1e-6 of the initial kinetic energy. Steps are
 /// capped at T/20 and the controller never needs smaller ones, so Newton
 /// converges fully in every step (with the error controller cutting steps
-/// instead, the energy random-walks by ~1e-5: README, "Stiff and extreme cases").
+/// instead, the energy random-walks by ~1e-5: docs/validation.md, "Stiff and extreme cases").
 #[test]
 fn energy_conserved_over_1000_periods_with_rho_inf_1() {
     for &integrator in INTEGRATORS {

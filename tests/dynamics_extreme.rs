@@ -3,7 +3,7 @@
 //! no NaN and no divergence, the energy stays bounded (non-increasing while
 //! the inputs are held in a damped run), and the final state is within a
 //! stated tolerance of its reference. Every case prints one row with the
-//! step controller's work (`--nocapture`); README "Stiff and extreme cases"
+//! step controller's work (`--nocapture`); docs/validation.md "Stiff and extreme cases"
 //! tabulates them.
 //!
 //! Reference of the folding cases: with no load but the crease's own rest
@@ -423,7 +423,7 @@ fn rigid_spin_100_rad_per_s() {
             scene.solver.integrator = integrator;
             // A fast spin's phase error grows as tolerance^(2/3): the return
             // asked here needs 1e-5 or finer (at the default 1e-4 it is
-            // 3.1e-3 R, README "Stiff and extreme cases").
+            // 3.1e-3 R, docs/validation.md "Stiff and extreme cases").
             scene.solver.tolerance = 1e-6;
             let mt = scene.material;
             let e0 = 0.5 * mt.density * mt.thickness * a * a * inertia * rate * rate;

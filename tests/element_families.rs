@@ -4,7 +4,7 @@
 //! clamped plate) are within 1 % at 32 cells, converge with observed order of at least 1.5
 //! between 16 and 64 cells, and union-jack errors are at most 2x the
 //! same-diagonal ones. The studies are `origami_fmu::benchmarks::FamilyStudy`,
-//! tabulated by `cargo bench --bench element_families` (the README's table).
+//! tabulated by `cargo bench --bench element_families` (docs/validation.md's table).
 
 use origami_fmu::benchmarks::{FamilyStudy, MeshFamily};
 use origami_fmu::element::Interpolation;

@@ -772,8 +772,9 @@ fn steps_past_the_stop_time_are_errors() {
 }
 
 /// FMI 2.0 section 2.1.5: the logger is called only for enabled
-/// categories. Without loggingOn, errors are reported (logStatusError) but
-/// not discards; fmi2SetDebugLogging(false) silences everything, and with a
+/// categories. Without loggingOn, discards and errors are reported (a master
+/// that ends its run at a discard must not end it silently);
+/// fmi2SetDebugLogging(false) silences everything, and with a
 /// list only the listed categories are called, once per failure.
 #[test]
 fn the_logger_is_called_only_for_enabled_categories() {
@@ -783,7 +784,11 @@ fn the_logger_is_called_only_for_enabled_categories() {
     unsafe {
         assert_eq!(fmi2GetFMUstate(f.c, &mut saved), fmi2OK);
         assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Discard);
-        assert_eq!(f.lines("logStatusDiscard"), 0, "discard category is off");
+        assert_eq!(
+            f.lines("logStatusDiscard"),
+            1,
+            "discards are reported by default"
+        );
         assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Error);
         assert_eq!(f.lines("logStatusError"), 1);
         // Everything off: no call at all.
@@ -849,4 +854,50 @@ fn input_derivatives_extrapolate_over_the_step() {
             fmi2Error
         );
     }
+}
+
+/// fmi2SetupExperiment's tolerance (toleranceDefined) sets the parameter
+/// solver.tolerance, unless the master set that parameter to another value
+/// (in either order); an out-of-range tolerance is not used (fmi2Warning).
+#[test]
+fn the_experiment_tolerance_sets_the_solver_tolerance() {
+    let m = model();
+    let vr = m
+        .parameters()
+        .iter()
+        .position(|v| v.name == "solver.tolerance")
+        .unwrap() as u32;
+    let start = m.parameters()[vr as usize].start;
+    let f = Fmu::new("tol_defined");
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(f.c, 1, 1e-6, 0.0, 0, 0.0), fmi2OK);
+    }
+    assert_eq!(f.get(&[vr]), vec![1e-6]);
+    // Not defined: the start value stays.
+    let g = Fmu::new("tol_undefined");
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(g.c, 0, 1e-6, 0.0, 0, 0.0), fmi2OK);
+    }
+    assert_eq!(g.get(&[vr]), vec![start]);
+    // Set before: the parameter wins; set after: it overwrites.
+    let h = Fmu::new("tol_param_first");
+    assert_eq!(h.set(&[vr], &[1e-5]), fmi2OK);
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(h.c, 1, 1e-7, 0.0, 0, 0.0), fmi2OK);
+    }
+    assert_eq!(h.get(&[vr]), vec![1e-5]);
+    let k = Fmu::new("tol_param_after");
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(k.c, 1, 1e-7, 0.0, 0, 0.0), fmi2OK);
+    }
+    assert_eq!(k.set(&[vr], &[1e-5]), fmi2OK);
+    assert_eq!(k.get(&[vr]), vec![1e-5]);
+    // Out of range: not used, with a warning.
+    let w = Fmu::new("tol_bad");
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(w.c, 1, 2.0, 0.0, 0, 0.0), fmi2Warning);
+        assert_eq!(fmi2EnterInitializationMode(w.c), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(w.c), fmi2OK);
+    }
+    assert_eq!(w.get(&[vr]), vec![start]);
 }

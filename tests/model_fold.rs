@@ -1,5 +1,5 @@
 //! End-to-end model checks: a single crease driven through its rest angle
-//! folds to the target and settles there (BENCHMARKS.md case C: driving the
+//! folds to the target and settles there (docs/validation.md case C: driving the
 //! rest angle quasi-statically must end at phi_0 with zero crease moment).
 
 use origami_fmu::element::Rule;
@@ -149,7 +149,7 @@ fn energy_conservation_and_decay() {
     }
 }
 
-/// BENCHMARKS.md case C: a moment T on the crease of two panels, one
+/// docs/validation.md case C: a moment T on the crease of two panels, one
 /// clamped, folds it statically to phi = T / k (k the whole crease
 /// stiffness); within 0.5 % after the damped motion settles.
 #[test]

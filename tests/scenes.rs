@@ -341,11 +341,11 @@ fn mutate_value(v: &mut Value, rng: &mut Rng) {
             }
         }
         4 => {
-            if let Value::Array(a) = node {
-                if a.len() >= 2 {
-                    let (i, j) = (rng.below(a.len()), rng.below(a.len()));
-                    a.swap(i, j);
-                }
+            if let Value::Array(a) = node
+                && a.len() >= 2
+            {
+                let (i, j) = (rng.below(a.len()), rng.below(a.len()));
+                a.swap(i, j);
             }
         }
         5 => {
@@ -355,11 +355,11 @@ fn mutate_value(v: &mut Value, rng: &mut Rng) {
             }
         }
         6 => {
-            if let Value::Array(a) = node {
-                if !a.is_empty() {
-                    let x = a[rng.below(a.len())].clone();
-                    a.push(x);
-                }
+            if let Value::Array(a) = node
+                && !a.is_empty()
+            {
+                let x = a[rng.below(a.len())].clone();
+                a.push(x);
             }
         }
         _ => {

@@ -61,7 +61,8 @@ def main(argv=None):
     if a.series:
         report.write_series(results, out / "series")
     n_ok = int((df["status"] == "ok").sum())
-    print(f"{n_ok} of {len(df)} runs completed in {time.perf_counter() - started:.1f} s; wrote {csv} and {png}")
+    wrote = f"{csv} and {png}" if png else f"{csv} (no metrics to plot)"
+    print(f"{n_ok} of {len(df)} runs completed in {time.perf_counter() - started:.1f} s; wrote {wrote}")
     return 0
 
 

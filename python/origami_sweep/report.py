@@ -35,7 +35,10 @@ def write_series(results, folder):
 
 def plot(df: pd.DataFrame, study, path, title=None):
     """Each plot metric against plot.x; lines group the runs that share the
-    other swept values (and branch)."""
+    other swept values (and branch). None (no file) for a study without
+    metrics."""
+    if not study.plot["metrics"]:
+        return None
     import matplotlib
 
     matplotlib.use("Agg")

@@ -25,6 +25,11 @@ pub struct BuildArgs {
     /// executable, as cargo builds it).
     #[arg(long)]
     pub library: Option<PathBuf>,
+    /// Start value of the parameter ramp.time: the FMU folds by itself, every rest-angle
+    /// actuator going from 0 to 1 over SECONDS, in tools that drive no input [default: 0,
+    /// off: the master drives the inputs].
+    #[arg(long, value_name = "SECONDS")]
+    pub ramp: Option<f64>,
     /// How a FOLD scene is read (--frame, --size, --unit, --f-edges).
     #[command(flatten)]
     pub read: SceneOptions,
@@ -59,7 +64,11 @@ fn default_library() -> Result<PathBuf, String> {
 /// Run `origami-fmu build`.
 pub fn run(args: &BuildArgs) -> Result<(), String> {
     let loaded = super::load_scene(&args.scene, &args.read)?;
-    let scene = loaded.scene;
+    let mut scene = loaded.scene;
+    if let Some(t) = args.ramp {
+        crate::scene::limits::check("ramp.time", t).map_err(|e| format!("--ramp: {e}"))?;
+        scene.ramp.time = t;
+    }
     let contents = fmi::fmu_contents(&scene)?;
     let library = match &args.library {
         Some(l) => l.clone(),
@@ -117,8 +126,53 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
         library.display()
     );
     let _ = writeln!(o, "  {resource} ({} bytes)", contents.scene_file.len());
+    o.push_str(&drive_note(&contents.scene));
     out(&o);
     Ok(())
+}
+
+/// What a user must drive for the sheet to move, in `build`'s report.
+fn drive_note(scene: &crate::scene::Scene) -> String {
+    use crate::scene::ActuatorMode;
+    let mut o = String::new();
+    let rest: Vec<&str> = scene
+        .actuators
+        .iter()
+        .filter(|a| a.mode == ActuatorMode::RestAngle)
+        .map(|a| a.name.as_str())
+        .collect();
+    let torque: Vec<&str> = scene
+        .actuators
+        .iter()
+        .filter(|a| a.mode == ActuatorMode::Torque)
+        .map(|a| a.name.as_str())
+        .collect();
+    if !rest.is_empty() {
+        if scene.ramp.is_on() {
+            let _ = writeln!(
+                o,
+                "  folds by itself: {} go from 0 to 1 over {} s (parameter ramp.time; 0 hands them to the master)",
+                rest.join(", "),
+                scene.ramp.time
+            );
+        } else {
+            let _ = writeln!(
+                o,
+                "  drive the input {} from 0 (flat) to 1 (the pattern's fold angles): it starts at 0, so \
+                 until a master drives it the sheet stays flat; or set the parameter ramp.time \
+                 (e.g. 0.5 s) to fold without a signal",
+                rest.join(", ")
+            );
+        }
+    }
+    if !torque.is_empty() {
+        let _ = writeln!(
+            o,
+            "  crease moment inputs (N, per unit crease length): {}",
+            torque.join(", ")
+        );
+    }
+    o
 }
 
 fn write_zip(path: &Path, files: &[(&str, &[u8], u32)]) -> Result<(), String> {

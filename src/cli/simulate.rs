@@ -1,6 +1,7 @@
 //! `origami-fmu simulate`: run a scene with the plain Rust model (no FMU)
-//! and write every output to CSV. Inputs come from an optional CSV with a
-//! `time` column and one column per input name, linearly interpolated.
+//! and write its outputs to CSV, pictures (GIF, snapshots, plot) and a
+//! ParaView series. The input is the model's built-in ramp (`--ramp`), or
+//! a CSV with a `time` column and one column per input, linearly interpolated.
 
 use crate::model::Model;
 use clap::Args;
@@ -12,19 +13,47 @@ use std::path::PathBuf;
 pub struct SimulateArgs {
     /// The scene: a FOLD file (or a scene JSON).
     pub scene: PathBuf,
-    /// Stop time in s (default: the scene's stop time).
+    /// Stop time in s (default: the scene's stop time, 1 s for a plain FOLD file). It does not
+    /// change the input signal: a shorter run shows the beginning of the same fold.
     #[arg(long)]
     pub stop_time: Option<f64>,
     /// Output (communication) step in s.
     #[arg(long, default_value_t = 1e-2)]
     pub step: f64,
-    /// Input CSV: a `time` column and columns named after inputs. Without
-    /// it every rest-angle actuator ramps from 0 to 1 over the first half.
+    /// The default input: every rest-angle actuator (`fold`) goes from 0 to 1 over SECONDS,
+    /// then holds 1 (the FMU's parameter ramp.time); 0 leaves the actuators at their start
+    /// values.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 0.5,
+        conflicts_with = "input"
+    )]
+    pub ramp: f64,
+    /// Shape of the default ramp: linear, or smooth (zero slope at both ends).
+    #[arg(
+        long,
+        value_name = "SHAPE",
+        default_value = "linear",
+        conflicts_with = "input"
+    )]
+    pub ramp_shape: RampShapeArg,
+    /// Input CSV instead of the ramp: a `time` column and columns named after inputs, linearly
+    /// interpolated (held before the first and after the last row).
     #[arg(long)]
     pub input: Option<PathBuf>,
-    /// Output CSV.
+    /// Output CSV: time and every output at every output step.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub output: Option<PathBuf>,
+    /// Animated GIF of the folding sheet (50 frames at most).
+    #[arg(long, value_name = "FILE")]
+    pub gif: Option<PathBuf>,
+    /// PNG sheet of 3D views of the sheet at six evenly spaced times, on one scale.
+    #[arg(long, value_name = "FILE")]
+    pub snapshots: Option<PathBuf>,
+    /// PNG plot of every fold angle and the energies against time.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
     /// Also write a ParaView time series into this folder: STEM.pvd and one
     /// STEM_NNNNN.vtu per output time (STEM = the scene file's name), with
     /// the model's mesh, per-facet strain energy and per-crease fold angle.
@@ -33,6 +62,15 @@ pub struct SimulateArgs {
     /// How a FOLD scene is read (--frame, --size, --unit, --f-edges).
     #[command(flatten)]
     pub read: super::SceneOptions,
+}
+
+/// `--ramp-shape`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum RampShapeArg {
+    /// Straight from 0 to 1.
+    Linear,
+    /// Smoothstep: zero slope at both ends.
+    Smooth,
 }
 
 /// Input signals: times and, per model input index, values.
@@ -123,6 +161,128 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
     })
 }
 
+/// Set a parameter of `model` by name (a scene may not have it).
+fn set_parameter(model: &mut Model, name: &str, value: f64) -> Result<bool, String> {
+    match model.parameters().iter().position(|v| v.name == name) {
+        Some(i) => {
+            model.set_parameter(i, value).map_err(|e| e.to_string())?;
+            Ok(true)
+        }
+        None => Ok(false),
+    }
+}
+
+/// What a run writes besides the CSV: pictures from recorded frames.
+struct Pictures {
+    sheet: crate::pictures::Sheet,
+    /// Output rows to record as frames (GIF and snapshots).
+    gif_rows: Vec<usize>,
+    snapshot_rows: Vec<usize>,
+    /// Recorded frames by output row.
+    frames: Vec<(usize, crate::pictures::Frame)>,
+    series: crate::pictures::Series,
+}
+
+impl Pictures {
+    fn record(&mut self, row: usize, model: &Model, values: &[f64]) {
+        if self.gif_rows.contains(&row) || self.snapshot_rows.contains(&row) {
+            self.frames.push((row, self.sheet.frame(model, values)));
+        }
+        self.series.push(&self.sheet, model.time(), values);
+    }
+
+    /// Write the pictures asked for, from what was recorded.
+    fn write(&self, args: &SimulateArgs, title: &str) -> Result<(), String> {
+        let pick = |rows: &[usize]| -> Vec<&crate::pictures::Frame> {
+            self.frames
+                .iter()
+                .filter(|(r, _)| rows.contains(r))
+                .map(|(_, f)| f)
+                .collect()
+        };
+        if let Some(p) = &args.gif {
+            let frames = pick(&self.gif_rows);
+            crate::pictures::write_gif(p, &self.sheet, &frames, title)?;
+            super::err(&format!(
+                "animation: {} frames -> {}\n",
+                frames.len(),
+                p.display()
+            ));
+        }
+        if let Some(p) = &args.snapshots {
+            let frames = pick(&self.snapshot_rows);
+            crate::pictures::write_snapshots(
+                p,
+                &self.sheet,
+                &frames,
+                &format!("{title}: folding"),
+            )?;
+            super::err(&format!(
+                "snapshots: {} views -> {}\n",
+                frames.len(),
+                p.display()
+            ));
+        }
+        if let Some(p) = &args.plot {
+            crate::pictures::write_plot(p, &self.sheet, &self.series, title)?;
+            super::err(&format!("plot -> {}\n", p.display()));
+        }
+        Ok(())
+    }
+}
+
+/// The progress bar of a run: hidden for its first second and whenever
+/// standard error is not a terminal (CI logs stay clean).
+struct Progress {
+    bar: indicatif::ProgressBar,
+    started: std::time::Instant,
+    shown: bool,
+    stop: f64,
+}
+
+impl Progress {
+    fn new(steps: usize, stop: f64) -> Progress {
+        let bar = indicatif::ProgressBar::with_draw_target(
+            Some(steps as u64),
+            indicatif::ProgressDrawTarget::hidden(),
+        );
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{bar:28}] {msg}  {elapsed} elapsed, ~{eta} left",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        Progress {
+            bar,
+            started: std::time::Instant::now(),
+            shown: false,
+            stop,
+        }
+    }
+
+    fn update(&mut self, k: usize, t: f64, steps: usize) {
+        if !self.shown && self.started.elapsed().as_secs_f64() > 1.0 {
+            self.shown = true;
+            self.bar
+                .set_draw_target(indicatif::ProgressDrawTarget::stderr_with_hz(4));
+            self.bar
+                .enable_steady_tick(std::time::Duration::from_millis(250));
+        }
+        let wall = self.started.elapsed().as_secs_f64().max(1e-9);
+        self.bar.set_message(format!(
+            "t = {t:.3} / {} s, {steps} internal steps, {:.3} simulated s per s",
+            self.stop,
+            t / wall
+        ));
+        self.bar.set_position(k as u64);
+    }
+
+    fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
 /// Run `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<(), String> {
     let loaded = super::load_scene(&args.scene, &args.read)?;
@@ -134,42 +294,89 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
         return Err("--step and --stop-time must be positive numbers".into());
     }
+    if !(args.ramp >= 0.0 && args.ramp.is_finite()) {
+        return Err("--ramp must be zero or a positive number of seconds".into());
+    }
+    let title = scene.name.clone();
     let mut model = Model::new(scene).map_err(|e| e.to_string())?;
     let signals = match &args.input {
-        Some(p) => read_inputs(p, &model)?,
+        Some(p) => Some(read_inputs(p, &model)?),
         None => {
-            let ramp: Vec<(usize, Vec<f64>)> = model
-                .scene()
-                .actuators
-                .iter()
-                .enumerate()
-                .filter(|(_, a)| a.mode == crate::scene::ActuatorMode::RestAngle)
-                .map(|(i, _)| (i, vec![0.0, 1.0]))
-                .collect();
-            Signals {
-                time: vec![0.0, 0.5 * stop],
-                columns: ramp,
+            // The built-in ramp of the model (the FMU's ramp.time): the
+            // same signal whatever the stop time.
+            let shape = match args.ramp_shape {
+                RampShapeArg::Linear => 0.0,
+                RampShapeArg::Smooth => 1.0,
+            };
+            let has = set_parameter(&mut model, "ramp.time", args.ramp)?;
+            set_parameter(&mut model, "ramp.shape", shape)?;
+            if has && args.ramp > 0.0 {
+                super::err(&format!(
+                    "input: every rest-angle actuator ramps from 0 to 1 over {} s ({}), then holds 1\n",
+                    args.ramp,
+                    if shape == 0.0 { "linear" } else { "smooth" }
+                ));
+            } else if !has {
+                super::err(
+                    "input: the scene has no rest-angle actuator; inputs stay at their start values\n",
+                );
             }
+            None
         }
     };
-    for (i, v) in signals.at(0.0) {
-        model.set_input(i, v).map_err(|e| e.to_string())?;
+    if let Some(sig) = &signals {
+        for (i, v) in sig.at(0.0) {
+            model.set_input(i, v).map_err(|e| e.to_string())?;
+        }
     }
     model.initialize().map_err(|e| e.to_string())?;
-    let file = std::fs::File::create(&args.output)
-        .map_err(|e| format!("cannot write {}: {e}", args.output.display()))?;
-    let mut out = std::io::BufWriter::new(file);
-    let names: Vec<&str> = model.outputs().iter().map(|v| v.name.as_str()).collect();
-    let write_row = |out: &mut std::io::BufWriter<std::fs::File>, t: f64, vals: &[f64]| {
-        let mut line = format!("{t}");
-        for v in vals {
-            line.push_str(&format!(",{v}"));
+    let mut csv = match &args.output {
+        Some(path) => {
+            let file = std::fs::File::create(path)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            let mut out = std::io::BufWriter::new(file);
+            let names: Vec<&str> = model.outputs().iter().map(|v| v.name.as_str()).collect();
+            writeln!(out, "time,{}", names.join(","))
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            Some((out, path))
         }
-        writeln!(out, "{line}")
+        None => None,
     };
-    let io = |e: std::io::Error| format!("cannot write {}: {e}", args.output.display());
-    writeln!(out, "time,{}", names.join(",")).map_err(io)?;
-    write_row(&mut out, 0.0, &model.output_values()).map_err(io)?;
+    let write_row = |csv: &mut Option<(std::io::BufWriter<std::fs::File>, &PathBuf)>,
+                     t: f64,
+                     vals: &[f64]|
+     -> Result<(), String> {
+        if let Some((out, path)) = csv {
+            let mut line = format!("{t}");
+            for v in vals {
+                line.push_str(&format!(",{v}"));
+            }
+            writeln!(out, "{line}").map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        }
+        Ok(())
+    };
+    let n = (stop / args.step).round().max(1.0) as usize;
+    let mut pictures = (args.gif.is_some() || args.snapshots.is_some() || args.plot.is_some())
+        .then(|| Pictures {
+            sheet: crate::pictures::Sheet::new(&model),
+            gif_rows: if args.gif.is_some() {
+                crate::pictures::frame_rows(n + 1, 50)
+            } else {
+                vec![]
+            },
+            snapshot_rows: if args.snapshots.is_some() {
+                crate::pictures::frame_rows(n + 1, 6)
+            } else {
+                vec![]
+            },
+            frames: Vec::new(),
+            series: Default::default(),
+        });
+    let values = model.output_values();
+    write_row(&mut csv, 0.0, &values)?;
+    if let Some(p) = pictures.as_mut() {
+        p.record(0, &model, &values);
+    }
     let mut series = match &args.pvd {
         Some(dir) => {
             let stem = args
@@ -183,10 +390,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         }
         None => None,
     };
-    let n = (stop / args.step).round().max(1.0) as usize;
-    let started = std::time::Instant::now();
-    let mut last_report = started;
+    let clock = crate::cpu_time::Stopwatch::start();
+    let mut progress = Progress::new(n, stop);
     let mut total = crate::model::StepReport::default();
+    let mut failure = None;
     for k in 1..=n {
         let t = (k as f64 * args.step).min(stop);
         let t0 = model.time();
@@ -194,39 +401,55 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         // The table's value at the step start and its slope over the step
         // (the FMU's held input plus derivative): the piecewise linear
         // signal itself, never a staircase.
-        for ((i, v0), (_, v1)) in signals.at(t0).into_iter().zip(signals.at(t)) {
-            model.set_input(i, v0).map_err(|e| e.to_string())?;
-            model
-                .set_input_derivative(i, 1, (v1 - v0) / h)
-                .map_err(|e| e.to_string())?;
+        if let Some(sig) = &signals {
+            for ((i, v0), (_, v1)) in sig.at(t0).into_iter().zip(sig.at(t)) {
+                model.set_input(i, v0).map_err(|e| e.to_string())?;
+                model
+                    .set_input_derivative(i, 1, (v1 - v0) / h)
+                    .map_err(|e| e.to_string())?;
+            }
         }
-        let r = model.advance(h).map_err(|e| e.to_string())?;
-        total.accumulate(&r);
-        let steps = total.steps;
-        write_row(&mut out, t, &model.output_values()).map_err(io)?;
+        match model.advance(h) {
+            Ok(r) => total.accumulate(&r),
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        }
+        let values = model.output_values();
+        write_row(&mut csv, t, &values)?;
+        if let Some(p) = pictures.as_mut() {
+            p.record(k, &model, &values);
+        }
         if let Some(s) = series.as_mut() {
             s.write(&model)?;
         }
-        if last_report.elapsed().as_secs_f64() > 2.0 {
-            super::err(&format!(
-                "t = {t:.4} / {stop} s ({:.0} %), {steps} internal steps\n",
-                100.0 * t / stop
-            ));
-            last_report = std::time::Instant::now();
-        }
+        progress.update(k, t, total.steps);
     }
-    out.flush().map_err(io)?;
+    progress.finish();
+    let (cpu, wall) = (clock.cpu(), clock.wall());
+    if let Some((out, path)) = csv.as_mut() {
+        out.flush()
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
     if let Some(s) = &series {
         super::err(&format!("ParaView series -> {}\n", s.finish()?.display()));
     }
+    if let Some(p) = &pictures {
+        p.write(args, &title)?;
+    }
+    let reached = model.time();
+    let to = args
+        .output
+        .as_ref()
+        .map(|p| format!(" -> {}", p.display()))
+        .unwrap_or_default();
     super::err(&format!(
-        "simulated {stop} s in {:.2} s (wall-clock time) -> {}\n",
-        started.elapsed().as_secs_f64(),
-        args.output.display()
+        "simulated {reached} s in {cpu:.2} s of CPU ({wall:.2} s wall){to}\n"
     ));
     super::err(&format!(
         "{} internal steps ({} rejected, smallest {:.3e} s), {} Newton iterations, \
-         {} factorizations; of that time assembly {:.2} s, factorization {:.2} s, solves {:.2} s\n",
+         {} factorizations; CPU in assembly {:.2} s, factorization {:.2} s, solves {:.2} s\n",
         total.steps,
         total.rejected,
         total.min_step,
@@ -236,5 +459,28 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         total.factor_time,
         total.solve_time
     ));
-    Ok(())
+    match failure {
+        None => Ok(()),
+        Some(e) => Err(format!(
+            "{e}; the run stopped at t = {reached} of {stop} s (outputs up to there are written)"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Past its first second the bar draws to standard error, but only to
+    /// a terminal: under `cargo test` (and in CI logs, pipes) it stays hidden.
+    #[test]
+    fn progress_is_hidden_off_a_terminal() {
+        use std::io::IsTerminal;
+        let mut p = Progress::new(10, 1.0);
+        p.started -= std::time::Duration::from_secs(2);
+        p.update(5, 0.5, 42);
+        assert!(p.shown);
+        assert_eq!(p.bar.is_hidden(), !std::io::stderr().is_terminal());
+        p.finish();
+    }
 }

@@ -280,8 +280,8 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
 // ---------------------------------------------------------------------------
 // Initialization, termination, reset.
 
-/// `fmi2SetupExperiment`: start time (any), stop time (recorded); the
-/// tolerance is not used (parameter `solver.tolerance` sets it).
+/// `fmi2SetupExperiment`: start time (any), stop time (recorded); a defined
+/// tolerance sets the parameter `solver.tolerance` unless the master set it.
 ///
 /// # Safety
 /// Arguments as the FMI 2.0 standard requires.

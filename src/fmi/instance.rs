@@ -64,8 +64,9 @@ impl InstancePhase {
 
 /// Log categories (declared in modelDescription.xml). The logger is only
 /// called for enabled categories (FMI 2.0 section 2.1.5): with `loggingOn`
-/// at instantiation all of them, without it `logStatusError` and
-/// `logStatusFatal` (so that a failed call says why);
+/// at instantiation all of them, without it `logStatusDiscard`,
+/// `logStatusError` and `logStatusFatal` (so that a failed call or step says
+/// why);
 /// `fmi2SetDebugLogging` changes the selection.
 pub const LOG_CATEGORIES: [(&str, &str); 5] = [
     (
@@ -95,9 +96,10 @@ pub struct Logger {
 impl Logger {
     /// A logger for instance `name` with the host's callbacks.
     pub fn new(callbacks: fmi2CallbackFunctions, name: &str, logging_on: bool) -> Logger {
-        // logEvents, logStatusWarning, logStatusDiscard: debug output;
-        // logStatusError, logStatusFatal: on unless switched off.
-        let enabled = [logging_on, logging_on, logging_on, true, true];
+        // logEvents, logStatusWarning: debug output; logStatusDiscard,
+        // logStatusError, logStatusFatal: on unless switched off (a master
+        // that ends a run at a discard would otherwise end it silently).
+        let enabled = [logging_on, logging_on, true, true, true];
         Logger {
             callbacks,
             instance_name: c_string(name),
@@ -423,8 +425,8 @@ impl Instance {
         }
     }
 
-    /// `fmi2SetupExperiment`: record start and stop time. The tolerance is
-    /// not used (the scene's `solver.tolerance` parameter sets it).
+    /// `fmi2SetupExperiment`: record start and stop time; a defined
+    /// tolerance sets `solver.tolerance` (see `experiment_tolerance`).
     pub fn setup_experiment(
         &mut self,
         tolerance: Option<f64>,
@@ -446,17 +448,57 @@ impl Instance {
                 "fmi2SetupExperiment: stopTime {stop} must be finite and >= startTime {start}"
             ));
         }
-        if let Some(tol) = tolerance {
+        self.start_time = start;
+        self.stop_time = stop;
+        match tolerance {
+            Some(tol) => self.experiment_tolerance(tol),
+            None => fmi2OK,
+        }
+    }
+
+    /// A tolerance from `fmi2SetupExperiment` becomes `solver.tolerance`,
+    /// unless the master set that parameter to another value than its
+    /// start (an explicit parameter wins, in either order: one set later
+    /// simply overwrites). An out-of-range tolerance is not used
+    /// (`fmi2Warning`, with the reason logged).
+    fn experiment_tolerance(&mut self, tol: f64) -> fmi2Status {
+        let Some(i) = self
+            .model
+            .parameters()
+            .iter()
+            .position(|v| v.name == "solver.tolerance")
+        else {
+            return fmi2OK;
+        };
+        let start = self.model.parameters()[i].start;
+        let now = self.model.parameter(i).unwrap_or(start);
+        if now != start {
             self.log.log(
                 fmi2OK,
                 &format!(
-                    "fmi2SetupExperiment: tolerance {tol} ignored; set the parameter solver.tolerance"
+                    "fmi2SetupExperiment: tolerance {tol} not used: the parameter solver.tolerance was set to {now}"
                 ),
             );
+            return fmi2OK;
         }
-        self.start_time = start;
-        self.stop_time = stop;
-        fmi2OK
+        match self.model.set_parameter(i, tol) {
+            Ok(()) => {
+                self.log.log(
+                    fmi2OK,
+                    &format!(
+                        "fmi2SetupExperiment: solver.tolerance = {tol} (the experiment's tolerance)"
+                    ),
+                );
+                fmi2OK
+            }
+            Err(e) => {
+                self.log.log(
+                    fmi2Warning,
+                    &format!("fmi2SetupExperiment: tolerance not used: {e}"),
+                );
+                fmi2Warning
+            }
+        }
     }
 
     /// `fmi2EnterInitializationMode`.

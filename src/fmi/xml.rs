@@ -168,11 +168,26 @@ pub fn model_description(model: &Model, guid: &str) -> String {
     let _ = writeln!(w, "  <ModelStructure>");
     let outputs = (np + ni + 1)..=vars.len();
     if !outputs.is_empty() {
-        // Outputs are positions/angles/energies at the communication point:
-        // inputs set now act over the next step only (no direct feedthrough).
+        // Outputs are the state at the communication point: an input set
+        // now acts over the next step only, except that the crease energy
+        // is read under the rest angles in force, which the rest-angle
+        // actuators set at once (direct feedthrough).
+        let rest_angle: Vec<String> = model
+            .scene()
+            .actuators
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| a.mode == crate::scene::ActuatorMode::RestAngle)
+            .map(|(k, _)| (np + k + 1).to_string())
+            .collect();
         let _ = writeln!(w, "    <Outputs>");
         for i in outputs.clone() {
-            let _ = writeln!(w, r#"      <Unknown index="{i}" dependencies=""/>"#);
+            let deps = if vars[i - 1].name == "energy.crease" {
+                rest_angle.join(" ")
+            } else {
+                String::new()
+            };
+            let _ = writeln!(w, r#"      <Unknown index="{i}" dependencies="{deps}"/>"#);
         }
         let _ = writeln!(w, "    </Outputs>");
         let _ = writeln!(w, "    <InitialUnknowns>");

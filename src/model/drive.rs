@@ -3,6 +3,7 @@
 
 use super::Model;
 use crate::assembly::Assembler;
+use crate::scene::InputRamp;
 use crate::solver::stepper::Drive;
 
 /// Below this time constant (s) an actuator follows its input at once.
@@ -22,9 +23,57 @@ pub(super) fn actuator_response(
     if tau.is_nan() || tau <= INSTANT {
         return [u0 + slope * e, slope];
     }
-    // Deviation from the particular solution u0 + slope (t - 2 tau) and its rate.
-    let d0 = start[0] - u0 + 2.0 * slope * tau;
-    let r0 = start[1] - slope;
+    // The particular solution of a ramp lags it by 2 tau.
+    respond(tau, start, e, |t| [u0 + slope * (t - 2.0 * tau), slope])
+}
+
+/// An actuator's value and rate `e` seconds after `start` under the
+/// built-in ramp (which starts at t = 0), `t0` the time at `start`: its
+/// response piece by piece, the rise (a polynomial of degree 1 or 3) and
+/// the hold after it. With `tau` 0 the ramp itself.
+pub(super) fn ramp_response(
+    tau: f64,
+    start: [f64; 2],
+    ramp: &InputRamp,
+    t0: f64,
+    e: f64,
+) -> [f64; 2] {
+    if tau.is_nan() || tau <= INSTANT {
+        return [ramp.value(t0 + e), ramp.derivatives(t0 + e)[1]];
+    }
+    // The particular solution of a polynomial input c: sum over k of
+    // (-1)^k (k + 1) tau^k c^(k) (the series of (1 + tau d/dt)^-2).
+    let particular = |t: f64, rising: bool| {
+        let c = if rising {
+            ramp.rise_derivatives(t)
+        } else {
+            [1.0, 0.0, 0.0, 0.0]
+        };
+        let v = c[0] - 2.0 * tau * c[1] + 3.0 * tau * tau * c[2] - 4.0 * tau.powi(3) * c[3];
+        let r = c[1] - 2.0 * tau * c[2] + 3.0 * tau * tau * c[3];
+        [v, r]
+    };
+    let rise = (ramp.time - t0).clamp(0.0, e);
+    let mid = if rise > 0.0 {
+        respond(tau, start, rise, |t| particular(t0 + t, true))
+    } else {
+        start
+    };
+    if e > rise {
+        respond(tau, mid, e - rise, |t| particular(t0 + rise + t, false))
+    } else {
+        mid
+    }
+}
+
+/// The critically damped response (time constant `tau`) `e` seconds after
+/// `start` to an input whose particular solution (value, rate) at elapsed
+/// time t is `p(t)`: that solution plus the decaying deviation from it.
+fn respond(tau: f64, start: [f64; 2], e: f64, p: impl Fn(f64) -> [f64; 2]) -> [f64; 2] {
+    let [p0, p0_rate] = p(0.0);
+    let [pe, pe_rate] = p(e);
+    let d0 = start[0] - p0;
+    let r0 = start[1] - p0_rate;
     let x = (-e / tau).exp();
     let (dev, rate) = if x > 0.0 {
         let k = e / tau;
@@ -32,7 +81,7 @@ pub(super) fn actuator_response(
     } else {
         (0.0, 0.0)
     };
-    [u0 + slope * (e - 2.0 * tau) + dev, slope + rate]
+    [pe + dev, pe_rate + rate]
 }
 
 impl Model {
@@ -189,7 +238,7 @@ impl DriveValues {
 
 #[cfg(test)]
 mod tests {
-    use super::actuator_response;
+    use super::{actuator_response, ramp_response};
 
     /// The closed form solves tau^2 a'' + 2 tau a' + a = u0 + s t from its
     /// start, its rate is the derivative of its value, a ramp is followed
@@ -216,5 +265,40 @@ mod tests {
         assert!((a - (u0 + s * (2.0 - 2.0 * tau))).abs() < 1e-12);
         assert!((r - s).abs() < 1e-12);
         assert_eq!(actuator_response(0.0, start, u0, s, 0.5), [u0 + s * 0.5, s]);
+    }
+
+    /// The ramp's response solves the same equation on both sides of the
+    /// ramp's end, is continuous in value and rate across it, splits into
+    /// pieces at any point, and settles at 1.
+    #[test]
+    fn ramp_response_solves_its_equation() {
+        use crate::scene::{InputRamp, RampShape};
+        let tau = 0.01;
+        for shape in [RampShape::Linear, RampShape::Smooth] {
+            let ramp = InputRamp { time: 0.1, shape };
+            let at = |t: f64| ramp_response(tau, [0.0, 0.0], &ramp, 0.0, t);
+            let d = 1e-6;
+            for t in [0.003, 0.05, 0.0999, 0.1001, 0.2] {
+                let [a, r] = at(t);
+                let rate = (at(t + d)[0] - at(t - d)[0]) / (2.0 * d);
+                let acc = (at(t + d)[1] - at(t - d)[1]) / (2.0 * d);
+                assert!(
+                    (rate - r).abs() < 1e-5 * (1.0 + r.abs()),
+                    "{shape:?} {t}: {rate} vs {r}"
+                );
+                let residual = tau * tau * acc + 2.0 * tau * r + a - ramp.value(t);
+                assert!(
+                    residual.abs() < 1e-5,
+                    "{shape:?}: residual {residual} at {t}"
+                );
+            }
+            // Two pieces give what one does.
+            let mid = at(0.07);
+            let [a, r] = ramp_response(tau, mid, &ramp, 0.07, 0.06);
+            let [b, q] = at(0.13);
+            assert!((a - b).abs() < 1e-12 && (r - q).abs() < 1e-10);
+            let [a, r] = at(1.0);
+            assert!((a - 1.0).abs() < 1e-12 && r.abs() < 1e-12);
+        }
     }
 }

@@ -7,7 +7,14 @@
 
 use super::{Error, Model, Phase, VariableSpec, physics};
 use crate::assembly::Physics;
-use crate::scene::{CreaseStiffness, Scene};
+use crate::scene::{ActuatorMode, CreaseStiffness, RampShape as RampShapeKind, Scene};
+
+/// Whether `sc` has an actuator that the built-in ramp drives.
+fn has_rest_angle_actuator(sc: &Scene) -> bool {
+    sc.actuators
+        .iter()
+        .any(|a| a.mode == ActuatorMode::RestAngle)
+}
 
 /// Declares [`Parameter`], [`ALL`] and `Parameter::info` from one row per
 /// parameter, in the FMU's order: `Variant => (name, unit, description)`.
@@ -74,6 +81,14 @@ parameters! {
         "s",
         "time constant of the actuators' critically damped response to their inputs, 0 for none"
     ),
+    /// Only in scenes with a rest-angle actuator.
+    RampTime => (
+        "ramp.time",
+        "s",
+        "built-in signal: when > 0, every rest-angle actuator (fold) goes from 0 to 1 over this time and holds 1, and values set on those inputs are not used; 0 = off, the master drives them"
+    ),
+    /// Only in scenes with a rest-angle actuator.
+    RampShape => ("ramp.shape", "", "shape of the built-in signal: 0 linear, 1 smooth (zero slope at both ends)"),
 }
 
 use Parameter::*;
@@ -102,7 +117,9 @@ impl Parameter {
             | Tolerance
             | MaxInternalSteps
             | ContactFriction
-            | ActuatorTimeConstant => false,
+            | ActuatorTimeConstant
+            | RampTime
+            | RampShape => false,
         }
     }
 
@@ -139,6 +156,12 @@ impl Parameter {
             ActuatorTimeConstant => {
                 (!sc.actuators.is_empty()).then(|| super::actuator_time_constant(sc))
             }
+            RampTime | RampShape if !has_rest_angle_actuator(sc) => None,
+            RampTime => Some(sc.ramp.time),
+            RampShape => Some(match sc.ramp.shape {
+                RampShapeKind::Linear => 0.0,
+                RampShapeKind::Smooth => 1.0,
+            }),
         }
     }
 
@@ -175,6 +198,14 @@ impl Parameter {
                 }
             }
             ActuatorTimeConstant => sc.actuator_time_constant = Some(x),
+            RampTime => sc.ramp.time = x,
+            RampShape => {
+                sc.ramp.shape = if x == 0.0 {
+                    RampShapeKind::Linear
+                } else {
+                    RampShapeKind::Smooth
+                }
+            }
         }
     }
 

@@ -3,7 +3,7 @@
 //! size the step control proposes ([`crate::solver::step_control`]), and
 //! what it reports.
 
-use super::drive::{DriveValues, actuator_response};
+use super::drive::{DriveValues, actuator_response, ramp_response};
 use super::system::System;
 use super::{Error, Model, ModelState, Phase};
 use crate::solver::step_control::{StepController, Verdict, equal_substeps};
@@ -23,7 +23,7 @@ pub struct StepReport {
     pub factorizations: usize,
     /// Smallest internal step used, s.
     pub min_step: f64,
-    /// CPU time assembling forces and matrices, s.
+    /// CPU time (the stepping thread's clock) assembling forces and matrices, s.
     pub assembly_time: f64,
     /// CPU time in sparse numeric factorizations, s.
     pub factor_time: f64,
@@ -100,6 +100,11 @@ impl Model {
     }
 
     fn advance_inner(&mut self, big_h: f64) -> Result<StepReport, Error> {
+        // Inputs the built-in ramp drives follow it, whatever was set.
+        let ramped: Vec<usize> = (0..self.inputs.len())
+            .filter(|&k| self.is_ramped(k))
+            .collect();
+        let ramp = (self.scene.ramp, ramped);
         let sys = self.sys.as_mut().expect("initialized");
         let state = &mut self.state;
         let t0 = state.time;
@@ -109,7 +114,7 @@ impl Model {
                 time: t0,
                 reason: e.to_string(),
             })?;
-        let mut adv = Advance::new(sys, state, big_h);
+        let mut adv = Advance::new(sys, state, big_h, ramp);
         adv.run(sys, state)?;
         let (factor_time, solve_time) = sys.stepper.linear_times(&sys.solver);
         adv.report.factor_time = (factor_time - adv.linear_times.0).as_secs_f64();
@@ -175,6 +180,9 @@ struct Advance {
     act0: Vec<[f64; 2]>,
     /// Inputs acting at the step at hand's end.
     u: Vec<f64>,
+    /// The built-in ramp and the inputs it drives (in place of the
+    /// master's values).
+    ramp: (crate::scene::InputRamp, Vec<usize>),
     /// The drive at the start of the step at hand (its work over the step) ...
     d_start: DriveValues,
     /// ... and at its end.
@@ -187,7 +195,12 @@ struct Advance {
 }
 
 impl Advance {
-    fn new(sys: &System, state: &ModelState, big_h: f64) -> Advance {
+    fn new(
+        sys: &System,
+        state: &ModelState,
+        big_h: f64,
+        ramp: (crate::scene::InputRamp, Vec<usize>),
+    ) -> Advance {
         let mut adv = Advance {
             big_h,
             t0: state.time,
@@ -198,6 +211,7 @@ impl Advance {
             u: state.inputs_now.clone(),
             d_start: DriveValues::default(),
             u0: state.inputs_now.clone(),
+            ramp,
             d: DriveValues::default(),
             next: Dynamics::default(),
             report: StepReport {
@@ -219,6 +233,9 @@ impl Advance {
         for (k, x) in u.iter_mut().enumerate() {
             *x = self.command(k, e);
         }
+        for &k in &self.ramp.1 {
+            u[k] = self.ramp.0.value(self.t0 + e);
+        }
     }
 
     /// Input `k` as the master set it at elapsed time `e`.
@@ -237,8 +254,12 @@ impl Advance {
         }
     }
 
-    /// Actuator `k`'s value and rate at elapsed time `e`.
+    /// Actuator `k`'s value and rate at elapsed time `e` (its response to
+    /// the master's input or to the built-in ramp).
     fn actuator(&self, k: usize, e: f64) -> [f64; 2] {
+        if self.ramp.1.contains(&k) {
+            return ramp_response(self.tau, self.act0[k], &self.ramp.0, self.t0, e);
+        }
         let slope = (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k];
         if self.tau > 0.0 {
             actuator_response(self.tau, self.act0[k], self.u0[k], slope, e)

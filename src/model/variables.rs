@@ -196,6 +196,10 @@ impl Model {
                 reason: "not a finite number".into(),
             });
         }
+        if self.is_ramped(i) {
+            // The built-in ramp drives it (parameter ramp.time): not used.
+            return Ok(());
+        }
         self.state.inputs_next[i] = value;
         if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
             // An actuator follows its input at once where its time constant
@@ -244,8 +248,22 @@ impl Model {
         if !value.is_finite() {
             return Err(bad("not a finite number"));
         }
-        self.state.input_slopes[i] = value;
+        if !self.is_ramped(i) {
+            self.state.input_slopes[i] = value;
+        }
         Ok(())
+    }
+
+    /// Whether input `i` follows the built-in ramp (`ramp.time` > 0 and a
+    /// rest-angle actuator) instead of the values set on it.
+    pub fn is_ramped(&self, i: usize) -> bool {
+        self.state.phase == Phase::Running
+            && self.scene.ramp.is_on()
+            && self
+                .scene
+                .actuators
+                .get(i)
+                .is_some_and(|a| a.mode == crate::scene::ActuatorMode::RestAngle)
     }
 
     /// Current values of all outputs, in the order of [`Model::outputs`].

@@ -102,6 +102,8 @@ pub const LIMITS: &[Limit] = &[
     lim("solver.stop_time", Range::Positive, "s"),
     lim("contact.friction", Range::NonNegative, ""),
     lim("actuator.time_constant", Range::NonNegative, "s"),
+    lim("ramp.time", Range::Closed(0.0, 1e9), "s"),
+    lim("ramp.shape", Range::Whole(0, 1), ""),
 ];
 
 /// The limit of `name`, if it has one.
@@ -173,6 +175,7 @@ pub fn check_scene(s: &Scene) -> Result<(), String> {
         ("solver.max_newton", so.max_newton as f64),
         ("solver.max_internal_steps", so.max_internal_steps as f64),
         ("solver.stop_time", so.stop_time),
+        ("ramp.time", s.ramp.time),
     ];
     match s.crease {
         super::CreaseStiffness::LengthScale(l) => values.push(("crease.length_scale", l)),

@@ -475,6 +475,80 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// Output groups.
     pub outputs: Outputs,
+    /// The built-in input signal of the rest-angle actuators (off by
+    /// default: the master drives them).
+    #[serde(default)]
+    pub ramp: InputRamp,
+}
+
+/// Shape of the built-in ramp.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum RampShape {
+    /// Straight from 0 to 1.
+    #[default]
+    Linear,
+    /// Cubic smoothstep `3 x^2 - 2 x^3`: zero slope at both ends, so the
+    /// sheet starts and stops folding without a jolt.
+    Smooth,
+}
+
+/// A built-in signal for every rest-angle actuator: 0 at t = 0, 1 from
+/// `time` on. With `time` 0 it is off and the actuators follow their
+/// inputs; on, it replaces them (values set on those inputs are not used).
+/// The CLI's default schedule and the FMU's `ramp.time` parameter are this.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InputRamp {
+    /// Time to reach full actuation, s (0 = off).
+    pub time: f64,
+    /// Shape of the rise.
+    pub shape: RampShape,
+}
+
+impl InputRamp {
+    /// Whether the ramp replaces the actuator inputs.
+    pub fn is_on(&self) -> bool {
+        self.time > 0.0
+    }
+
+    /// The signal at time `t` (s).
+    pub fn value(&self, t: f64) -> f64 {
+        if !self.is_on() {
+            return 0.0;
+        }
+        let x = (t / self.time).clamp(0.0, 1.0);
+        match self.shape {
+            RampShape::Linear => x,
+            RampShape::Smooth => x * x * (3.0 - 2.0 * x),
+        }
+    }
+
+    /// The signal and its first three time derivatives at `t` (s): the
+    /// rise's before its end, zero slopes after it.
+    pub fn derivatives(&self, t: f64) -> [f64; 4] {
+        if !self.is_on() {
+            return [0.0; 4];
+        }
+        if t >= self.time {
+            return [1.0, 0.0, 0.0, 0.0];
+        }
+        self.rise_derivatives(t.max(0.0))
+    }
+
+    /// The rise's polynomial and its first three time derivatives at `t`
+    /// (also at and past the rise's end).
+    pub fn rise_derivatives(&self, t: f64) -> [f64; 4] {
+        let big_t = self.time;
+        let x = t / big_t;
+        match self.shape {
+            RampShape::Linear => [x, 1.0 / big_t, 0.0, 0.0],
+            RampShape::Smooth => [
+                x * x * (3.0 - 2.0 * x),
+                6.0 * x * (1.0 - x) / big_t,
+                (6.0 - 12.0 * x) / (big_t * big_t),
+                -12.0 / big_t.powi(3),
+            ],
+        }
+    }
 }
 
 impl Scene {
@@ -514,6 +588,7 @@ impl Scene {
             vertex_motions: vec![],
             solver: SolverSettings::default(),
             outputs: Outputs::default(),
+            ramp: InputRamp::default(),
         }
     }
 }

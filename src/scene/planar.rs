@@ -253,7 +253,7 @@ pub(crate) fn trace_faces(
     let ne = edges.len();
     // Half-edge h = 2e runs a -> b, 2e + 1 runs b -> a.
     let origin = |h: usize| {
-        if h % 2 == 0 {
+        if h.is_multiple_of(2) {
             edges[h / 2][0]
         } else {
             edges[h / 2][1]
@@ -318,17 +318,17 @@ pub(crate) fn trace_faces(
         let verts: Vec<usize> = hs.iter().map(|&h| origin(h)).collect();
         let mut sorted = verts.clone();
         sorted.sort_unstable();
-        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-            if !hs.iter().any(|&h| cycle_of[h ^ 1] == id) {
-                return Err(invalid(
-                    format!("vertices_coords[{}]", w[0]),
-                    format!(
-                        "a face traced from the edges touches itself at vertex {}: add an edge \
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1])
+            && !hs.iter().any(|&h| cycle_of[h ^ 1] == id)
+        {
+            return Err(invalid(
+                format!("vertices_coords[{}]", w[0]),
+                format!(
+                    "a face traced from the edges touches itself at vertex {}: add an edge \
                          that splits it there",
-                        w[0]
-                    ),
-                ));
-            }
+                    w[0]
+                ),
+            ));
         }
         faces.push(verts);
     }

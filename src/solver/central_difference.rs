@@ -21,7 +21,9 @@ use crate::solver::stepper::{
     Attempt, Drive, Dynamics, Failure, Mechanics, Outcome, StepError, StepPolicy, Stepper,
     StepperMemory,
 };
-use std::time::{Duration, Instant};
+// Phase times are CPU time: the calling thread's clock, not the wall.
+use crate::cpu_time::CpuInstant as Instant;
+use std::time::Duration;
 
 /// Fraction of the estimated stability limit `2 / omega_max` used as step.
 pub const SAFETY: f64 = 0.8;

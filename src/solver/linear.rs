@@ -19,7 +19,9 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use nalgebra::DMatrix;
-use std::time::{Duration, Instant};
+// Phase times are CPU time: the calling thread's clock, not the wall.
+use crate::cpu_time::CpuInstant as Instant;
+use std::time::Duration;
 
 /// A dense low-rank part of a matrix that its sparse pattern cannot hold:
 /// the matrix is `A - U S^-1 U^T`, `A` sparse, `U` (n x rank, column-major)
@@ -288,7 +290,7 @@ impl SparseSolver {
         block: usize,
         coords: Option<&[[f64; 3]]>,
     ) -> Result<Self, String> {
-        let blocked = block > 1 && n % block == 0;
+        let blocked = block > 1 && n.is_multiple_of(block);
         let ordering = match coords {
             Some(coords) if blocked && n >= NESTED_DISSECTION_MIN => {
                 Ordering::BlockNestedDissection { block, coords }

@@ -36,7 +36,7 @@ pub fn crease_ratio(scene: &mut Scene, w: f64, ratio: f64) {
 
 /// Angular frequency of a rigid panel of width `w` (perpendicular to the
 /// crease) hinged on a crease of stiffness `k` per length: omega^2 = k l /
-/// I with I = m w^2 / 3, m = rho h w l (BENCHMARKS.md case C).
+/// I with I = m w^2 / 3, m = rho h w l (docs/validation.md case C).
 pub fn hinge_omega(scene: &Scene, w: f64) -> f64 {
     let m = &scene.material;
     let k = scene.crease.stiffness(m, 1.0);

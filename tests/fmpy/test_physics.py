@@ -1,4 +1,4 @@
-"""Physics through the FMU, against BENCHMARKS.md. These need the real
+"""Physics through the FMU, against docs/validation.md. These need the real
 stepper (the Model's advance is a placeholder that holds the sheet still
 until it lands); each test states its expectation precisely."""
 

@@ -273,13 +273,13 @@ pub(super) fn fold_edges(
             _ => EdgeKind::Smooth,
         };
         let angle_key = format!("edges_foldAngle[{e}]");
-        if let Some(d) = angles[e] {
-            if !(-180.0..=180.0).contains(&d) {
-                return Err(invalid(
-                    angle_key,
-                    format!("{d} degrees is outside [-180, 180]"),
-                ));
-            }
+        if let Some(d) = angles[e]
+            && !(-180.0..=180.0).contains(&d)
+        {
+            return Err(invalid(
+                angle_key,
+                format!("{d} degrees is outside [-180, 180]"),
+            ));
         }
         let deg = if k == EdgeKind::Crease {
             match (assignment[e], angles[e]) {

@@ -79,13 +79,13 @@ pub(super) fn choose_scale(
     if options.size.is_some() && options.unit.is_some() {
         return Err(invalid("--size", "give either a size or a unit, not both"));
     }
-    if let Some(s) = options.size {
-        if !(s > 0.0 && s.is_finite()) {
-            return Err(invalid(
-                "--size",
-                format!("{s} is not a positive length (m)"),
-            ));
-        }
+    if let Some(s) = options.size
+        && !(s > 0.0 && s.is_finite())
+    {
+        return Err(invalid(
+            "--size",
+            format!("{s} is not a positive length (m)"),
+        ));
     }
     let dims = |k: f64| {
         format!(

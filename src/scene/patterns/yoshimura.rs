@@ -50,7 +50,7 @@ impl Yoshimura {
     /// Vertex x positions (in units of `width`) of row `r`.
     fn row_x(&self, r: usize) -> Vec<f64> {
         let n = self.sides;
-        if r % 2 == 0 {
+        if r.is_multiple_of(2) {
             (0..=n).map(|k| k as f64).collect()
         } else {
             let mut v = vec![0.0];

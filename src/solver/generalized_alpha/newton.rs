@@ -26,7 +26,8 @@ use crate::assembly::{Assembler, FIXED, MatrixCoeffs};
 use crate::solver::SparseSolver;
 use crate::solver::stepper::{Dynamics, Outcome, StepError};
 use crate::solver::{IntegrationParameters, NewtonMode};
-use std::time::Instant;
+// Phase times are CPU time: the calling thread's clock, not the wall.
+use crate::cpu_time::CpuInstant as Instant;
 
 /// One step's iteration: its settings and what it remembers from one
 /// iteration to the next.

@@ -9,7 +9,8 @@
 use super::{StepContext, Workspace};
 use crate::assembly::FIXED;
 use crate::solver::stepper::{Dynamics, Outcome};
-use std::time::Instant;
+// Phase times are CPU time: the calling thread's clock, not the wall.
+use crate::cpu_time::CpuInstant as Instant;
 
 /// Which guess.
 #[derive(Clone, Copy, PartialEq)]
@@ -46,8 +47,8 @@ pub(super) fn predict(
     let held = memory.held_streak;
     // Where one guess keeps winning, the other is skipped, and re-tried
     // every `recheck_every` steps of the streak or when the winner fails.
-    let skip_held = streak >= p.skip_loser_after && streak % p.recheck_every != 0;
-    let skip_extrapolated = held >= p.skip_loser_after && held % p.recheck_every != 0;
+    let skip_held = streak >= p.skip_loser_after && !streak.is_multiple_of(p.recheck_every);
+    let skip_extrapolated = held >= p.skip_loser_after && !held.is_multiple_of(p.recheck_every);
     let mut size = [f64::INFINITY; 2];
     if !p.two_guess_predictor {
         size[0] = residual_size(ctx, Guess::Held, next, ws, out);

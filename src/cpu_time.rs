@@ -1,0 +1,105 @@
+//! CPU time, as the kernel counts it: the calling thread's clock
+//! (`CLOCK_THREAD_CPUTIME_ID`) for the stepper's phase times, the
+//! process's (`CLOCK_PROCESS_CPUTIME_ID`) for the benches' totals. On a
+//! shared machine wall time counts the other jobs too; these do not.
+
+use std::time::{Duration, Instant};
+
+/// Which CPU clock to read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Clock {
+    /// CPU time of the calling thread.
+    Thread,
+    /// CPU time of the whole process (all threads).
+    Process,
+}
+
+/// The CPU time `clock` has counted so far.
+#[allow(unsafe_code)] // one libc call with a valid out pointer
+pub fn now(clock: Clock) -> Duration {
+    let id = match clock {
+        Clock::Thread => libc::CLOCK_THREAD_CPUTIME_ID,
+        Clock::Process => libc::CLOCK_PROCESS_CPUTIME_ID,
+    };
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; the clock ids exist on
+    // every Linux (and the BSDs and macOS have both).
+    let rc = unsafe { libc::clock_gettime(id, &mut ts) };
+    if rc != 0 {
+        return Duration::ZERO;
+    }
+    Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
+}
+
+/// CPU time of the whole process so far, s.
+pub fn process_seconds() -> f64 {
+    now(Clock::Process).as_secs_f64()
+}
+
+/// A start point on the calling thread's CPU clock: `Instant` for CPU
+/// time. Read [`CpuInstant::elapsed`] on the thread that took it.
+#[derive(Clone, Copy, Debug)]
+pub struct CpuInstant(Duration);
+
+impl CpuInstant {
+    /// The calling thread's CPU time now.
+    pub fn now() -> CpuInstant {
+        CpuInstant(now(Clock::Thread))
+    }
+
+    /// CPU time the thread spent since `self`.
+    pub fn elapsed(&self) -> Duration {
+        now(Clock::Thread).saturating_sub(self.0)
+    }
+}
+
+/// Process CPU time and wall time from one start: what a bench prints
+/// (both, labelled), so that the machine's load shows as their ratio.
+#[derive(Clone, Copy, Debug)]
+pub struct Stopwatch {
+    cpu: Duration,
+    wall: Instant,
+}
+
+impl Stopwatch {
+    /// Start both clocks.
+    pub fn start() -> Stopwatch {
+        Stopwatch {
+            cpu: now(Clock::Process),
+            wall: Instant::now(),
+        }
+    }
+
+    /// Process CPU seconds since the start.
+    pub fn cpu(&self) -> f64 {
+        now(Clock::Process).saturating_sub(self.cpu).as_secs_f64()
+    }
+
+    /// Wall-clock seconds since the start.
+    pub fn wall(&self) -> f64 {
+        self.wall.elapsed().as_secs_f64()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A busy loop counts on the thread clock; a sleep does not.
+    #[test]
+    fn thread_clock_counts_work_not_sleep() {
+        let t = CpuInstant::now();
+        std::thread::sleep(Duration::from_millis(50));
+        let slept = t.elapsed();
+        assert!(slept < Duration::from_millis(20), "sleep counted {slept:?}");
+        let t = CpuInstant::now();
+        let mut x = 0u64;
+        while t.elapsed() < Duration::from_millis(20) {
+            x = std::hint::black_box(x.wrapping_add(1));
+        }
+        assert!(x > 0);
+    }
+}
