@@ -48,9 +48,11 @@ def test_undamped_run_conserves_energy(unzipped):
     50 ms, which must be positive (the ramp put energy in). At tolerance
     1e-6: the energy is constant to the integrator's accuracy, and the
     default 1e-4 lets it drift 1.6-1.8 % over those 950 ms (measured
-    2026-12-02)."""
+    2026-12-02). An ideal actuator (actuator.time_constant 0), so that the
+    rest angles stop with the input at 50 ms."""
     inst = Instance(unzipped("square"), "energy").initialize(
-        {"solver.rho_inf": 1.0, "solver.tolerance": 1e-6})
+        {"solver.rho_inf": 1.0, "solver.tolerance": 1e-6,
+         "actuator.time_constant": 0.0})
     try:
         totals = []
         for n in range(1000):
