@@ -143,144 +143,175 @@ fn side_edge(mesh: &Mesh, f: FacetId, v: VertexId, w: VertexId) -> EdgeId {
 /// Two unit directions closer than this (1 - |cos|) count as parallel.
 const PARALLEL_TOL: f64 = 1e-9;
 
+/// The sectors of vertex `v` (fan `fan`), making their gradient slots:
+/// one tangent slot per crease, shared (with sign) across anti-parallel
+/// creases that bound one sector, and a second slot where a sector needs one.
+fn vertex_sectors(
+    mesh: &Mesh,
+    curves: &CreaseCurves,
+    v: VertexId,
+    fan: &crate::mesh::Fan,
+    slots: &mut Slots,
+) -> Vec<Sector> {
+    // Unit tangent at v along edge e: the chord, or the crease curve's
+    // tangent where two non-collinear creases meet.
+    let dir = |e: EdgeId| {
+        let [a, b] = mesh.edge(e).v;
+        let w = if a == v { b } else { a };
+        curves.direction(mesh, e, v, w)
+    };
+    let is_crease = |e: EdgeId| mesh.edge(e).kind == EdgeKind::Crease;
+    let raw = split_fan(fan, is_crease);
+    let mut tangent: Tangents = Vec::new();
+    for (first, _, last) in &raw {
+        if let (Some(a), Some(b)) = (*first, *last)
+            && a != b
+            && 1.0 + dir(a).dot(&dir(b)) < PARALLEL_TOL
+        {
+            match (tangent_of(&tangent, a), tangent_of(&tangent, b)) {
+                (Some((s, sg)), None) => tangent.push((b, s, -sg)),
+                (None, Some((s, sg))) => tangent.push((a, s, -sg)),
+                (None, None) => {
+                    let s = slots.add(v, SlotKind::Gradient);
+                    tangent.push((a, s, 1.0));
+                    tangent.push((b, s, -1.0));
+                }
+                (Some(_), Some(_)) => {}
+            }
+        }
+    }
+    for &e in fan.edges.iter().filter(|&&e| is_crease(e)) {
+        if tangent_of(&tangent, e).is_none() {
+            let s = slots.add(v, SlotKind::Gradient);
+            tangent.push((e, s, 1.0));
+        }
+    }
+    let mut sectors = Vec::with_capacity(raw.len());
+    for (first, faces, last) in raw {
+        let perp = |d: Vector2<f64>| Vector2::new(-d.y, d.x);
+        // Columns: G [d0 d1] = [u0 u1] with u_k = sign * q[slot].
+        let (d0, u0, d1, u1) = match (first, last) {
+            (None, None) => {
+                let sx = slots.add(v, SlotKind::Gradient);
+                let sy = slots.add(v, SlotKind::Gradient);
+                (Vector2::x(), (sx, 1.0), Vector2::y(), (sy, 1.0))
+            }
+            (Some(a), Some(b)) if a != b && (1.0 - dir(a).dot(&dir(b)).abs()) >= PARALLEL_TOL => (
+                dir(a),
+                tangent_of(&tangent, a).unwrap(),
+                dir(b),
+                tangent_of(&tangent, b).unwrap(),
+            ),
+            (Some(a), _) | (None, Some(a)) => {
+                let extra = slots.add(v, SlotKind::Gradient);
+                (
+                    dir(a),
+                    tangent_of(&tangent, a).unwrap(),
+                    perp(dir(a)),
+                    (extra, 1.0),
+                )
+            }
+        };
+        let dinv = Matrix2::from_columns(&[d0, d1])
+            .try_inverse()
+            .expect("sector directions span the plane");
+        // G = [u0 u1] D^-1 = u0 row0(D^-1) + u1 row1(D^-1)
+        let terms = vec![
+            (u0.0, u0.1 * dinv.row(0).transpose()),
+            (u1.0, u1.1 * dinv.row(1).transpose()),
+        ];
+        sectors.push(Sector { faces, terms });
+    }
+    sectors
+}
+
+/// Slots made so far: the vertex and kind of each.
+#[derive(Default)]
+struct Slots {
+    vertex: Vec<VertexId>,
+    kind: Vec<SlotKind>,
+}
+
+impl Slots {
+    /// A new slot at vertex `v`.
+    fn add(&mut self, v: VertexId, kind: SlotKind) -> usize {
+        self.vertex.push(v);
+        self.kind.push(kind);
+        self.vertex.len() - 1
+    }
+}
+
+/// A sector of a vertex's fan before its slots are chosen: the crease or
+/// boundary it starts at (None: the fan's boundary or a closed fan without
+/// creases), its faces, the crease it ends at.
+type RawSector = (Option<EdgeId>, Vec<FacetId>, Option<EdgeId>);
+
+/// A crease's tangent slot at a vertex, with the sign it enters with.
+type Tangents = Vec<(EdgeId, usize, f64)>;
+
+/// The tangent slot and sign of crease `e` at the vertex, if made.
+fn tangent_of(tangents: &Tangents, e: EdgeId) -> Option<(usize, f64)> {
+    tangents.iter().find(|t| t.0 == e).map(|t| (t.1, t.2))
+}
+
+/// Split a vertex's fan into sectors at its creases (`is_crease`).
+fn split_fan(fan: &crate::mesh::Fan, is_crease: impl Fn(EdgeId) -> bool) -> Vec<RawSector> {
+    let nf = fan.faces.len();
+    let crease_pos: Vec<usize> = (0..fan.edges.len())
+        .filter(|&i| is_crease(fan.edges[i]))
+        .collect();
+    let mut raw = Vec::new();
+    if fan.closed {
+        if crease_pos.is_empty() {
+            raw.push((None, fan.faces.clone(), None));
+        } else {
+            let nc = crease_pos.len();
+            for k in 0..nc {
+                let start = crease_pos[k];
+                let end = crease_pos[(k + 1) % nc];
+                let mut faces = Vec::new();
+                let mut i = start;
+                loop {
+                    faces.push(fan.faces[i]);
+                    i = (i + 1) % nf;
+                    if i == end {
+                        break;
+                    }
+                }
+                raw.push((Some(fan.edges[start]), faces, Some(fan.edges[end])));
+            }
+        }
+    } else {
+        // Open fan: edges[0] and edges[nf] are boundary edges.
+        let mut cuts = vec![0usize];
+        cuts.extend(crease_pos.iter().copied().filter(|&i| i > 0 && i < nf));
+        cuts.push(nf);
+        for w in cuts.windows(2) {
+            let (s, e) = (w[0], w[1]);
+            let first = if s == 0 { None } else { Some(fan.edges[s]) };
+            let last = if e == nf { None } else { Some(fan.edges[e]) };
+            raw.push((first, fan.faces[s..e].to_vec(), last));
+        }
+    }
+    raw
+}
+
 impl DofLayout {
     /// Build the layout of a validated mesh.
     pub fn new(mesh: &Mesh) -> DofLayout {
         let curves = CreaseCurves::new(mesh);
         let nv = mesh.n_vertices();
-        let mut slot_vertex = Vec::new();
-        let mut slot_kind = Vec::new();
-        let mut new_slot = |v: VertexId, kind: SlotKind| {
-            slot_vertex.push(v);
-            slot_kind.push(kind);
-            slot_vertex.len() - 1
-        };
+        let mut slots = Slots::default();
         let mut position_slot = vec![0; nv];
         let mut sectors = vec![Vec::new(); nv];
         let fans = mesh.fans().expect("mesh validated its fans");
         for v in mesh.vertex_ids() {
-            position_slot[v.index()] = new_slot(v, SlotKind::Position);
+            position_slot[v.index()] = slots.add(v, SlotKind::Position);
             let fan = &fans[v.index()];
-            if fan.faces.is_empty() {
-                continue;
-            }
-            // Unit tangent at v along edge e: the chord, or the crease
-            // curve's tangent where two non-collinear creases meet.
-            let dir = |e: EdgeId| {
-                let [a, b] = mesh.edge(e).v;
-                let w = if a == v { b } else { a };
-                curves.direction(mesh, e, v, w)
-            };
-            let is_crease = |e: EdgeId| mesh.edge(e).kind == EdgeKind::Crease;
-            // Split the fan into sectors at creases: list of (first edge, faces, last edge).
-            let nf = fan.faces.len();
-            let crease_pos: Vec<usize> = (0..fan.edges.len())
-                .filter(|&i| is_crease(fan.edges[i]))
-                .collect();
-            let mut raw: Vec<(Option<EdgeId>, Vec<FacetId>, Option<EdgeId>)> = Vec::new();
-            if fan.closed {
-                if crease_pos.is_empty() {
-                    raw.push((None, fan.faces.clone(), None));
-                } else {
-                    let nc = crease_pos.len();
-                    for k in 0..nc {
-                        let start = crease_pos[k];
-                        let end = crease_pos[(k + 1) % nc];
-                        let mut faces = Vec::new();
-                        let mut i = start;
-                        loop {
-                            faces.push(fan.faces[i]);
-                            i = (i + 1) % nf;
-                            if i == end {
-                                break;
-                            }
-                        }
-                        raw.push((Some(fan.edges[start]), faces, Some(fan.edges[end])));
-                    }
-                }
-            } else {
-                // Open fan: edges[0] and edges[nf] are boundary edges.
-                let mut cuts = vec![0usize];
-                cuts.extend(crease_pos.iter().copied().filter(|&i| i > 0 && i < nf));
-                cuts.push(nf);
-                for w in cuts.windows(2) {
-                    let (s, e) = (w[0], w[1]);
-                    let first = if s == 0 { None } else { Some(fan.edges[s]) };
-                    let last = if e == nf { None } else { Some(fan.edges[e]) };
-                    raw.push((first, fan.faces[s..e].to_vec(), last));
-                }
-            }
-            // Crease tangent slots, shared (with sign) across anti-parallel
-            // creases that bound one sector.
-            let mut tangent: Vec<(EdgeId, usize, f64)> = Vec::new(); // (edge, slot, sign)
-            let find = |tangent: &Vec<(EdgeId, usize, f64)>, e: EdgeId| {
-                tangent.iter().find(|t| t.0 == e).map(|t| (t.1, t.2))
-            };
-            for (first, _, last) in &raw {
-                if let (Some(a), Some(b)) = (*first, *last)
-                    && a != b
-                    && 1.0 + dir(a).dot(&dir(b)) < PARALLEL_TOL
-                {
-                    match (find(&tangent, a), find(&tangent, b)) {
-                        (Some((s, sg)), None) => tangent.push((b, s, -sg)),
-                        (None, Some((s, sg))) => tangent.push((a, s, -sg)),
-                        (None, None) => {
-                            let s = new_slot(v, SlotKind::Gradient);
-                            tangent.push((a, s, 1.0));
-                            tangent.push((b, s, -1.0));
-                        }
-                        (Some(_), Some(_)) => {}
-                    }
-                }
-            }
-            for &i in &crease_pos {
-                let e = fan.edges[i];
-                if find(&tangent, e).is_none() {
-                    let s = new_slot(v, SlotKind::Gradient);
-                    tangent.push((e, s, 1.0));
-                }
-            }
-            for (first, faces, last) in raw {
-                let perp = |d: Vector2<f64>| Vector2::new(-d.y, d.x);
-                // Columns: G [d0 d1] = [u0 u1] with u_k = sign * q[slot].
-                let (d0, u0, d1, u1) = match (first, last) {
-                    (None, None) => {
-                        let sx = new_slot(v, SlotKind::Gradient);
-                        let sy = new_slot(v, SlotKind::Gradient);
-                        (Vector2::x(), (sx, 1.0), Vector2::y(), (sy, 1.0))
-                    }
-                    (Some(a), Some(b))
-                        if a != b && (1.0 - dir(a).dot(&dir(b)).abs()) >= PARALLEL_TOL =>
-                    {
-                        (
-                            dir(a),
-                            find(&tangent, a).unwrap(),
-                            dir(b),
-                            find(&tangent, b).unwrap(),
-                        )
-                    }
-                    (Some(a), _) | (None, Some(a)) => {
-                        let extra = new_slot(v, SlotKind::Gradient);
-                        (
-                            dir(a),
-                            find(&tangent, a).unwrap(),
-                            perp(dir(a)),
-                            (extra, 1.0),
-                        )
-                    }
-                };
-                let dinv = Matrix2::from_columns(&[d0, d1])
-                    .try_inverse()
-                    .expect("sector directions span the plane");
-                // G = [u0 u1] D^-1 = u0 row0(D^-1) + u1 row1(D^-1)
-                let terms = vec![
-                    (u0.0, u0.1 * dinv.row(0).transpose()),
-                    (u1.0, u1.1 * dinv.row(1).transpose()),
-                ];
-                sectors[v.index()].push(Sector { faces, terms });
+            if !fan.faces.is_empty() {
+                sectors[v.index()] = vertex_sectors(mesh, &curves, v, fan, &mut slots);
             }
         }
-
         let local = mesh
             .facet_ids()
             .map(|f| {
@@ -304,8 +335,8 @@ impl DofLayout {
             })
             .collect();
         DofLayout {
-            slot_vertex,
-            slot_kind,
+            slot_vertex: slots.vertex,
+            slot_kind: slots.kind,
             position_slot,
             sectors,
             local,

@@ -198,6 +198,156 @@ pub(crate) fn is_degenerate(area: f64, mean_len2: f64) -> bool {
     area.abs() <= DEGENERATE_AREA * mean_len2
 }
 
+/// Edges by their vertex pair ([`edge_key`]).
+type EdgeIndex = HashMap<(VertexId, VertexId), EdgeId>;
+
+/// The key of the edge between `a` and `b` (either order).
+fn edge_key(a: VertexId, b: VertexId) -> (VertexId, VertexId) {
+    if a < b { (a, b) } else { (b, a) }
+}
+
+/// Finite coordinates; triangles of three distinct vertices in range,
+/// neither degenerate nor inverted.
+fn check_triangles(coords: &[Vector2<f64>], triangles: &[[VertexId; 3]]) -> Result<(), MeshError> {
+    let nv = coords.len();
+    for (i, c) in coords.iter().enumerate() {
+        if !(c.x.is_finite() && c.y.is_finite()) {
+            return Err(MeshError::NotFinite {
+                what: "vertex".into(),
+                index: i,
+            });
+        }
+    }
+    for (t, tri) in triangles.iter().enumerate() {
+        for &v in tri {
+            if v.index() >= nv {
+                return Err(MeshError::VertexOutOfRange {
+                    what: "face".into(),
+                    index: t,
+                    vertex: v,
+                    count: nv,
+                });
+            }
+        }
+        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+            return Err(MeshError::RepeatedVertex {
+                triangle: FacetId(t),
+            });
+        }
+    }
+    let corners: Vec<[usize; 3]> = triangles.iter().map(|t| t.map(VertexId::index)).collect();
+    let mean_len2 = mean_side_length2(corners.iter().map(|t| &t[..]), coords);
+    for (t, &[a, b, c]) in corners.iter().enumerate() {
+        let u = coords[b] - coords[a];
+        let w = coords[c] - coords[a];
+        let area = 0.5 * (u.x * w.y - u.y * w.x);
+        if is_degenerate(area, mean_len2) {
+            return Err(MeshError::Degenerate {
+                triangle: FacetId(t),
+                area,
+            });
+        }
+        if area < 0.0 {
+            return Err(MeshError::Inverted {
+                triangle: FacetId(t),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The listed edges, checked (vertices in range, finite targets, no
+/// duplicates), and their index by vertex pair.
+fn listed_edges(
+    edges: Vec<Edge>,
+    nv: usize,
+) -> Result<(Vec<Edge>, EdgeIndex), MeshError> {
+    let mut index = EdgeIndex::new();
+    let mut all = Vec::with_capacity(edges.len());
+    for (e, edge) in edges.into_iter().enumerate() {
+        for &v in &edge.v {
+            if v.index() >= nv {
+                return Err(MeshError::VertexOutOfRange {
+                    what: "edge".into(),
+                    index: e,
+                    vertex: v,
+                    count: nv,
+                });
+            }
+        }
+        if !edge.fold_target.is_finite() {
+            return Err(MeshError::NotFinite {
+                what: "fold angle of edge".into(),
+                index: e,
+            });
+        }
+        if let Some(&first) = index.get(&edge_key(edge.v[0], edge.v[1])) {
+            return Err(MeshError::DuplicateEdge {
+                first,
+                second: EdgeId(e),
+            });
+        }
+        index.insert(edge_key(edge.v[0], edge.v[1]), EdgeId(e));
+        all.push(edge);
+    }
+    Ok((all, index))
+}
+
+/// Every edge in one or two faces, creases interior and boundary edges on
+/// the boundary; edges in one face become boundary edges.
+fn check_edge_faces(all: &mut [Edge], edge_faces: &[Vec<FacetId>]) -> Result<(), MeshError> {
+    for (e, faces) in edge_faces.iter().enumerate() {
+        if faces.len() > 2 {
+            return Err(MeshError::NonManifold {
+                vertices: all[e].v,
+                faces: faces.clone(),
+            });
+        }
+        if faces.is_empty() {
+            return Err(MeshError::DanglingEdge { edge: EdgeId(e) });
+        }
+        match all[e].kind {
+            EdgeKind::Crease if faces.len() != 2 => {
+                return Err(MeshError::CreaseNotInterior {
+                    edge: EdgeId(e),
+                    faces: faces.len(),
+                });
+            }
+            EdgeKind::Boundary if faces.len() == 2 => {
+                return Err(MeshError::BoundaryNotOnBoundary { edge: EdgeId(e) });
+            }
+            _ => {}
+        }
+        if faces.len() == 1 {
+            all[e].kind = EdgeKind::Boundary;
+        }
+    }
+    Ok(())
+}
+
+/// Two triangles across an edge traverse it in opposite directions
+/// (consistent orientation); with all faces counter-clockwise in the plane
+/// this holds unless faces overlap.
+fn check_orientation(
+    all: &[Edge],
+    edge_faces: &[Vec<FacetId>],
+    triangles: &[[VertexId; 3]],
+) -> Result<(), MeshError> {
+    for (e, faces) in edge_faces.iter().enumerate() {
+        if faces.len() == 2 {
+            let [a, b] = all[e].v;
+            let dir = |t: FacetId| {
+                let tri = triangles[t.index()];
+                (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
+            };
+            if dir(faces[0]) == dir(faces[1]) {
+                return Err(MeshError::Inverted { triangle: faces[1] });
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Mesh {
     /// Validate the pattern and build its topology. `edges` lists labelled
     /// edges; unlisted triangle sides become smooth or boundary edges.
@@ -206,81 +356,10 @@ impl Mesh {
         triangles: Vec<[VertexId; 3]>,
         edges: Vec<Edge>,
     ) -> Result<Mesh, MeshError> {
+        check_triangles(&coords, &triangles)?;
         let nv = coords.len();
-        for (i, c) in coords.iter().enumerate() {
-            if !(c.x.is_finite() && c.y.is_finite()) {
-                return Err(MeshError::NotFinite {
-                    what: "vertex".into(),
-                    index: i,
-                });
-            }
-        }
-        for (t, tri) in triangles.iter().enumerate() {
-            for &v in tri {
-                if v.index() >= nv {
-                    return Err(MeshError::VertexOutOfRange {
-                        what: "face".into(),
-                        index: t,
-                        vertex: v,
-                        count: nv,
-                    });
-                }
-            }
-            if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
-                return Err(MeshError::RepeatedVertex {
-                    triangle: FacetId(t),
-                });
-            }
-        }
-        let corners: Vec<[usize; 3]> = triangles.iter().map(|t| t.map(VertexId::index)).collect();
-        let mean_len2 = mean_side_length2(corners.iter().map(|t| &t[..]), &coords);
-        for (t, &[a, b, c]) in corners.iter().enumerate() {
-            let u = coords[b] - coords[a];
-            let w = coords[c] - coords[a];
-            let area = 0.5 * (u.x * w.y - u.y * w.x);
-            if is_degenerate(area, mean_len2) {
-                return Err(MeshError::Degenerate {
-                    triangle: FacetId(t),
-                    area,
-                });
-            }
-            if area < 0.0 {
-                return Err(MeshError::Inverted {
-                    triangle: FacetId(t),
-                });
-            }
-        }
-
-        // Listed edges first.
-        let key = |a: VertexId, b: VertexId| if a < b { (a, b) } else { (b, a) };
-        let mut index: HashMap<(VertexId, VertexId), EdgeId> = HashMap::new();
-        let mut all = Vec::with_capacity(edges.len() + triangles.len() * 2);
-        for (e, edge) in edges.into_iter().enumerate() {
-            for &v in &edge.v {
-                if v.index() >= nv {
-                    return Err(MeshError::VertexOutOfRange {
-                        what: "edge".into(),
-                        index: e,
-                        vertex: v,
-                        count: nv,
-                    });
-                }
-            }
-            if !edge.fold_target.is_finite() {
-                return Err(MeshError::NotFinite {
-                    what: "fold angle of edge".into(),
-                    index: e,
-                });
-            }
-            if let Some(&first) = index.get(&key(edge.v[0], edge.v[1])) {
-                return Err(MeshError::DuplicateEdge {
-                    first,
-                    second: EdgeId(e),
-                });
-            }
-            index.insert(key(edge.v[0], edge.v[1]), EdgeId(e));
-            all.push(edge);
-        }
+        // Listed edges first, then the sides no edge lists.
+        let (mut all, mut index) = listed_edges(edges, nv)?;
         let n_listed = all.len();
         let mut edge_faces: Vec<Vec<FacetId>> = vec![Vec::new(); n_listed];
         let mut face_edges = Vec::with_capacity(triangles.len());
@@ -288,7 +367,7 @@ impl Mesh {
             let mut fe = [EdgeId(0); 3];
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                let e = *index.entry(key(a, b)).or_insert_with(|| {
+                let e = *index.entry(edge_key(a, b)).or_insert_with(|| {
                     all.push(Edge::smooth(a, b));
                     edge_faces.push(Vec::new());
                     EdgeId(all.len() - 1)
@@ -298,50 +377,8 @@ impl Mesh {
             }
             face_edges.push(fe);
         }
-        for (e, faces) in edge_faces.iter().enumerate() {
-            if faces.len() > 2 {
-                return Err(MeshError::NonManifold {
-                    vertices: all[e].v,
-                    faces: faces.clone(),
-                });
-            }
-            if faces.is_empty() {
-                return Err(MeshError::DanglingEdge { edge: EdgeId(e) });
-            }
-            match all[e].kind {
-                EdgeKind::Crease if faces.len() != 2 => {
-                    return Err(MeshError::CreaseNotInterior {
-                        edge: EdgeId(e),
-                        faces: faces.len(),
-                    });
-                }
-                EdgeKind::Boundary if faces.len() == 2 => {
-                    return Err(MeshError::BoundaryNotOnBoundary { edge: EdgeId(e) });
-                }
-                _ => {}
-            }
-            if faces.len() == 1 {
-                all[e].kind = EdgeKind::Boundary;
-            }
-            if e >= n_listed {
-                // Unlisted interior edges stay smooth; nothing else to do.
-            }
-        }
-        // Two triangles across an edge must traverse it in opposite directions
-        // (consistent orientation); with all faces counter-clockwise in the
-        // plane this holds unless faces overlap.
-        for (e, faces) in edge_faces.iter().enumerate() {
-            if faces.len() == 2 {
-                let [a, b] = all[e].v;
-                let dir = |t: FacetId| {
-                    let tri = triangles[t.index()];
-                    (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
-                };
-                if dir(faces[0]) == dir(faces[1]) {
-                    return Err(MeshError::Inverted { triangle: faces[1] });
-                }
-            }
-        }
+        check_edge_faces(&mut all, &edge_faces)?;
+        check_orientation(&all, &edge_faces, &triangles)?;
         let mesh = Mesh {
             coords,
             triangles,

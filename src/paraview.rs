@@ -84,6 +84,28 @@ impl std::fmt::Display for Exp {
 /// The text of one `.vtu` file. Fails when the frame's arrays disagree in
 /// length or hold a non-finite value (VTK's ASCII reader cannot read NaN).
 pub fn vtu_text(fr: &Frame) -> Result<String, String> {
+    check_frame(fr)?;
+    let (np, nt, nl) = (fr.points.len(), fr.triangles.len(), fr.lines.len());
+    let mut s = String::with_capacity(64 * (np + nt + nl) + 1024);
+    s.push_str("<?xml version=\"1.0\"?>\n");
+    s.push_str(
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+    );
+    s.push_str("  <UnstructuredGrid>\n");
+    let _ = writeln!(
+        s,
+        "    <Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{}\">",
+        nt + nl
+    );
+    point_data(&mut s, fr);
+    cell_data(&mut s, fr);
+    points_and_cells(&mut s, fr);
+    s.push_str("    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+    Ok(s)
+}
+
+/// The frame's arrays agree in length, hold finite values and index its points.
+fn check_frame(fr: &Frame) -> Result<(), String> {
     let np = fr.points.len();
     let nt = fr.triangles.len();
     let nl = fr.lines.len();
@@ -112,20 +134,15 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
             "ParaView frame: vertex {v} out of range ({np} points)"
         ));
     }
-    let mut s = String::with_capacity(64 * (np + nt + nl) + 1024);
-    s.push_str("<?xml version=\"1.0\"?>\n");
-    s.push_str(
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
-    );
-    s.push_str("  <UnstructuredGrid>\n");
-    let _ = writeln!(
-        s,
-        "    <Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{}\">",
-        nt + nl
-    );
+    Ok(())
+}
+
+/// The points' data: FOLD vertex index, displacement.
+fn point_data(s: &mut String, fr: &Frame) {
+    let np = fr.points.len();
     s.push_str("      <PointData>\n");
     data_array(
-        &mut s,
+        s,
         "Int64",
         "fold_vertex",
         1,
@@ -138,7 +155,7 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
         }),
     );
     data_array(
-        &mut s,
+        s,
         "Float64",
         "displacement",
         3,
@@ -147,18 +164,24 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
             .zip(fr.reference)
             .flat_map(|(p, r)| (0..3).map(move |c| Exp(p[c] - r[c]))),
     );
-    s.push_str("      </PointData>\n      <CellData>\n");
+    s.push_str("      </PointData>\n");
+}
+
+/// The cells' data: kind, FOLD edge, strain energy and its density, fold angle.
+fn cell_data(s: &mut String, fr: &Frame) {
+    let (nt, nl) = (fr.triangles.len(), fr.lines.len());
+    s.push_str("      <CellData>\n");
     let kinds = || std::iter::repeat_n(0u8, nt).chain(std::iter::repeat_n(1u8, nl));
-    data_array(&mut s, "UInt8", "cell_kind", 1, kinds());
+    data_array(s, "UInt8", "cell_kind", 1, kinds());
     data_array(
-        &mut s,
+        s,
         "Int64",
         "fold_edge",
         1,
         std::iter::repeat_n(-1i64, nt).chain(fr.lines.iter().map(|&(_, e)| e as i64)),
     );
     data_array(
-        &mut s,
+        s,
         "Float64",
         "strain_energy",
         1,
@@ -168,7 +191,7 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
             .chain(std::iter::repeat_n(Exp(0.0), nl)),
     );
     data_array(
-        &mut s,
+        s,
         "Float64",
         "strain_energy_density",
         1,
@@ -179,15 +202,21 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
             .chain(std::iter::repeat_n(Exp(0.0), nl)),
     );
     data_array(
-        &mut s,
+        s,
         "Float64",
         "fold_angle_deg",
         1,
         std::iter::repeat_n(Exp(0.0), nt).chain(fr.line_angle.iter().map(|a| Exp(a.to_degrees()))),
     );
-    s.push_str("      </CellData>\n      <Points>\n");
+    s.push_str("      </CellData>\n");
+}
+
+/// The points and the cells: triangles, then crease lines.
+fn points_and_cells(s: &mut String, fr: &Frame) {
+    let (nt, nl) = (fr.triangles.len(), fr.lines.len());
+    s.push_str("      <Points>\n");
     data_array(
-        &mut s,
+        s,
         "Float64",
         "",
         3,
@@ -195,7 +224,7 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
     );
     s.push_str("      </Points>\n      <Cells>\n");
     data_array(
-        &mut s,
+        s,
         "Int64",
         "connectivity",
         1,
@@ -205,7 +234,7 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
             .chain(fr.lines.iter().flat_map(|(l, _)| l)),
     );
     data_array(
-        &mut s,
+        s,
         "Int64",
         "offsets",
         1,
@@ -214,14 +243,13 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
             .chain((1..=nl).map(|k| 3 * nt + 2 * k)),
     );
     data_array(
-        &mut s,
+        s,
         "UInt8",
         "types",
         1,
         std::iter::repeat_n(VTK_TRIANGLE, nt).chain(std::iter::repeat_n(VTK_LINE, nl)),
     );
-    s.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
-    Ok(s)
+    s.push_str("      </Cells>\n");
 }
 
 /// Escape the characters XML does not allow in an attribute value.

@@ -593,24 +593,89 @@ fn add_tangent_upper(
     h: f64,
     st: &Stress,
 ) {
+    let inv = 1.0 / kin.n_len;
+    // d kappa_V / d e_k = beta_kV n_hat with beta_kV = N_k,V + N_k,1 p_V + N_k,2 q_V:
+    // the in-plane parts F_2 x w_V and w_V x F_1 (w_V tangent) are normal.
+    let t2 = kin.n_hat.cross(&kin.f2) * inv;
+    let t1 = kin.f1.cross(&kin.n_hat) * inv;
+    let pv = [t2.dot(&kin.rv[0]), t2.dot(&kin.rv[1]), t2.dot(&kin.rv[2])];
+    let qv = [t1.dot(&kin.rv[0]), t1.dot(&kin.rv[1]), t1.dot(&kin.rv[2])];
+    let sb = q.wa * h * h * h / 12.0;
+    let x = point_matrices(q, kin, pl, h, st);
+    let mut y1 = [ZERO3; 9];
+    let mut y2 = [ZERO3; 9];
+    let mut yv = [ZERO3; 9];
+    let mut beta = [[0.0; 3]; 9];
+    let mut dbeta = [[0.0; 3]; 9];
+    for l in 0..9 {
+        let (n1, n2, ntl) = (q.n1[l], q.n2[l], st.nt[l]);
+        let nv = [q.n11[l], q.n22[l], 2.0 * q.n12[l]];
+        beta[l] = [0, 1, 2].map(|v| nv[v] + n1 * pv[v] + n2 * qv[v]);
+        dbeta[l] = pl.apply(sb, beta[l]);
+        let mut m = ZERO3;
+        axpy(&mut m, n1, &x.x11);
+        axpy(&mut m, n2, &x.x12);
+        axpy(&mut m, ntl, &x.g1v);
+        y1[l] = m;
+        let mut m = ZERO3;
+        axpy(&mut m, n1, &x.x21);
+        axpy(&mut m, n2, &x.x22);
+        axpy(&mut m, ntl, &x.g2v);
+        y2[l] = m;
+        let mut m = ZERO3;
+        axpy(&mut m, n1, &x.gv1);
+        axpy(&mut m, n2, &x.gv2);
+        yv[l] = m;
+    }
+    let nn = outer(&kin.n_hat, &kin.n_hat);
+    for k in 0..9 {
+        let (n1, n2, ntk) = (q.n1[k], q.n2[k], st.nt[k]);
+        for l in k..9 {
+            // Bending material part: (beta_k . D beta_l) n_hat n_hat^T.
+            let d = dot3(beta[k], dbeta[l]);
+            let b = &mut bl[k][l];
+            for i in 0..3 {
+                for j in 0..3 {
+                    b[i][j] +=
+                        n1 * y1[l][i][j] + n2 * y2[l][i][j] + ntk * yv[l][i][j] + d * nn[i][j];
+                }
+            }
+        }
+    }
+}
+
+/// The 3x3 matrices of one quadrature point's tangent blocks: the second
+/// derivatives with respect to F_1, F_2 (`x11`, `x12`, `x21`, `x22`) and
+/// the mixed F-v ones (`g1v`, `g2v` and their transposes).
+struct PointMatrices {
+    x11: M3,
+    x12: M3,
+    x21: M3,
+    x22: M3,
+    g1v: M3,
+    g2v: M3,
+    gv1: M3,
+    gv2: M3,
+}
+
+/// [`PointMatrices`]: the Hessian of n_hat . v with respect to F_1, F_2
+/// (closed forms of -[F2]x H_n [F2]x, [F2]x H_n [F1]x - [w]x,
+/// -[F1]x H_n [F1]x) with the membrane's geometric and material parts.
+#[inline(always)]
+fn point_matrices(
+    q: &QuadPoint,
+    kin: &Kinematics,
+    pl: &Plane,
+    h: f64,
+    st: &Stress,
+) -> PointMatrices {
     let (f1, f2, nh) = (&kin.f1, &kin.f2, &kin.n_hat);
     let inv = 1.0 / kin.n_len;
     let nm = st.nm;
-
-    // d kappa_V / d e_k = beta_kV n_hat with beta_kV = N_k,V + N_k,1 p_V + N_k,2 q_V:
-    // the in-plane parts F_2 x w_V and w_V x F_1 (w_V tangent) are normal.
-    let t2 = nh.cross(f2) * inv;
-    let t1 = f1.cross(nh) * inv;
-    let pv = [t2.dot(&kin.rv[0]), t2.dot(&kin.rv[1]), t2.dot(&kin.rv[2])];
-    let qv = [t1.dot(&kin.rv[0]), t1.dot(&kin.rv[1]), t1.dot(&kin.rv[2])];
     let sm = q.wa * h;
-    let sb = q.wa * h * h * h / 12.0;
     let cm = sm * pl.c;
     let cm_nu = cm * pl.nu;
     let cm_g = cm * 0.5 * (1.0 - pl.nu);
-
-    // Hessian of n_hat . v with respect to F_1, F_2 (closed forms of
-    // -[F2]x H_n [F2]x, [F2]x H_n [F1]x - [w]x, -[F1]x H_n [F1]x).
     let b1 = f1.cross(nh);
     let b2 = f2.cross(nh);
     let si = st.s * inv * inv;
@@ -672,46 +737,15 @@ fn add_tangent_upper(
     g2v[2][1] -= f1.x * inv;
     let gv1 = transpose(&g1v);
     let gv2 = transpose(&g2v);
-
-    let mut y1 = [ZERO3; 9];
-    let mut y2 = [ZERO3; 9];
-    let mut yv = [ZERO3; 9];
-    let mut beta = [[0.0; 3]; 9];
-    let mut dbeta = [[0.0; 3]; 9];
-    for l in 0..9 {
-        let (n1, n2, ntl) = (q.n1[l], q.n2[l], st.nt[l]);
-        let nv = [q.n11[l], q.n22[l], 2.0 * q.n12[l]];
-        beta[l] = [0, 1, 2].map(|v| nv[v] + n1 * pv[v] + n2 * qv[v]);
-        dbeta[l] = pl.apply(sb, beta[l]);
-        let mut m = ZERO3;
-        axpy(&mut m, n1, &x11);
-        axpy(&mut m, n2, &x12);
-        axpy(&mut m, ntl, &g1v);
-        y1[l] = m;
-        let mut m = ZERO3;
-        axpy(&mut m, n1, &x21);
-        axpy(&mut m, n2, &x22);
-        axpy(&mut m, ntl, &g2v);
-        y2[l] = m;
-        let mut m = ZERO3;
-        axpy(&mut m, n1, &gv1);
-        axpy(&mut m, n2, &gv2);
-        yv[l] = m;
-    }
-    let nn = outer(nh, nh);
-    for k in 0..9 {
-        let (n1, n2, ntk) = (q.n1[k], q.n2[k], st.nt[k]);
-        for l in k..9 {
-            // Bending material part: (beta_k . D beta_l) n_hat n_hat^T.
-            let d = dot3(beta[k], dbeta[l]);
-            let b = &mut bl[k][l];
-            for i in 0..3 {
-                for j in 0..3 {
-                    b[i][j] +=
-                        n1 * y1[l][i][j] + n2 * y2[l][i][j] + ntk * yv[l][i][j] + d * nn[i][j];
-                }
-            }
-        }
+    PointMatrices {
+        x11,
+        x12,
+        x21,
+        x22,
+        g1v,
+        g2v,
+        gv1,
+        gv2,
     }
 }
 

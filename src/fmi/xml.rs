@@ -77,43 +77,13 @@ pub fn model_description(model: &Model, guid: &str) -> String {
         w,
         r#"  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="true" canInterpolateInputs="true" maxOutputDerivativeOrder="0" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="false"/>"#
     );
-
     let vars: Vec<&VariableSpec> = model
         .parameters()
         .iter()
         .chain(model.inputs())
         .chain(model.outputs())
         .collect();
-    let units: BTreeSet<&str> = vars
-        .iter()
-        .map(|v| v.unit.as_str())
-        .filter(|u| !u.is_empty())
-        .collect();
-    if !units.is_empty() {
-        let _ = writeln!(w, "  <UnitDefinitions>");
-        for u in &units {
-            match base_unit(u) {
-                Some(e) => {
-                    let mut attrs = String::new();
-                    for (name, k) in ["kg", "m", "s", "rad"].iter().zip(e) {
-                        if k != 0 {
-                            let _ = write!(attrs, r#" {name}="{k}""#);
-                        }
-                    }
-                    let _ = writeln!(
-                        w,
-                        r#"    <Unit name="{}"><BaseUnit{attrs}/></Unit>"#,
-                        escape(u)
-                    );
-                }
-                None => {
-                    let _ = writeln!(w, r#"    <Unit name="{}"/>"#, escape(u));
-                }
-            }
-        }
-        let _ = writeln!(w, "  </UnitDefinitions>");
-    }
-
+    unit_definitions(w, &vars);
     let _ = writeln!(w, "  <LogCategories>");
     for (name, description) in LOG_CATEGORIES {
         let _ = writeln!(
@@ -123,7 +93,6 @@ pub fn model_description(model: &Model, guid: &str) -> String {
         );
     }
     let _ = writeln!(w, "  </LogCategories>");
-
     let s = &scene.solver;
     let _ = writeln!(
         w,
@@ -132,9 +101,50 @@ pub fn model_description(model: &Model, guid: &str) -> String {
         real(s.tolerance),
         real(default_step_size(s.max_step, s.stop_time)),
     );
-
-    let _ = writeln!(w, "  <ModelVariables>");
     let (np, ni) = (model.parameters().len(), model.inputs().len());
+    model_variables(w, &vars, np, ni);
+    model_structure(w, model, &vars, np, ni);
+    let _ = writeln!(w, "</fmiModelDescription>");
+    x
+}
+
+/// `<UnitDefinitions>` of every unit the variables use.
+fn unit_definitions(w: &mut String, vars: &[&VariableSpec]) {
+    let units: BTreeSet<&str> = vars
+        .iter()
+        .map(|v| v.unit.as_str())
+        .filter(|u| !u.is_empty())
+        .collect();
+    if units.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "  <UnitDefinitions>");
+    for u in &units {
+        match base_unit(u) {
+            Some(e) => {
+                let mut attrs = String::new();
+                for (name, k) in ["kg", "m", "s", "rad"].iter().zip(e) {
+                    if k != 0 {
+                        let _ = write!(attrs, r#" {name}="{k}""#);
+                    }
+                }
+                let _ = writeln!(
+                    w,
+                    r#"    <Unit name="{}"><BaseUnit{attrs}/></Unit>"#,
+                    escape(u)
+                );
+            }
+            None => {
+                let _ = writeln!(w, r#"    <Unit name="{}"/>"#, escape(u));
+            }
+        }
+    }
+    let _ = writeln!(w, "  </UnitDefinitions>");
+}
+
+/// `<ModelVariables>`: `np` parameters, then `ni` inputs, then outputs.
+fn model_variables(w: &mut String, vars: &[&VariableSpec], np: usize, ni: usize) {
+    let _ = writeln!(w, "  <ModelVariables>");
     for (vr, v) in vars.iter().enumerate() {
         let index = vr + 1;
         let (causality, variability, initial, start) = if vr < np {
@@ -164,14 +174,18 @@ pub fn model_description(model: &Model, guid: &str) -> String {
         let _ = writeln!(w, "/></ScalarVariable>");
     }
     let _ = writeln!(w, "  </ModelVariables>");
+}
 
+/// `<ModelStructure>`: the outputs, their dependencies, the initial unknowns.
+fn model_structure(w: &mut String, model: &Model, vars: &[&VariableSpec], np: usize, ni: usize) {
     let _ = writeln!(w, "  <ModelStructure>");
     let outputs = (np + ni + 1)..=vars.len();
     if !outputs.is_empty() {
         // Outputs are the state at the communication point: an input set
         // now acts over the next step only, except that the crease energy
         // is read under the rest angles in force, which the rest-angle
-        // actuators set at once (direct feedthrough).
+        // actuators set at once where they are ideal (actuator.time_constant
+        // 0, which a master may set): declared whatever the time constant.
         let rest_angle: Vec<String> = model
             .scene()
             .actuators
@@ -197,8 +211,6 @@ pub fn model_description(model: &Model, guid: &str) -> String {
         let _ = writeln!(w, "    </InitialUnknowns>");
     }
     let _ = writeln!(w, "  </ModelStructure>");
-    let _ = writeln!(w, "</fmiModelDescription>");
-    x
 }
 
 /// DefaultExperiment stepSize: the largest internal step, unless that

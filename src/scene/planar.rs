@@ -249,60 +249,12 @@ pub(crate) fn trace_faces(
     boundary: &[bool],
 ) -> Result<Vec<Vec<usize>>, SceneError> {
     check_crossings(coords, edges)?;
-    let nv = coords.len();
-    let ne = edges.len();
-    // Half-edge h = 2e runs a -> b, 2e + 1 runs b -> a.
-    let origin = |h: usize| {
-        if h.is_multiple_of(2) {
-            edges[h / 2][0]
-        } else {
-            edges[h / 2][1]
-        }
-    };
-    let dest = |h: usize| origin(h ^ 1);
-    let mut out: Vec<Vec<usize>> = vec![Vec::new(); nv];
-    for h in 0..2 * ne {
-        out[origin(h)].push(h);
-    }
-    let angle = |h: usize| {
-        let d = coords[dest(h)] - coords[origin(h)];
-        d.y.atan2(d.x)
-    };
-    let mut pos = vec![0usize; 2 * ne];
-    for list in &mut out {
-        list.sort_by(|&x, &y| angle(x).total_cmp(&angle(y)).then(x.cmp(&y)));
-        for (k, &h) in list.iter().enumerate() {
-            pos[h] = k;
-        }
-    }
-    let next = |h: usize| {
-        let twin = h ^ 1;
-        let list = &out[origin(twin)];
-        list[(pos[twin] + list.len() - 1) % list.len()]
-    };
+    let he = HalfEdges::new(coords, edges);
     let (lo, hi) = bbox_of(coords.iter().copied());
     let eps = 1e-12 * (hi - lo).norm_squared();
-    let mut cycle_of = vec![usize::MAX; 2 * ne];
-    let mut cycles: Vec<(Vec<usize>, f64)> = Vec::new(); // (half-edges, area)
-    for start in 0..2 * ne {
-        if cycle_of[start] != usize::MAX {
-            continue;
-        }
-        let id = cycles.len();
-        let mut hs = Vec::new();
-        let mut h = start;
-        while cycle_of[h] == usize::MAX {
-            cycle_of[h] = id;
-            hs.push(h);
-            h = next(h);
-        }
-        let verts: Vec<usize> = hs.iter().map(|&h| origin(h)).collect();
-        let area = shoelace(&verts, coords);
-        cycles.push((hs, area));
-    }
+    let (cycles, cycle_of) = he.cycles(coords);
     // Bounded regions; holes (all sides boundary edges shared with another
     // region) are not paper.
-    let bounded: Vec<usize> = (0..cycles.len()).filter(|&id| cycles[id].1 > eps).collect();
     let is_hole = |id: usize| {
         cycles[id].0.iter().all(|&h| {
             let other = cycle_of[h ^ 1];
@@ -310,12 +262,12 @@ pub(crate) fn trace_faces(
         })
     };
     let mut faces = Vec::new();
-    for &id in &bounded {
+    for id in (0..cycles.len()).filter(|&id| cycles[id].1 > eps) {
         if is_hole(id) {
             continue;
         }
         let hs = &cycles[id].0;
-        let verts: Vec<usize> = hs.iter().map(|&h| origin(h)).collect();
+        let verts: Vec<usize> = hs.iter().map(|&h| he.origin(h)).collect();
         let mut sorted = verts.clone();
         sorted.sort_unstable();
         if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1])
@@ -332,8 +284,105 @@ pub(crate) fn trace_faces(
         }
         faces.push(verts);
     }
-    // Pieces (connected components) inside a face of another piece.
-    let mut parent: Vec<usize> = (0..nv).collect();
+    let outer: Vec<usize> = (0..cycles.len())
+        .filter(|&id| cycles[id].1 < -eps)
+        .collect();
+    if outer.len() > 1 {
+        let starts: Vec<usize> = outer.iter().map(|&id| cycles[id].0[0]).collect();
+        check_islands(coords, edges, &faces, &he, &starts)?;
+    }
+    Ok(faces)
+}
+
+/// Where half-edge `h` starts: h = 2e runs a -> b, 2e + 1 runs b -> a.
+fn half_edge_origin(edges: &[[usize; 2]], h: usize) -> usize {
+    if h.is_multiple_of(2) {
+        edges[h / 2][0]
+    } else {
+        edges[h / 2][1]
+    }
+}
+
+/// The half-edges of a planar graph: h = 2e runs a -> b, 2e + 1 runs b -> a;
+/// around each vertex its outgoing half-edges sorted by angle.
+struct HalfEdges<'a> {
+    edges: &'a [[usize; 2]],
+    /// Outgoing half-edges of each vertex, counter-clockwise.
+    out: Vec<Vec<usize>>,
+    /// Position of each half-edge in its origin's list.
+    pos: Vec<usize>,
+}
+
+impl<'a> HalfEdges<'a> {
+    fn new(coords: &[Vector2<f64>], edges: &'a [[usize; 2]]) -> Self {
+        let ne = edges.len();
+        let origin = |h: usize| half_edge_origin(edges, h);
+        let mut out: Vec<Vec<usize>> = vec![Vec::new(); coords.len()];
+        for h in 0..2 * ne {
+            out[origin(h)].push(h);
+        }
+        let angle = |h: usize| {
+            let d = coords[origin(h ^ 1)] - coords[origin(h)];
+            d.y.atan2(d.x)
+        };
+        let mut pos = vec![0usize; 2 * ne];
+        for list in &mut out {
+            list.sort_by(|&x, &y| angle(x).total_cmp(&angle(y)).then(x.cmp(&y)));
+            for (k, &h) in list.iter().enumerate() {
+                pos[h] = k;
+            }
+        }
+        HalfEdges { edges, out, pos }
+    }
+
+    fn origin(&self, h: usize) -> usize {
+        half_edge_origin(self.edges, h)
+    }
+
+    /// The half-edge after `h` in its cycle: the next one clockwise around
+    /// `h`'s end.
+    fn next(&self, h: usize) -> usize {
+        let twin = h ^ 1;
+        let list = &self.out[self.origin(twin)];
+        list[(self.pos[twin] + list.len() - 1) % list.len()]
+    }
+
+    /// Every cycle (its half-edges and signed area) and the cycle of each
+    /// half-edge.
+    fn cycles(&self, coords: &[Vector2<f64>]) -> (Vec<(Vec<usize>, f64)>, Vec<usize>) {
+        let nh = self.pos.len();
+        let mut cycle_of = vec![usize::MAX; nh];
+        let mut cycles = Vec::new();
+        for start in 0..nh {
+            if cycle_of[start] != usize::MAX {
+                continue;
+            }
+            let id = cycles.len();
+            let mut hs = Vec::new();
+            let mut h = start;
+            while cycle_of[h] == usize::MAX {
+                cycle_of[h] = id;
+                hs.push(h);
+                h = self.next(h);
+            }
+            let verts: Vec<usize> = hs.iter().map(|&h| self.origin(h)).collect();
+            let area = shoelace(&verts, coords);
+            cycles.push((hs, area));
+        }
+        (cycles, cycle_of)
+    }
+}
+
+/// Refuse a piece (connected component) of the pattern lying inside a face
+/// of another piece: `starts` holds a half-edge of each outer boundary.
+fn check_islands(
+    coords: &[Vector2<f64>],
+    edges: &[[usize; 2]],
+    faces: &[Vec<usize>],
+    he: &HalfEdges,
+    starts: &[usize],
+) -> Result<(), SceneError> {
+    let mut parent: Vec<usize> = (0..coords.len()).collect();
     fn find(p: &mut [usize], mut x: usize) -> usize {
         while p[x] != x {
             p[x] = p[p[x]];
@@ -347,39 +396,34 @@ pub(crate) fn trace_faces(
             parent[ra] = rb;
         }
     }
-    let outer: Vec<usize> = (0..cycles.len())
-        .filter(|&id| cycles[id].1 < -eps)
+    let boxes: Vec<_> = faces
+        .iter()
+        .map(|f| bbox_of(f.iter().map(|&v| coords[v])))
         .collect();
-    if outer.len() > 1 {
-        let boxes: Vec<_> = faces
-            .iter()
-            .map(|f| bbox_of(f.iter().map(|&v| coords[v])))
-            .collect();
-        let piece: Vec<usize> = faces.iter().map(|f| find(&mut parent, f[0])).collect();
-        for &id in &outer {
-            let v = origin(cycles[id].0[0]);
-            let pv = find(&mut parent, v);
-            let x = coords[v];
-            for (f, face) in faces.iter().enumerate() {
-                let (l, h) = boxes[f];
-                if piece[f] == pv || x.x < l.x || x.x > h.x || x.y < l.y || x.y > h.y {
-                    continue;
-                }
-                if inside(x, face, coords) {
-                    return Err(invalid(
-                        format!("edges_vertices[{}]", cycles[id].0[0] / 2),
-                        format!(
-                            "the edges around vertex {v} form a piece that lies inside a face of \
-                             the rest of the pattern, with no edge joining them (an island): join \
-                             it to the surrounding pattern with an edge (a J edge joins without \
-                             folding), or mark the edges around it B if it is a hole"
-                        ),
-                    ));
-                }
+    let piece: Vec<usize> = faces.iter().map(|f| find(&mut parent, f[0])).collect();
+    for &h in starts {
+        let v = he.origin(h);
+        let pv = find(&mut parent, v);
+        let x = coords[v];
+        for (f, face) in faces.iter().enumerate() {
+            let (l, hi) = boxes[f];
+            if piece[f] == pv || x.x < l.x || x.x > hi.x || x.y < l.y || x.y > hi.y {
+                continue;
+            }
+            if inside(x, face, coords) {
+                return Err(invalid(
+                    format!("edges_vertices[{}]", h / 2),
+                    format!(
+                        "the edges around vertex {v} form a piece that lies inside a face of \
+                         the rest of the pattern, with no edge joining them (an island): join \
+                         it to the surrounding pattern with an edge (a J edge joins without \
+                         folding), or mark the edges around it B if it is a hole"
+                    ),
+                ));
             }
         }
     }
-    Ok(faces)
+    Ok(())
 }
 
 /// Point strictly inside a simple polygon (crossing number).
