@@ -242,9 +242,13 @@ impl Model {
 }
 
 impl Model {
-    /// Contact at the current state (None without contact): smallest gap,
-    /// active pairs, normal force.
+    /// Contact at the current state (None without contact, and before
+    /// [`Model::initialize`], when there are no positions to search):
+    /// smallest gap, active pairs, normal force.
     pub fn contact(&self) -> Option<crate::contact::ContactReport> {
+        if self.state.phase != Phase::Running {
+            return None;
+        }
         let sys = self.sys.as_ref()?;
         let c = sys.asm.term::<crate::contact::ContactTerm>()?;
         Some(
