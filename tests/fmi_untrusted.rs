@@ -50,6 +50,18 @@ fn vr(scene: &Scene, name: &str) -> u32 {
         .unwrap_or_else(|| panic!("no variable {name}")) as u32
 }
 
+/// An initialized instance of `scene` after three steps folding.
+fn running(tag: &str, scene: &Scene) -> Fmu {
+    let f = Fmu::of(tag, scene);
+    f.initialize();
+    let fold = vr(scene, "fold");
+    assert_eq!(f.set(&[fold], &[0.5]), fmi2OK);
+    for k in 0..3 {
+        assert_eq!(f.step(k as f64 * 0.01, 0.01), fmi2OK, "{}", f.last());
+    }
+    f
+}
+
 #[test]
 fn contact_outputs_are_readable_before_initialization_and_after_reset() {
     let scene = contact_square();
@@ -88,4 +100,57 @@ fn contact_outputs_are_readable_before_initialization_and_after_reset() {
     f.initialize();
     assert_eq!(f.step(0.0, 0.01), fmi2OK);
     assert_eq!(f.count(fmi2Fatal), 0);
+}
+
+/// A step the internal-step budget cannot cover is discarded before any
+/// work (the message says how many steps it would need), not after it.
+#[test]
+fn a_step_far_beyond_the_internal_step_budget_is_discarded_at_once() {
+    let f = running("budget", &square());
+    assert_eq!(f.step(0.03, 1e300), fmi2Discard);
+    let msg = f.last();
+    assert!(msg.contains("at least"), "{msg}");
+    assert!(msg.contains("1e300"), "short numbers: {msg}");
+    let mut t = 0.0;
+    unsafe {
+        assert_eq!(fmi2GetRealStatus(f.c, 2, &mut t), fmi2OK);
+    }
+    assert_eq!(t, 0.03);
+}
+
+/// Settings outside the range where a step finishes are refused, with the
+/// range in the message.
+#[test]
+fn solver_settings_outside_their_working_range_are_refused() {
+    let scene = square();
+    let f = Fmu::of("settings", &scene);
+    for (name, bad) in [
+        ("solver.tolerance", 1e-300),
+        ("solver.tolerance", 0.9),
+        ("solver.max_internal_steps", 1e9),
+        ("solver.max_step", 1e-12),
+        ("solver.max_step", -1.0),
+        ("solver.rho_inf", 5.0),
+    ] {
+        assert_eq!(f.set(&[vr(&scene, name)], &[bad]), fmi2Error, "{name} = {bad}");
+        let msg = f.last();
+        assert!(msg.contains(name), "{msg}");
+    }
+    // Within the range: accepted.
+    assert_eq!(f.set(&[vr(&scene, "solver.tolerance")], &[1e-8]), fmi2OK);
+    assert_eq!(
+        f.set(&[vr(&scene, "solver.max_internal_steps")], &[1e6]),
+        fmi2OK
+    );
+}
+
+/// Numbers in messages are short: 1e-200, not 200 zeros.
+#[test]
+fn messages_print_numbers_in_short_form() {
+    let f = running("short", &square());
+    assert_eq!(f.step(1e-200, 0.01), fmi2Error);
+    let msg = f.last();
+    assert!(msg.contains("1e-200"), "{msg}");
+    assert!(!msg.contains("0.0000000"), "{msg}");
+    assert!(msg.len() < 300, "{msg}");
 }

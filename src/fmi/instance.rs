@@ -21,6 +21,7 @@ use super::resources::{self, SCENE_FILE};
 use super::types::{Fmi2Type, StatusKind, fmi2CallbackFunctions, fmi2Status};
 use crate::model::{Error as ModelError, Model, ModelState};
 use crate::scene::Scene;
+use crate::text::num;
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
 
@@ -597,9 +598,10 @@ impl Instance {
                 Ok(x) if x.is_finite() => values[k] = x,
                 Ok(x) => {
                     return self.error(format!(
-                        "fmi2GetReal: {} is {x} at t = {}; the model state is broken",
+                        "fmi2GetReal: {} is {} at t = {}; the model state is broken",
                         self.var_name(r),
-                        self.model.time()
+                        num(x),
+                        num(self.model.time())
                     ));
                 }
                 Err(e) => return self.error(format!("fmi2GetReal: {e}")),
@@ -640,8 +642,9 @@ impl Instance {
             }
             if !v.is_finite() {
                 return self.error(format!(
-                    "fmi2SetReal: {} = {v} is not a finite number; nothing was changed",
-                    self.var_name(r)
+                    "fmi2SetReal: {} = {} is not a finite number; nothing was changed",
+                    self.var_name(r),
+                    num(v)
                 ));
             }
             refs.push(r);
@@ -717,8 +720,9 @@ impl Instance {
         }
         if let Some((&i, &v)) = inputs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
             return self.error(format!(
-                "{F}: the derivative of {} = {v} is not a finite number; nothing was changed",
-                self.var_name(VarRef::Input(i))
+                "{F}: the derivative of {} = {} is not a finite number; nothing was changed",
+                self.var_name(VarRef::Input(i)),
+                num(v)
             ));
         }
         for (&i, &v) in inputs.iter().zip(values) {
@@ -742,14 +746,17 @@ impl Instance {
         }
         if !(h.is_finite() && h > 0.0) {
             return self.error(format!(
-                "fmi2DoStep: communicationStepSize {h} must be a positive finite number"
+                "fmi2DoStep: communicationStepSize {} must be a positive finite number",
+                num(h)
             ));
         }
         let now = self.model.time();
         if !t.is_finite() || (t - now).abs() > TIME_TOLERANCE * now.abs().max(1.0) {
             return self.error(format!(
-                "fmi2DoStep: currentCommunicationPoint {t} does not match the FMU's time {now}; \
-                 use fmi2SetFMUstate to go back in time"
+                "fmi2DoStep: currentCommunicationPoint {} does not match the FMU's time {}; \
+                 use fmi2SetFMUstate to go back in time",
+                num(t),
+                num(now)
             ));
         }
         let target = t + h;
@@ -757,8 +764,12 @@ impl Instance {
             && target > stop + TIME_TOLERANCE * stop.abs().max(1.0)
         {
             return self.error(format!(
-                "fmi2DoStep: the step from t = {t} by {h} ends at {target}, after the stopTime {stop} \
-                 set by fmi2SetupExperiment (FMI 2.0 section 2.1.6)"
+                "fmi2DoStep: the step from t = {} by {} ends at {}, after the stopTime {} \
+                 set by fmi2SetupExperiment (FMI 2.0 section 2.1.6)",
+                num(t),
+                num(h),
+                num(target),
+                num(stop)
             ));
         }
         if let Err(e) = set_model_time(&mut self.model, t) {
@@ -774,8 +785,8 @@ impl Instance {
                     self.log.log(
                     fmi2OK,
                     &format!(
-                        "fmi2DoStep: t = {t} + {h}: {} internal steps ({} rejected), {} Newton iterations, smallest step {:e}",
-                        report.steps, report.rejected, report.newton_iterations, report.min_step
+                        "fmi2DoStep: t = {} + {}: {} internal steps ({} rejected), {} Newton iterations, smallest step {}",
+                        num(t), num(h), report.steps, report.rejected, report.newton_iterations, num(report.min_step)
                     ),
                 );
                 }
@@ -786,11 +797,14 @@ impl Instance {
                 self.log.log(
                     fmi2Discard,
                     &format!(
-                        "fmi2DoStep: the step from t = {t} by {h} could not be completed (failed at t = {time}: {reason}); \
+                        "fmi2DoStep: the step from t = {} by {} could not be completed (failed at t = {}: {reason}); \
                          the state is rolled back to t = {} (fmi2LastSuccessfulTime) and fmi2Terminated is true; \
                          to retry, restore a state saved at t with fmi2SetFMUstate and step again, \
                          e.g. with a smaller step",
-                        self.model.time()
+                        num(t),
+                        num(h),
+                        num(time),
+                        num(self.model.time())
                     ),
                 );
                 fmi2Discard
