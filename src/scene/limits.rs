@@ -113,8 +113,16 @@ pub const LIMITS: &[Limit] = &[
     lim("gravity.y", Range::Any, "m/s^2"),
     lim("gravity.z", Range::Any, "m/s^2"),
     lim("solver.rho_inf", Range::Closed(0.0, 1.0), ""),
-    lim("solver.max_step", Range::Closed(MIN_STEP, MAX_MAGNITUDE), "s"),
-    lim("solver.min_step", Range::Closed(MIN_STEP, MAX_MAGNITUDE), "s"),
+    lim(
+        "solver.max_step",
+        Range::Closed(MIN_STEP, MAX_MAGNITUDE),
+        "s",
+    ),
+    lim(
+        "solver.min_step",
+        Range::Closed(MIN_STEP, MAX_MAGNITUDE),
+        "s",
+    ),
     lim(
         "solver.tolerance",
         Range::Closed(MIN_TOLERANCE, MAX_TOLERANCE),
@@ -242,7 +250,10 @@ mod tests {
     fn ranges_and_messages() {
         assert!(check("material.thickness", 1e-4).is_ok());
         let e = check("material.thickness", 0.0).unwrap_err();
-        assert_eq!(e, "0 is out of range; it must be positive (at least 1e-30) (m)");
+        assert_eq!(
+            e,
+            "0 is out of range; it must be positive (at least 1e-30) (m)"
+        );
         assert!(check("material.density", 1e-300).is_err());
         assert!(check("solver.tolerance", 50.0).is_err());
         assert!(check("solver.tolerance", 1e-6).is_ok());

@@ -34,9 +34,7 @@ unsafe extern "C" fn logger(
     // the strings are NUL-terminated by the FMU.
     let log = unsafe { &*(env as *const Log) };
     let s = |p: *const c_char| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
-    log.lock()
-        .unwrap()
-        .push((status, s(category), s(message)));
+    log.lock().unwrap().push((status, s(category), s(message)));
 }
 
 /// Callbacks that log into `log`.
@@ -103,7 +101,12 @@ impl Fmu {
         unsafe {
             assert_eq!(fmi2SetupExperiment(self.c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
             assert_eq!(fmi2EnterInitializationMode(self.c), fmi2OK);
-            assert_eq!(fmi2ExitInitializationMode(self.c), fmi2OK, "{}", self.last());
+            assert_eq!(
+                fmi2ExitInitializationMode(self.c),
+                fmi2OK,
+                "{}",
+                self.last()
+            );
         }
     }
 
@@ -168,9 +171,8 @@ impl Fmu {
     pub fn deserialize(&self, bytes: &[u8]) -> (fmi2Status, fmi2FMUstate) {
         let mut s: fmi2FMUstate = null_mut();
         // SAFETY: `bytes.len()` readable bytes, a writable slot.
-        let st = unsafe {
-            fmi2DeSerializeFMUstate(self.c, bytes.as_ptr().cast(), bytes.len(), &mut s)
-        };
+        let st =
+            unsafe { fmi2DeSerializeFMUstate(self.c, bytes.as_ptr().cast(), bytes.len(), &mut s) };
         (st, s)
     }
 
