@@ -495,3 +495,50 @@ fn messages_print_numbers_in_short_form() {
     assert!(!msg.contains("0.0000000"), "{msg}");
     assert!(msg.len() < 300, "{msg}");
 }
+
+/// Values that cannot give finite forces are refused when set, by name;
+/// an initialization or a step whose forces are not finite names the
+/// force term and the variables that set it, with their values.
+#[test]
+fn non_finite_forces_name_the_variables_to_change() {
+    let scene = square();
+    let f = Fmu::of("names", &scene);
+    for (name, value) in [
+        ("material.density", 1e-300),
+        ("crease.length_scale", 1e-300),
+        ("tip.x", 1e308),
+    ] {
+        assert_eq!(f.set(&[vr(&scene, name)], &[value]), fmi2Error);
+        let msg = f.last();
+        let limit = msg.contains("at least 1e-30") || msg.contains("at most 1e30");
+        assert!(msg.contains(name) && limit, "{msg}");
+    }
+    // Within the limits one by one, beyond them together: the step says
+    // which term and which values.
+    for (name, value) in [
+        ("material.youngs_modulus", 1e30),
+        ("material.thickness", 1e30),
+        ("fold", 1e29),
+    ] {
+        assert_eq!(f.set(&[vr(&scene, name)], &[value]), fmi2OK, "{name}");
+    }
+    f.initialize();
+    assert_eq!(f.step(0.0, 0.01), fmi2Discard);
+    let msg = f.last();
+    assert!(msg.contains("(those of the shell)"), "{msg}");
+    assert!(
+        msg.contains("check material.youngs_modulus = 1e30"),
+        "{msg}"
+    );
+    // An initialization that fails (a scene built in code, not checked by
+    // the scene reader) says the same.
+    let mut s = square();
+    s.material.density = 1e-300;
+    s.material.thickness = 1e-300;
+    let mut m = Model::new(s).unwrap();
+    let e = m.initialize().unwrap_err().to_string();
+    assert!(
+        e.contains("not finite") && e.contains("material.density = 1e-300"),
+        "{e}"
+    );
+}

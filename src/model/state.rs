@@ -355,19 +355,17 @@ impl Model {
         let d = sys.inputs.drive(u);
         let dynm = &self.state.dynamics;
         let mut ev = Evaluation::default();
-        sys.asm
-            .evaluate(
-                &State {
-                    q: &dynm.q,
-                    v: &dynm.v,
-                    theta0: &d.theta0,
-                    moment: &d.moment,
-                    theta_prev,
-                },
-                &mut ev,
-                None,
-            )
-            .map_err(Error::Scene)?;
+        let st = State {
+            q: &dynm.q,
+            v: &dynm.v,
+            theta0: &d.theta0,
+            moment: &d.moment,
+            theta_prev,
+        };
+        if let Err(e) = sys.asm.evaluate(&st, &mut ev, None) {
+            let term = sys.asm.non_finite_term(&st).unwrap_or("").to_string();
+            return Err(self.not_finite(&e, &term));
+        }
         let mut rhs = vec![0.0; sys.asm.n_free];
         for i in 0..n {
             let fi = sys.asm.free[i];
@@ -378,12 +376,13 @@ impl Model {
         sys.stepper.invalidate_matrix();
         self.state.memory.jacobian = None;
         let mvals = sys.asm.mass_values().to_vec();
-        sys.solver
+        let solved = sys
+            .solver
             .factor(&mvals)
-            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
-        sys.solver
-            .solve_in_place(&mut rhs)
-            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+            .and_then(|()| sys.solver.solve_in_place(&mut rhs));
+        if let Err(e) = solved {
+            return Err(self.not_finite(&format!("the accelerations: mass matrix: {e}"), ""));
+        }
         let mut qdd = vec![0.0; n];
         for (a, &fi) in qdd.iter_mut().zip(&sys.asm.free) {
             if fi != crate::assembly::FIXED {
@@ -442,6 +441,125 @@ fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result
         values("memory.jacobian.v_start", &j.v_start, &[j.q_start.len()])?;
     }
     Ok(())
+}
+
+/// The variables that set the forces of each force term (by its name;
+/// "" for the accelerations: the mass and the external forces), for the
+/// message of an evaluation that is not finite. An entry ending in '.'
+/// stands for every parameter it begins; inputs are named by their group.
+const SUSPECTS: &[(&str, &[&str])] = &[
+    (
+        "shell",
+        &[
+            "material.youngs_modulus",
+            "material.poisson_ratio",
+            "material.thickness",
+            "<motions>",
+        ],
+    ),
+    (
+        "crease springs",
+        &[
+            "crease.",
+            "damping.crease",
+            "material.youngs_modulus",
+            "material.thickness",
+            "<actuators>",
+        ],
+    ),
+    (
+        "mass damping",
+        &[
+            "damping.alpha",
+            "damping.beta",
+            "material.density",
+            "material.thickness",
+        ],
+    ),
+    ("contact", &["contact.", "material.", "<motions>"]),
+    (
+        "",
+        &[
+            "material.density",
+            "material.thickness",
+            "gravity.",
+            "<forces>",
+            "<actuators>",
+        ],
+    ),
+];
+
+impl Model {
+    /// The error of an initial evaluation that is not finite (`what`, in
+    /// the force term `term`, "" for the accelerations), naming the
+    /// variables that set it with their values: what to change.
+    fn not_finite(&self, what: &str, term: &str) -> Error {
+        Error::Initialization(format!("{what}{}", self.suspects(term)))
+    }
+
+    /// A failed step's error, with the variables to check where its forces
+    /// were not finite (the assembler names the force term).
+    pub(super) fn with_suspects(&self, e: Error) -> Error {
+        match e {
+            Error::StepFailed { time, reason } => {
+                let term = reason
+                    .split_once("(those of the ")
+                    .and_then(|(_, rest)| rest.split_once(')'))
+                    .map(|(term, _)| term.to_string());
+                let reason = match term {
+                    Some(t) => format!("{reason}{}", self.suspects(&t)),
+                    None => reason,
+                };
+                Error::StepFailed { time, reason }
+            }
+            e => e,
+        }
+    }
+
+    /// "; check name = value, ..." for the variables of force term `term`
+    /// (see [`SUSPECTS`]); "" when it has none.
+    fn suspects(&self, term: &str) -> String {
+        let names = SUSPECTS
+            .iter()
+            .find(|(t, _)| *t == term)
+            .map_or(&[][..], |(_, n)| *n);
+        let n_act = self.scene.actuators.len();
+        let n_force = 3 * self.scene.vertex_forces.len();
+        let mut listed = Vec::new();
+        for &pat in names {
+            let inputs = match pat {
+                "<actuators>" => 0..n_act,
+                "<forces>" => n_act..n_act + n_force,
+                "<motions>" => n_act + n_force..self.inputs.len(),
+                _ => {
+                    let matches = |name: &str| match pat.strip_suffix('.') {
+                        Some(prefix) => name.starts_with(prefix),
+                        None => name == pat,
+                    };
+                    for (spec, &x) in self.parameters.iter().zip(&self.state.parameters) {
+                        if matches(&spec.name) {
+                            listed.push(format!("{} = {}", spec.name, num(x)));
+                        }
+                    }
+                    continue;
+                }
+            };
+            // The inputs of the group set furthest from zero first.
+            let mut group: Vec<(usize, f64)> = inputs
+                .filter_map(|i| Some((i, *self.state.inputs_now.get(i)?)))
+                .collect();
+            group.retain(|g| g.1 != 0.0);
+            group.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+            for (i, x) in group.into_iter().take(3) {
+                listed.push(format!("{} = {}", self.inputs[i].name, num(x)));
+            }
+        }
+        if listed.is_empty() {
+            String::new()
+        } else {
+            format!("; check {}", listed.join(", "))
+        }
+    }
 }
 
 /// Largest count of the stepper's memory a restored state may hold (the

@@ -95,7 +95,7 @@ impl Model {
             Err(e) => {
                 self.state = saved;
                 self.read_cache = Default::default();
-                Err(e)
+                Err(self.with_suspects(e))
             }
         }
     }
