@@ -76,6 +76,7 @@ pub fn load_scene_file(path: &Path) -> Result<Scene, String> {
 /// Parse and validate scene bytes. This is the one place that knows the
 /// scene format; every message names the key or index and the reason.
 pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
+    check_budget(bytes)?;
     let mut scene: Scene =
         serde_json::from_slice(bytes).map_err(|e| format!("not a valid scene JSON: {e}"))?;
     // The derived Deserialize does not check the mesh: rebuild it through
@@ -89,6 +90,29 @@ pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
     .map_err(|e| format!("mesh: {e}"))?;
     validate_scene(&scene)?;
     Ok(scene)
+}
+
+/// The size budget on the raw scene JSON, before it is parsed: the
+/// number of triangles of `mesh`.
+fn check_budget(bytes: &[u8]) -> Result<(), String> {
+    use serde_json::value::RawValue;
+    use std::collections::BTreeMap;
+    type Raw<'a> = BTreeMap<String, &'a RawValue>;
+    let Ok(scene) = serde_json::from_slice::<Raw>(bytes) else {
+        return Ok(()); // the parse says what is wrong
+    };
+    let triangles = scene
+        .get("mesh")
+        .and_then(|m| serde_json::from_str::<Raw>(m.get()).ok())
+        .and_then(|m| Some(crate::scene::fold::array_counts(m.get("triangles")?).0))
+        .unwrap_or(0);
+    if triangles > crate::scene::build::MAX_FACETS {
+        return Err(
+            crate::scene::build::over_budget("mesh.triangles", triangles, "the mesh has")
+                .to_string(),
+        );
+    }
+    Ok(())
 }
 
 fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), String> {
