@@ -11,10 +11,12 @@ files"):
   facets_2m.fold             a 1000 x 1000 grid of squares cut into
                              2,000,000 triangles, indented (105 MB): beyond
                              the size budget
+  circle_40000.fold          one convex face of 40,000 corners (a disc)
 
 Usage: python3 scripts/probe_files.py DIR
 """
 import json
+import math
 import pathlib
 import sys
 
@@ -47,6 +49,11 @@ def main(out):
         for i in range(m):
             a = j * (m + 1) + i
             faces += [[a, a + 1, a + m + 2], [a, a + m + 2, a + m + 1]]
+    n = 40000
+    disc = [[math.cos(2 * math.pi * k / n), math.sin(2 * math.pi * k / n)] for k in range(n)]
+    (out / "circle_40000.fold").write_text(json.dumps(
+        {"file_spec": 1.2, "frame_unit": "cm", "vertices_coords": disc,
+         "faces_vertices": [list(range(n))]}))
     with open(out / "facets_2m.fold", "w") as f:
         json.dump({"file_spec": 1.2, "frame_unit": "mm", "vertices_coords": coords,
                    "faces_vertices": faces}, f, indent=1)
