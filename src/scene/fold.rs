@@ -19,6 +19,7 @@
 //! ```
 
 use super::error::{SceneError, suggestion};
+use crate::text::num;
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
 use std::collections::{BTreeMap, HashMap};
@@ -228,7 +229,10 @@ pub(crate) fn expect_array<'a>(v: &'a Value, key: &str) -> Result<&'a Vec<Value>
 pub(crate) fn expect_number(v: &Value, key: &str) -> Result<f64, SceneError> {
     match v.as_f64() {
         Some(x) if x.is_finite() => Ok(x),
-        Some(x) => Err(SceneError::invalid(key, format!("{x} is not finite"))),
+        Some(x) => Err(SceneError::invalid(
+            key,
+            format!("{} is not finite", num(x)),
+        )),
         None => Err(SceneError::invalid(
             key,
             format!("expected a number, found {}", type_name(v)),
@@ -260,7 +264,7 @@ pub(crate) fn expect_index(v: &Value, key: &str) -> Result<usize, SceneError> {
         }
         return Err(SceneError::invalid(
             key,
-            format!("expected a non-negative integer, found {x}"),
+            format!("expected a non-negative integer, found {}", num(x)),
         ));
     }
     Err(SceneError::invalid(

@@ -32,6 +32,7 @@ use super::{
 use crate::contact::ContactSettings;
 use crate::element::Rule;
 use crate::ids::VertexId;
+use crate::text::num;
 use serde_json::{Map, Value};
 
 /// Every `ancf:` key this version understands.
@@ -200,7 +201,7 @@ impl<'a> Obj<'a> {
         match self.num(f)? {
             Some(x) if !ok(x) => Err(SceneError::invalid(
                 self.path(f),
-                format!("{x} is out of range; it must be {what}"),
+                format!("{} is out of range; it must be {what}", num(x)),
             )),
             x => Ok(x),
         }
@@ -235,7 +236,10 @@ fn number(v: &Value, key: &str) -> Result<f64, SceneError> {
     if x.abs() > MAX_MAGNITUDE {
         return Err(SceneError::invalid(
             key,
-            format!("{x} is too large (at most {MAX_MAGNITUDE:e} in magnitude)"),
+            format!(
+                "{} is too large (at most {MAX_MAGNITUDE:e} in magnitude)",
+                num(x)
+            ),
         ));
     }
     Ok(x)
@@ -376,7 +380,8 @@ pub fn parse(
         import: Import::default(),
         contact: None,
     };
-    let positive = |x: f64| x > 0.0;
+    // As scene::limits: positive means at least MIN_POSITIVE.
+    let positive = |x: f64| x >= super::limits::MIN_POSITIVE;
     let non_negative = |x: f64| x >= 0.0;
 
     if let Some(v) = ancf.get("ancf:name") {
@@ -599,14 +604,14 @@ pub fn parse(
         };
         let d = ContactSettings::default();
         let friction = o.num_where("friction", non_negative, "zero or positive")?;
-        let stiffness = o.num_where("stiffness", positive, "positive (N/m)")?;
-        let thickness = o.num_where("thickness", positive, "positive (m)")?;
+        let stiffness = o.num_where("stiffness", positive, "positive, at least 1e-30 (N/m)")?;
+        let thickness = o.num_where("thickness", positive, "positive, at least 1e-30 (m)")?;
         let width = o.num_where(
             "barrier_width",
             |x| x > 0.0 && x <= 1.0,
             "in (0, 1] (a fraction of the thickness)",
         )?;
-        let stick = o.num_where("stick_velocity", positive, "positive (m/s)")?;
+        let stick = o.num_where("stick_velocity", positive, "positive, at least 1e-30 (m/s)")?;
         let zeta = o.num_where("damping_ratio", non_negative, "zero or positive")?;
         let subdivisions = o.num_where(
             "subdivisions",
@@ -755,7 +760,7 @@ pub fn parse(
 
     if let Some(v) = ancf.get("ancf:import") {
         let o = Obj::new("ancf:import", v, &["size", "unit", "f_edges"])?;
-        p.import.size = o.num_where("size", positive, "positive (m)")?;
+        p.import.size = o.num_where("size", positive, "positive, at least 1e-30 (m)")?;
         if let Some(u) = o.string("unit")? {
             p.import.unit = Some(check_unit(&o.path("unit"), u)?);
         }
