@@ -382,7 +382,6 @@ pub fn parse(
     };
     // As scene::limits: positive means at least MIN_POSITIVE.
     let positive = |x: f64| x >= super::limits::MIN_POSITIVE;
-    let non_negative = |x: f64| x >= 0.0;
 
     if let Some(v) = ancf.get("ancf:name") {
         let s = expect_string(v, "ancf:name")?;
@@ -603,21 +602,14 @@ pub fn parse(
             }
         };
         let d = ContactSettings::default();
-        let friction = o.num_where("friction", non_negative, "zero or positive")?;
-        let stiffness = o.num_where("stiffness", positive, "positive, at least 1e-30 (N/m)")?;
-        let thickness = o.num_where("thickness", positive, "positive, at least 1e-30 (m)")?;
-        let width = o.num_where(
-            "barrier_width",
-            |x| x > 0.0 && x <= 1.0,
-            "in (0, 1] (a fraction of the thickness)",
-        )?;
-        let stick = o.num_where("stick_velocity", positive, "positive, at least 1e-30 (m/s)")?;
-        let zeta = o.num_where("damping_ratio", non_negative, "zero or positive")?;
-        let subdivisions = o.num_where(
-            "subdivisions",
-            |x| x.fract() == 0.0 && (1.0..=8.0).contains(&x),
-            "a whole number from 1 to 8",
-        )?;
+        // The rules of scene::limits, which the FMU's scene check runs too.
+        let friction = o.num_limited("friction", "contact.friction")?;
+        let stiffness = o.num_limited("stiffness", "contact.stiffness")?;
+        let thickness = o.num_limited("thickness", "contact.thickness")?;
+        let width = o.num_limited("barrier_width", "contact.barrier_width")?;
+        let stick = o.num_limited("stick_velocity", "contact.stick_velocity")?;
+        let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
+        let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
         if enabled {
             p.contact = Some(ContactSettings {
                 // 0 = the sheet thickness (filled in with the material).

@@ -31,6 +31,8 @@ pub enum Range {
     Open(f64, f64),
     /// lo <= x <= hi.
     Closed(f64, f64),
+    /// lo < x <= hi.
+    OpenClosed(f64, f64),
     /// A whole number in lo..=hi.
     Whole(u64, u64),
 }
@@ -43,6 +45,7 @@ impl Range {
             Range::NonNegative => x >= 0.0,
             Range::Open(lo, hi) => x > lo && x < hi,
             Range::Closed(lo, hi) => (lo..=hi).contains(&x),
+            Range::OpenClosed(lo, hi) => x > lo && x <= hi,
             Range::Whole(lo, hi) => x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64,
         }
     }
@@ -54,6 +57,7 @@ impl Range {
             Range::NonNegative => "zero or positive".into(),
             Range::Open(lo, hi) => format!("in the open interval ({}, {})", num(lo), num(hi)),
             Range::Closed(lo, hi) => format!("in [{}, {}]", num(lo), num(hi)),
+            Range::OpenClosed(lo, hi) => format!("in ({}, {}]", num(lo), num(hi)),
             Range::Whole(lo, hi) => format!("a whole number in {lo}..={hi}"),
         }
     }
@@ -139,6 +143,16 @@ pub const LIMITS: &[Limit] = &[
     lim("actuator.time_constant", Range::NonNegative, "s"),
     lim("ramp.time", Range::Closed(0.0, 1e9), "s"),
     lim("ramp.shape", Range::Whole(0, 1), ""),
+    lim("contact.stiffness", Range::Positive, "N/m"),
+    lim("contact.thickness", Range::Positive, "m"),
+    lim(
+        "contact.barrier_width",
+        Range::OpenClosed(0.0, 1.0),
+        "a fraction of the thickness",
+    ),
+    lim("contact.stick_velocity", Range::Positive, "m/s"),
+    lim("contact.damping_ratio", Range::NonNegative, ""),
+    lim("contact.subdivisions", Range::Whole(1, 8), ""),
 ];
 
 /// The limit of `name`, if it has one.
@@ -235,6 +249,19 @@ pub fn check_scene(s: &Scene) -> Result<(), String> {
     }
     if let Some(t) = s.actuator_time_constant {
         values.push(("actuator.time_constant", t));
+    }
+    if let Some(c) = &s.contact {
+        values.extend([
+            ("contact.friction", c.friction),
+            ("contact.thickness", c.thickness),
+            ("contact.barrier_width", c.width),
+            ("contact.stick_velocity", c.stick_velocity),
+            ("contact.damping_ratio", c.damping_ratio),
+            ("contact.subdivisions", c.subdivisions as f64),
+        ]);
+        if let Some(k) = c.stiffness {
+            values.push(("contact.stiffness", k));
+        }
     }
     for (name, x) in values {
         check(name, x).map_err(|e| format!("{name}: {e}"))?;
