@@ -1,8 +1,9 @@
 //! Freeing (issue 38): `fmi2FreeFMUstate` frees a state in every state of
 //! its instance, a dead one (after a panic) included, and
 //! `fmi2FreeInstance` frees every state the instance created that the host
-//! did not free. One test in its own binary: it counts the states alive in
-//! the process. `scripts/c_host_test.sh` also runs it under valgrind.
+//! did not free. A test binary of its own without the test harness (it
+//! counts the states alive in the process, and `scripts/c_host_test.sh`
+//! runs it under valgrind, where the harness's threads would be noise).
 
 mod common;
 
@@ -14,7 +15,11 @@ use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::scene::Scene;
 use std::ptr::null_mut;
 
-#[test]
+fn main() {
+    states_are_freed_in_every_phase_and_with_their_instance_after_a_panic();
+    println!("fmi_free: states freed in every phase and with a dead instance");
+}
+
 fn states_are_freed_in_every_phase_and_with_their_instance_after_a_panic() {
     let base = live_states();
     let mut scene = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));
@@ -59,7 +64,12 @@ fn states_are_freed_in_every_phase_and_with_their_instance_after_a_panic() {
     g.free_state(foreign);
     // A panic kills the instance: every call but the freeing ones is fatal.
     unsafe {
-        assert_eq!(guard(f.c, "test", |_| panic!("a bug")), fmi2Fatal);
+        assert_eq!(
+            guard(f.c, "test", |_| panic!(
+                "a panic on purpose: the test kills the instance"
+            )),
+            fmi2Fatal
+        );
         assert_eq!(fmi2DoStep(f.c, 0.0, 0.001, 0), fmi2Fatal);
         let mut none: fmi2FMUstate = null_mut();
         assert_eq!(fmi2GetFMUstate(f.c, &mut none), fmi2Fatal);
