@@ -403,7 +403,7 @@ impl Model {
 /// DOFs, `nc` crease ends; an iteration matrix only once `running`).
 fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result<(), String> {
     number("memory.h_next", m.h_next)?;
-    if !(m.h_next > 0.0) {
+    if m.h_next <= 0.0 {
         return Err(format!(
             "memory.h_next = {}: a step size must be positive",
             num(m.h_next)
@@ -426,7 +426,7 @@ fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result
             return Err("memory.jacobian: an iteration matrix before initialization".into());
         }
         number("memory.jacobian.h", j.h)?;
-        if !(j.h > 0.0) {
+        if j.h <= 0.0 {
             return Err(format!(
                 "memory.jacobian.h = {}: a step size must be positive",
                 num(j.h)
@@ -587,7 +587,7 @@ fn length(what: &str, len: usize, sizes: &[usize]) -> Result<(), String> {
 fn values(what: &str, x: &[f64], sizes: &[usize]) -> Result<(), String> {
     length(what, x.len(), sizes)?;
     let max = crate::scene::limits::MAX_MAGNITUDE;
-    match x.iter().position(|v| !(v.abs() <= max)) {
+    match x.iter().position(|v| v.is_nan() || v.abs() > max) {
         Some(i) => number(&format!("{what}[{i}]"), x[i]),
         None => Ok(()),
     }
