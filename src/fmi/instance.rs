@@ -463,14 +463,17 @@ impl Instance {
         }
         if !start.is_finite() {
             return self.error(format!(
-                "fmi2SetupExperiment: startTime {start} is not finite"
+                "fmi2SetupExperiment: startTime {} is not finite",
+                num(start)
             ));
         }
         if let Some(stop) = stop
             && !(stop.is_finite() && stop >= start)
         {
             return self.error(format!(
-                "fmi2SetupExperiment: stopTime {stop} must be finite and >= startTime {start}"
+                "fmi2SetupExperiment: stopTime {} must be finite and >= startTime {}",
+                num(stop),
+                num(start)
             ));
         }
         self.start_time = start;
@@ -501,7 +504,9 @@ impl Instance {
             self.log.log(
                 fmi2OK,
                 &format!(
-                    "fmi2SetupExperiment: tolerance {tol} not used: the parameter solver.tolerance was set to {now}"
+                    "fmi2SetupExperiment: tolerance {} not used: the parameter solver.tolerance was set to {}",
+                    num(tol),
+                    num(now)
                 ),
             );
             return fmi2OK;
@@ -511,7 +516,8 @@ impl Instance {
                 self.log.log(
                     fmi2OK,
                     &format!(
-                        "fmi2SetupExperiment: solver.tolerance = {tol} (the experiment's tolerance)"
+                        "fmi2SetupExperiment: solver.tolerance = {} (the experiment's tolerance)",
+                        num(tol)
                     ),
                 );
                 fmi2OK
