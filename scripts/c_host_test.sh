@@ -6,6 +6,8 @@
 # valgrind with apt-get when missing (a fresh Debian machine, as root).
 # No suppressions: the one block left at exit is the dynamic loader's
 # thread-local storage for the library (still reachable, not an error).
+# Then the Rust test of freeing after a panic (tests/fmi_free.rs), under
+# valgrind as well.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v valgrind >/dev/null 2>&1; then
@@ -27,3 +29,17 @@ valgrind --quiet --error-exitcode=1 --leak-check=full \
   --show-leak-kinds=definite,indirect,possible \
   "$tmp/host" "$tmp/square"
 echo "c_host: no valgrind errors"
+# Freeing after a panic cannot be provoked from C (there is no panic to
+# reach): tests/fmi_free.rs kills an instance through the library's guard
+# and frees its states; run that test binary under valgrind too.
+free_test=$(cargo test --release --locked --test fmi_free --no-run --message-format=json 2>/dev/null |
+  python3 -c 'import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "fmi_free" and m.get("executable"):
+        print(m["executable"])')
+valgrind --quiet --error-exitcode=1 --leak-check=full \
+  --errors-for-leak-kinds=definite,indirect,possible \
+  --show-leak-kinds=definite,indirect,possible \
+  "$free_test"
+echo "fmi_free: no valgrind errors (a dead instance frees its states)"

@@ -641,9 +641,34 @@ impl Assembler {
             || !out.strain_energy.is_finite()
             || !out.term_energy.is_finite()
         {
-            return Err("internal forces are not finite".into());
+            return Err(match self.non_finite_term(st) {
+                Some(name) => format!("internal forces are not finite (those of the {name})"),
+                None => "internal forces are not finite".into(),
+            });
         }
         Ok(())
+    }
+
+    /// The name of the first force term whose forces or energy at `st` are
+    /// not finite, evaluated on its own (for the message of a failed
+    /// evaluation: which term, hence which parameters, to look at).
+    pub fn non_finite_term(&self, st: &State) -> Option<&str> {
+        let mut ev = Evaluation::default();
+        for term in &self.terms {
+            ev.force.clear();
+            ev.force.resize(self.n_dofs(), 0.0);
+            ev.theta.clear();
+            ev.strain_energy = 0.0;
+            ev.crease_energy = 0.0;
+            ev.term_energy = 0.0;
+            let bad = term.add(self, st, &mut ev, None).is_err()
+                || ev.force.iter().any(|x| !x.is_finite())
+                || !(ev.strain_energy + ev.crease_energy + ev.term_energy).is_finite();
+            if bad {
+                return Some(term.name());
+            }
+        }
+        None
     }
 
     /// The dense low-rank part of the iteration matrix at `q` (free DOFs):

@@ -64,6 +64,7 @@ pub mod rigid;
 pub mod rng;
 pub mod scene;
 pub mod solver;
+pub mod text;
 
 pub use material::Material;
 pub use mesh::Mesh;

@@ -232,3 +232,31 @@ fn a_closed_pipe_ends_output_quietly() {
         assert!(r.status.success(), "{args:?}: {:?} {err}", r.status);
     }
 }
+
+/// A run that would write more rows than the CLI allows is refused before
+/// anything is built (a step of 1e-300 s ran for ever).
+#[test]
+fn simulate_refuses_more_steps_than_it_can_write() {
+    let dir = scratch("steps");
+    let out = dir.join("x.csv");
+    let r = bin()
+        .args([
+            "simulate",
+            "scenes/single_crease.fold",
+            "--step",
+            "1e-300",
+            "-o",
+        ])
+        .arg(&out)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("communication steps; at most 10000000"),
+        "{err}"
+    );
+    assert!(!err.contains("000000000000"), "short numbers: {err}");
+    assert!(!out.exists());
+}

@@ -190,6 +190,46 @@ fn folded_states_are_refused_with_what_to_do() {
     };
     let (s, _) = scene::from_str_with(&text, &o).unwrap();
     assert_eq!(s.mesh.triangles().len(), 2);
+    // Among many frames: the first few crease patterns are named (each
+    // frame is read once, however many there are).
+    let mut many = both.clone();
+    let mut frames = Vec::new();
+    for k in 1..=300 {
+        let mut f = if k % 3 == 0 { cp.clone() } else { both.clone() };
+        f.as_object_mut().unwrap().remove("file_frames");
+        f["frame_title"] = format!("f{k}").into();
+        frames.push(f);
+    }
+    many["file_frames"] = frames.into();
+    let e = scene::from_str(&many.to_string()).unwrap_err().to_string();
+    assert!(
+        e.contains("frames 3 ('f3'), 6 ('f6'), 9 ('f9'), 12 ('f12'), 15 ('f15') and more are"),
+        "{e}"
+    );
+}
+
+/// A file beyond the size budget is refused from a count of its raw
+/// arrays, before they are parsed (docs/fold_files.md, "Large files").
+#[test]
+fn files_beyond_the_size_budget_are_refused_before_parsing() {
+    let budget = origami_fmu::scene::build::MAX_FACETS;
+    let faces = vec!["[0,1,2,3]"; budget / 2 + 1].join(",");
+    let text =
+        format!(r#"{{"vertices_coords": [[0,0],[1,0],[1,1],[0,1]], "faces_vertices": [{faces}]}}"#);
+    let e = scene::from_str(&text).unwrap_err();
+    assert_eq!(e.key(), Some("faces_vertices"));
+    assert!(e.to_string().contains("size budget"), "{e}");
+    // Vertices or edges beyond what a pattern within the budget can have.
+    let points = vec!["[0,0]"; 3 * budget + 1].join(",");
+    let text = format!(r#"{{"vertices_coords": [{points}], "faces_vertices": [[0,1,2]]}}"#);
+    let e = scene::from_str(&text).unwrap_err();
+    assert_eq!(e.key(), Some("vertices_coords"), "{e}");
+    // In a frame of file_frames too.
+    let text = format!(
+        r#"{{"file_frames": [{{"vertices_coords": [[0,0],[1,0],[1,1],[0,1]], "faces_vertices": [{faces}]}}]}}"#
+    );
+    let e = scene::from_str(&text).unwrap_err();
+    assert!(e.to_string().contains("size budget"), "{e}");
 }
 
 /// Origami Simulator's BoxPleatPyramid (the speed bench's large real

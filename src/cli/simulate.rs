@@ -73,6 +73,9 @@ pub enum RampShapeArg {
     Smooth,
 }
 
+/// Most communication steps (output rows) of one run.
+const MAX_STEPS: usize = 10_000_000;
+
 /// Input signals: times and, per model input index, values.
 struct Signals {
     time: Vec<f64>,
@@ -293,6 +296,13 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     let stop = args.stop_time.unwrap_or(scene.solver.stop_time);
     if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
         return Err("--step and --stop-time must be positive numbers".into());
+    }
+    if stop / args.step > MAX_STEPS as f64 {
+        return Err(format!(
+            "--stop-time / --step gives {} communication steps; at most {MAX_STEPS} \
+             (one CSV row each): take a longer --step",
+            crate::text::num((stop / args.step).round())
+        ));
     }
     if !(args.ramp >= 0.0 && args.ramp.is_finite()) {
         return Err("--ramp must be zero or a positive number of seconds".into());

@@ -71,10 +71,12 @@ impl<const CAP: usize> Expansion<CAP> {
         self.add(sign * p);
     }
 
+    /// The sign; `Equal` (degenerate) for values that are not numbers,
+    /// which arise only from non-finite coordinates.
     fn sign(&self) -> Ordering {
         match self.len {
             0 => Ordering::Equal,
-            n => self.e[n - 1].partial_cmp(&0.0).expect("finite"),
+            n => self.e[n - 1].partial_cmp(&0.0).unwrap_or(Ordering::Equal),
         }
     }
 }
@@ -100,7 +102,7 @@ pub fn orient3d(
         + (adxbdy.abs() + bdxady.abs()) * cd.z.abs();
     // Shewchuk's bound is (7 + 56 eps) eps ~ 7.8e-16; a little more is safe.
     if det.abs() > 1e-15 * permanent {
-        return det.partial_cmp(&0.0).expect("finite");
+        return det.partial_cmp(&0.0).unwrap_or(Ordering::Equal);
     }
     orient3d_exact(a, b, c, d)
 }
@@ -138,7 +140,7 @@ fn orient2d(a: P2, b: P2, c: P2) -> Ordering {
     let right = (a[1] - c[1]) * (b[0] - c[0]);
     let det = left - right;
     if det.abs() > 1e-15 * (left.abs() + right.abs()) {
-        return det.partial_cmp(&0.0).expect("finite");
+        return det.partial_cmp(&0.0).unwrap_or(Ordering::Equal);
     }
     // det2(a, b) - det2(a, c) + det2(b, c) with det2(p, q) = p0 q1 - p1 q0.
     let mut e = Expansion::<16>::new();

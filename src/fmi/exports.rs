@@ -62,10 +62,20 @@ fn run(
     function: &str,
     body: impl FnOnce(&mut Instance) -> fmi2Status,
 ) -> fmi2Status {
+    run_with(inst, function, false, body)
+}
+
+/// [`run`], also on a dead instance when `dead_ok` (freeing what it owns).
+fn run_with(
+    inst: Result<&mut Instance, Refused>,
+    function: &str,
+    dead_ok: bool,
+    body: impl FnOnce(&mut Instance) -> fmi2Status,
+) -> fmi2Status {
     let Ok(inst) = inst else {
         return fmi2Error;
     };
-    if inst.dead {
+    if inst.dead && !dead_ok {
         inst.log.log(
             fmi2Fatal,
             &format!("{function}: the instance is dead after an internal error; only fmi2FreeInstance is allowed"),
@@ -130,19 +140,20 @@ unsafe fn state_arg<'a>(
         .ok()
 }
 
-/// Store `state` in the host's `*FMUstate`: a new state when it is NULL,
-/// else in place of the state of ours it holds.
+/// Store `state` in the host's `*FMUstate`: a new state of this instance
+/// when it is NULL, else in place of the state of ours it holds.
 ///
 /// # Safety
 /// `*slot` is null or a state from us, not freed.
 unsafe fn store_state(
-    inst: &Instance,
+    inst: &mut Instance,
     function: &str,
     slot: &mut fmi2FMUstate,
     state: SavedState,
 ) -> fmi2Status {
     if slot.is_null() {
         *slot = ptr::into_handle(FmuState::new(state));
+        inst.own_state(*slot as usize);
         return fmi2OK;
     }
     // SAFETY: by the caller's contract.
@@ -263,8 +274,9 @@ pub unsafe extern "C" fn fmi2Instantiate(
     }
 }
 
-/// `fmi2FreeInstance`: release the instance (NULL, and a pointer that is
-/// detectably not a live instance of ours, are ignored).
+/// `fmi2FreeInstance`: release the instance and every FMU state it
+/// created that the host has not freed, also after a panic (NULL, and a
+/// pointer that is detectably not a live instance of ours, are ignored).
 ///
 /// # Safety
 /// `c` is NULL or an instance from `fmi2Instantiate`, not freed before.
@@ -272,7 +284,14 @@ pub unsafe extern "C" fn fmi2Instantiate(
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     // SAFETY: host contract as above (the magic number, cleared here,
     // catches most second frees).
-    if let Ok(b) = unsafe { ptr::free_handle::<Instance>(c) } {
+    if let Ok(mut b) = unsafe { ptr::free_handle::<Instance>(c) } {
+        for address in b.take_states() {
+            // SAFETY: the instance created this state and it was not freed
+            // (freeing removes it from the instance's list).
+            if let Ok(s) = unsafe { ptr::free_handle::<FmuState>(address as fmi2FMUstate) } {
+                let _ = catch_unwind(AssertUnwindSafe(move || drop(s)));
+            }
+        }
         let _ = catch_unwind(AssertUnwindSafe(move || drop(b)));
     }
 }
@@ -475,7 +494,9 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstat
     })
 }
 
-/// `fmi2FreeFMUstate`: release a saved state and set `*FMUstate` to NULL.
+/// `fmi2FreeFMUstate`: release a saved state of this instance and set
+/// `*FMUstate` to NULL; in every state of the instance, also after a panic.
+/// A state of another instance is refused (that instance frees it).
 ///
 /// # Safety
 /// Arguments as the FMI 2.0 standard requires.
@@ -484,7 +505,9 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    guarded!(c, "fmi2FreeFMUstate", |inst| {
+    // SAFETY: as in `guarded!`.
+    let inst = unsafe { ptr::handle::<Instance>(c) };
+    run_with(inst, "fmi2FreeFMUstate", true, |inst| {
         // SAFETY: host contract: NULL or a writable fmi2FMUstate.
         let slot = match unsafe { ptr::out_arg(FMUstate) } {
             Ok(slot) => slot,
@@ -495,6 +518,18 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
         }
         // SAFETY: host contract: a state from us, not yet freed (the magic
         // number, cleared here, catches most second frees).
+        if unsafe { state_arg(inst, "fmi2FreeFMUstate", *slot) }.is_none() {
+            return fmi2Error;
+        }
+        if !inst.disown_state(*slot as usize) {
+            inst.log.log(
+                fmi2Error,
+                "fmi2FreeFMUstate: FMUstate was created by another instance; free it with that \
+                 instance (fmi2FreeInstance of it frees it too)",
+            );
+            return fmi2Error;
+        }
+        // SAFETY: as above; checked to be a live state of this instance.
         match unsafe { ptr::free_handle::<FmuState>(*slot) } {
             Ok(b) => drop(b),
             Err(e) => return state_refused(inst, "fmi2FreeFMUstate", e),
@@ -525,7 +560,13 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
         let Some(s) = (unsafe { state_arg(inst, F, FMUstate) }) else {
             return fmi2Error;
         };
-        *size = Instance::serialize(&s.state).len();
+        match Instance::serialize(&s.state) {
+            Ok(bytes) => *size = bytes.len(),
+            Err(e) => {
+                inst.log.log(fmi2Error, &format!("{F}: {e}"));
+                return fmi2Error;
+            }
+        }
         fmi2OK
     })
 }
@@ -546,7 +587,14 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
         let Some(s) = (unsafe { state_arg(inst, "fmi2SerializeFMUstate", FMUstate) }) else {
             return fmi2Error;
         };
-        let bytes = Instance::serialize(&s.state);
+        let bytes = match Instance::serialize(&s.state) {
+            Ok(bytes) => bytes,
+            Err(e) => {
+                inst.log
+                    .log(fmi2Error, &format!("fmi2SerializeFMUstate: {e}"));
+                return fmi2Error;
+            }
+        };
         if size < bytes.len() {
             inst.log.log(
                 fmi2Error,

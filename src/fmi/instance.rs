@@ -16,13 +16,17 @@
 //! failed) moves it to [`InstancePhase::Error`], from which
 //! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
 
+use super::container;
 use super::ptr;
 use super::resources::{self, SCENE_FILE};
 use super::types::{Fmi2Type, StatusKind, fmi2CallbackFunctions, fmi2Status};
 use crate::model::{Error as ModelError, Model, ModelState};
 use crate::scene::Scene;
+use crate::text::num;
 use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
 use std::ffi::CString;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use fmi2Status::*;
 
@@ -245,13 +249,30 @@ pub struct FmuState {
     pub state: SavedState,
 }
 
+/// Number of [`FmuState`]s alive in the process.
+static LIVE_STATES: AtomicUsize = AtomicUsize::new(0);
+
+/// How many FMU states are alive in the process (created by
+/// `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate` and not yet freed): what
+/// the tests of freeing count.
+pub fn live_states() -> usize {
+    LIVE_STATES.load(Ordering::Relaxed)
+}
+
 impl FmuState {
     /// A live saved state.
     pub fn new(state: SavedState) -> FmuState {
+        LIVE_STATES.fetch_add(1, Ordering::Relaxed);
         FmuState {
             magic: STATE_MAGIC,
             state,
         }
+    }
+}
+
+impl Drop for FmuState {
+    fn drop(&mut self) {
+        LIVE_STATES.fetch_sub(1, Ordering::Relaxed);
     }
 }
 
@@ -274,6 +295,9 @@ pub struct Instance {
     n_par: usize,
     n_in: usize,
     n_out: usize,
+    /// Addresses of the `fmi2FMUstate`s this instance created and has not
+    /// freed: `fmi2FreeInstance` frees them (also after a panic).
+    states: HashSet<usize>,
 }
 
 impl Instance {
@@ -314,6 +338,7 @@ impl Instance {
                     n_par,
                     n_in,
                     n_out,
+                    states: HashSet::new(),
                 })
             }
             Err(msg) => {
@@ -438,14 +463,17 @@ impl Instance {
         }
         if !start.is_finite() {
             return self.error(format!(
-                "fmi2SetupExperiment: startTime {start} is not finite"
+                "fmi2SetupExperiment: startTime {} is not finite",
+                num(start)
             ));
         }
         if let Some(stop) = stop
             && !(stop.is_finite() && stop >= start)
         {
             return self.error(format!(
-                "fmi2SetupExperiment: stopTime {stop} must be finite and >= startTime {start}"
+                "fmi2SetupExperiment: stopTime {} must be finite and >= startTime {}",
+                num(stop),
+                num(start)
             ));
         }
         self.start_time = start;
@@ -476,7 +504,9 @@ impl Instance {
             self.log.log(
                 fmi2OK,
                 &format!(
-                    "fmi2SetupExperiment: tolerance {tol} not used: the parameter solver.tolerance was set to {now}"
+                    "fmi2SetupExperiment: tolerance {} not used: the parameter solver.tolerance was set to {}",
+                    num(tol),
+                    num(now)
                 ),
             );
             return fmi2OK;
@@ -486,7 +516,8 @@ impl Instance {
                 self.log.log(
                     fmi2OK,
                     &format!(
-                        "fmi2SetupExperiment: solver.tolerance = {tol} (the experiment's tolerance)"
+                        "fmi2SetupExperiment: solver.tolerance = {} (the experiment's tolerance)",
+                        num(tol)
                     ),
                 );
                 fmi2OK
@@ -597,9 +628,10 @@ impl Instance {
                 Ok(x) if x.is_finite() => values[k] = x,
                 Ok(x) => {
                     return self.error(format!(
-                        "fmi2GetReal: {} is {x} at t = {}; the model state is broken",
+                        "fmi2GetReal: {} is {} at t = {}; the model state is broken",
                         self.var_name(r),
-                        self.model.time()
+                        num(x),
+                        num(self.model.time())
                     ));
                 }
                 Err(e) => return self.error(format!("fmi2GetReal: {e}")),
@@ -640,8 +672,9 @@ impl Instance {
             }
             if !v.is_finite() {
                 return self.error(format!(
-                    "fmi2SetReal: {} = {v} is not a finite number; nothing was changed",
-                    self.var_name(r)
+                    "fmi2SetReal: {} = {} is not a finite number; nothing was changed",
+                    self.var_name(r),
+                    num(v)
                 ));
             }
             refs.push(r);
@@ -717,8 +750,9 @@ impl Instance {
         }
         if let Some((&i, &v)) = inputs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
             return self.error(format!(
-                "{F}: the derivative of {} = {v} is not a finite number; nothing was changed",
-                self.var_name(VarRef::Input(i))
+                "{F}: the derivative of {} = {} is not a finite number; nothing was changed",
+                self.var_name(VarRef::Input(i)),
+                num(v)
             ));
         }
         for (&i, &v) in inputs.iter().zip(values) {
@@ -742,14 +776,17 @@ impl Instance {
         }
         if !(h.is_finite() && h > 0.0) {
             return self.error(format!(
-                "fmi2DoStep: communicationStepSize {h} must be a positive finite number"
+                "fmi2DoStep: communicationStepSize {} must be a positive finite number",
+                num(h)
             ));
         }
         let now = self.model.time();
         if !t.is_finite() || (t - now).abs() > TIME_TOLERANCE * now.abs().max(1.0) {
             return self.error(format!(
-                "fmi2DoStep: currentCommunicationPoint {t} does not match the FMU's time {now}; \
-                 use fmi2SetFMUstate to go back in time"
+                "fmi2DoStep: currentCommunicationPoint {} does not match the FMU's time {}; \
+                 use fmi2SetFMUstate to go back in time",
+                num(t),
+                num(now)
             ));
         }
         let target = t + h;
@@ -757,8 +794,12 @@ impl Instance {
             && target > stop + TIME_TOLERANCE * stop.abs().max(1.0)
         {
             return self.error(format!(
-                "fmi2DoStep: the step from t = {t} by {h} ends at {target}, after the stopTime {stop} \
-                 set by fmi2SetupExperiment (FMI 2.0 section 2.1.6)"
+                "fmi2DoStep: the step from t = {} by {} ends at {}, after the stopTime {} \
+                 set by fmi2SetupExperiment (FMI 2.0 section 2.1.6)",
+                num(t),
+                num(h),
+                num(target),
+                num(stop)
             ));
         }
         if let Err(e) = set_model_time(&mut self.model, t) {
@@ -774,8 +815,8 @@ impl Instance {
                     self.log.log(
                     fmi2OK,
                     &format!(
-                        "fmi2DoStep: t = {t} + {h}: {} internal steps ({} rejected), {} Newton iterations, smallest step {:e}",
-                        report.steps, report.rejected, report.newton_iterations, report.min_step
+                        "fmi2DoStep: t = {} + {}: {} internal steps ({} rejected), {} Newton iterations, smallest step {}",
+                        num(t), num(h), report.steps, report.rejected, report.newton_iterations, num(report.min_step)
                     ),
                 );
                 }
@@ -786,11 +827,14 @@ impl Instance {
                 self.log.log(
                     fmi2Discard,
                     &format!(
-                        "fmi2DoStep: the step from t = {t} by {h} could not be completed (failed at t = {time}: {reason}); \
+                        "fmi2DoStep: the step from t = {} by {} could not be completed (failed at t = {}: {reason}); \
                          the state is rolled back to t = {} (fmi2LastSuccessfulTime) and fmi2Terminated is true; \
                          to retry, restore a state saved at t with fmi2SetFMUstate and step again, \
                          e.g. with a smaller step",
-                        self.model.time()
+                        num(t),
+                        num(h),
+                        num(time),
+                        num(self.model.time())
                     ),
                 );
                 fmi2Discard
@@ -852,16 +896,13 @@ impl Instance {
     }
 
     /// `fmi2SetFMUstate`: restore a state saved by an instance of the same
-    /// FMU. On failure nothing changes.
+    /// FMU, after checking every value it holds; on failure nothing changes.
     pub fn restore(&mut self, s: &SavedState) -> fmi2Status {
-        if s.guid != self.guid {
-            return self.error(format!(
-                "fmi2SetFMUstate: the state belongs to FMU {} but this is {}",
-                s.guid, self.guid
-            ));
+        if let Err(e) = self.check_saved(s) {
+            return self.error(format!("fmi2SetFMUstate: {e}; nothing was changed"));
         }
         if let Err(e) = self.model.restore_state(&s.model) {
-            return self.error(format!("fmi2SetFMUstate: {e}"));
+            return self.error(format!("fmi2SetFMUstate: {e}; nothing was changed"));
         }
         self.phase = s.phase;
         self.start_time = s.start_time;
@@ -869,25 +910,84 @@ impl Instance {
         fmi2OK
     }
 
-    /// The bytes of `fmi2SerializeFMUstate` (JSON).
-    pub fn serialize(s: &SavedState) -> Vec<u8> {
-        serde_json::to_vec(s).expect("a saved state always serializes")
+    /// Check a saved state against this instance: its FMU, times and
+    /// phase, and every value of its model state
+    /// ([`Model::check_state`]).
+    fn check_saved(&self, s: &SavedState) -> Result<(), String> {
+        if s.guid != self.guid {
+            return Err(container::foreign(&s.guid, &self.guid));
+        }
+        let limit = |what: &str, x: f64| {
+            crate::scene::limits::check_number(x).map_err(|e| format!("{what} = {e}"))
+        };
+        limit("start_time", s.start_time)?;
+        if let Some(stop) = s.stop_time {
+            limit("stop_time", stop)?;
+            if stop < s.start_time {
+                return Err(format!(
+                    "stop_time {} is before start_time {}",
+                    num(stop),
+                    num(s.start_time)
+                ));
+            }
+        }
+        use crate::model::Phase;
+        let fits = match s.phase {
+            InstancePhase::Instantiated | InstancePhase::InitializationMode => {
+                s.model.phase == Phase::Setup
+            }
+            InstancePhase::StepComplete | InstancePhase::StepFailed | InstancePhase::Terminated => {
+                s.model.phase == Phase::Running
+            }
+            InstancePhase::Error => true,
+        };
+        if !fits {
+            return Err(format!(
+                "phase '{}' with a model phase {:?}: they do not go together",
+                s.phase.name(),
+                s.model.phase
+            ));
+        }
+        self.model.check_state(&s.model).map_err(|e| e.to_string())
     }
 
-    /// `fmi2DeSerializeFMUstate`: parse and check a serialized state.
+    /// The bytes of `fmi2SerializeFMUstate`: the state's JSON in the
+    /// checksummed container of [`container`].
+    pub fn serialize(s: &SavedState) -> Result<Vec<u8>, String> {
+        let payload = serde_json::to_vec(s).map_err(|e| format!("cannot write the state: {e}"))?;
+        Ok(container::seal(&s.guid, &payload))
+    }
+
+    /// `fmi2DeSerializeFMUstate`: open the container, parse the state and
+    /// check every value against this instance; the reason on failure.
     pub fn deserialize(&self, bytes: &[u8]) -> Result<SavedState, fmi2Status> {
-        let s: SavedState = serde_json::from_slice(bytes).map_err(|e| {
+        const F: &str = "fmi2DeSerializeFMUstate";
+        let payload = container::open(&self.guid, bytes)
+            .map_err(|e| self.error(format!("{F}: {e}; nothing was changed")))?;
+        let s: SavedState = serde_json::from_slice(payload).map_err(|e| {
             self.error(format!(
-                "fmi2DeSerializeFMUstate: not a state of this FMU: {e}"
+                "{F}: the payload is not a state of this FMU ({e}); nothing was changed"
             ))
         })?;
-        if s.guid != self.guid {
-            return Err(self.error(format!(
-                "fmi2DeSerializeFMUstate: the state belongs to FMU {} but this is {}",
-                s.guid, self.guid
-            )));
-        }
+        self.check_saved(&s)
+            .map_err(|e| self.error(format!("{F}: {e}; nothing was changed")))?;
         Ok(s)
+    }
+
+    /// Record a state this instance created (freed with it at the latest).
+    pub fn own_state(&mut self, address: usize) {
+        self.states.insert(address);
+    }
+
+    /// Forget a state this instance created, before freeing it; false when
+    /// it did not create it.
+    pub fn disown_state(&mut self, address: usize) -> bool {
+        self.states.remove(&address)
+    }
+
+    /// The states still alive, to be freed with the instance.
+    pub fn take_states(&mut self) -> Vec<usize> {
+        self.states.drain().collect()
     }
 }
 

@@ -12,6 +12,8 @@
 //! - [`instance`]: the state machine around a [`crate::model::Model`]
 //!   and the value-reference map (parameters, inputs, outputs; contiguous).
 //! - [`xml`]: the modelDescription.xml writer.
+//! - [`container`]: the bytes of a serialized FMU state (versioned,
+//!   checksummed, bound to the GUID).
 //! - [`resources`]: the scene file in `resources/`, the GUID derived from
 //!   it, and resource-location URIs.
 //!
@@ -20,6 +22,7 @@
 //! (a hash of the scene file and the crate version) ties the XML, the scene
 //! and the library together.
 
+pub mod container;
 #[allow(unsafe_code)]
 pub mod exports;
 pub mod instance;

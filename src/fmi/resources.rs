@@ -26,8 +26,24 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`. Stable across platforms and
 /// Rust versions.
 pub fn guid(scene: &[u8]) -> String {
-    // Two 64-bit FNV-1a hashes with different offset bases.
-    fn fnv(seed: u64, parts: &[&[u8]]) -> u64 {
+    let [a, b] = hash128(&[b"origami-fmu", VERSION.as_bytes(), scene]);
+    format!(
+        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+        a >> 32,
+        (a >> 16) & 0xffff,
+        a & 0xffff,
+        b >> 48,
+        b & 0xffff_ffff_ffff
+    )
+}
+
+/// Two 64-bit FNV-1a hashes (different offset bases) of `parts`, each part
+/// followed by a 0xff byte: the GUID's hash and the checksum of a
+/// serialized FMU state. Any change confined to one byte changes both
+/// (each FNV-1a step is a bijection of the running hash for a given byte),
+/// so a single flipped bit is always detected.
+pub(crate) fn hash128(parts: &[&[u8]]) -> [u64; 2] {
+    let fnv = |seed: u64| {
         let mut h = seed;
         for part in parts {
             for &b in *part {
@@ -38,18 +54,8 @@ pub fn guid(scene: &[u8]) -> String {
             h = h.wrapping_mul(0x0000_0100_0000_01b3);
         }
         h
-    }
-    let parts: [&[u8]; 3] = [b"origami-fmu", VERSION.as_bytes(), scene];
-    let a = fnv(0xcbf2_9ce4_8422_2325, &parts);
-    let b = fnv(0x6c62_272e_07bb_0142, &parts);
-    format!(
-        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-        a >> 32,
-        (a >> 16) & 0xffff,
-        a & 0xffff,
-        b >> 48,
-        b & 0xffff_ffff_ffff
-    )
+    };
+    [fnv(0xcbf2_9ce4_8422_2325), fnv(0x6c62_272e_07bb_0142)]
 }
 
 /// The canonical bytes of a scene as the FMU stores it in
@@ -70,6 +76,7 @@ pub fn load_scene_file(path: &Path) -> Result<Scene, String> {
 /// Parse and validate scene bytes. This is the one place that knows the
 /// scene format; every message names the key or index and the reason.
 pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
+    check_budget(bytes)?;
     let mut scene: Scene =
         serde_json::from_slice(bytes).map_err(|e| format!("not a valid scene JSON: {e}"))?;
     // The derived Deserialize does not check the mesh: rebuild it through
@@ -83,6 +90,29 @@ pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
     .map_err(|e| format!("mesh: {e}"))?;
     validate_scene(&scene)?;
     Ok(scene)
+}
+
+/// The size budget on the raw scene JSON, before it is parsed: the
+/// number of triangles of `mesh`.
+fn check_budget(bytes: &[u8]) -> Result<(), String> {
+    use serde_json::value::RawValue;
+    use std::collections::BTreeMap;
+    type Raw<'a> = BTreeMap<String, &'a RawValue>;
+    let Ok(scene) = serde_json::from_slice::<Raw>(bytes) else {
+        return Ok(()); // the parse says what is wrong
+    };
+    let triangles = scene
+        .get("mesh")
+        .and_then(|m| serde_json::from_str::<Raw>(m.get()).ok())
+        .and_then(|m| Some(crate::scene::fold::array_counts(m.get("triangles")?).0))
+        .unwrap_or(0);
+    if triangles > crate::scene::build::MAX_FACETS {
+        return Err(
+            crate::scene::build::over_budget("mesh.triangles", triangles, "the mesh has")
+                .to_string(),
+        );
+    }
+    Ok(())
 }
 
 fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), String> {

@@ -41,6 +41,7 @@ pub use variables::{VariableSpec, fold_edges};
 
 use crate::scene::Scene;
 use crate::solver::stepper::{Dynamics, StepperMemory};
+use crate::text::num;
 use parameters::Parameter;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -66,6 +67,9 @@ pub enum Error {
     StepFailed { time: f64, reason: String },
     /// A saved state does not fit this model.
     State(String),
+    /// The accelerations of a state cannot be computed (forces or
+    /// accelerations not finite); the message names the variables to check.
+    Initialization(String),
 }
 
 impl fmt::Display for Error {
@@ -78,16 +82,18 @@ impl fmt::Display for Error {
                 value,
                 reason,
             } => {
-                write!(f, "{name} = {value}: {reason}; value not applied")
+                write!(f, "{name} = {}: {reason}; value not applied", num(*value))
             }
             Error::Phase(m) => write!(f, "{m}"),
             Error::StepFailed { time, reason } => {
                 write!(
                     f,
-                    "step from t = {time} failed: {reason}; state rolled back"
+                    "step from t = {} failed: {reason}; state rolled back",
+                    num(*time)
                 )
             }
             Error::State(m) => write!(f, "bad saved state: {m}"),
+            Error::Initialization(m) => write!(f, "{m}"),
         }
     }
 }
@@ -242,9 +248,13 @@ impl Model {
 }
 
 impl Model {
-    /// Contact at the current state (None without contact): smallest gap,
-    /// active pairs, normal force.
+    /// Contact at the current state (None without contact, and before
+    /// [`Model::initialize`], when there are no positions to search):
+    /// smallest gap, active pairs, normal force.
     pub fn contact(&self) -> Option<crate::contact::ContactReport> {
+        if self.state.phase != Phase::Running {
+            return None;
+        }
         let sys = self.sys.as_ref()?;
         let c = sys.asm.term::<crate::contact::ContactTerm>()?;
         Some(

@@ -289,25 +289,74 @@ impl Model {
 
     /// Put the parameter values into the scene. Automatic damping stays on
     /// until a damping parameter is set; while on, the damping parameters
-    /// show the values it chose for the current material.
+    /// show the values it chose for the current material (likewise the
+    /// automatic actuator time constant).
     pub(super) fn apply_parameters(&mut self) {
-        let sc = &mut self.scene;
-        sc.auto_damping = self.auto_damping && !self.state.damping_set;
-        for (p, &x) in self.parameter_kinds.iter().zip(&self.state.parameters) {
-            p.apply(sc, x);
+        let auto = (
+            self.auto_damping && !self.state.damping_set,
+            self.auto_actuator && !self.state.actuator_set,
+        );
+        apply(
+            &self.parameter_kinds,
+            auto,
+            &mut self.scene,
+            &mut self.state.parameters,
+        );
+    }
+
+    /// Check parameter values as a saved state holds them (`damping_set`,
+    /// `actuator_set`: whether a damping parameter or the actuator time
+    /// constant was set): each by the rules of [`crate::scene::limits`], as
+    /// [`Model::set_parameter`] does, then the scene they make as the scene
+    /// reader does. Returns that scene and the values as
+    /// [`Model::apply_parameters`] leaves them.
+    pub(super) fn check_parameters(
+        &self,
+        values: &[f64],
+        damping_set: bool,
+        actuator_set: bool,
+    ) -> Result<(Scene, Vec<f64>), String> {
+        if values.len() != self.parameters.len() {
+            return Err(format!(
+                "parameters: {} values; this model has {}",
+                values.len(),
+                self.parameters.len()
+            ));
         }
-        let auto_actuator = self.auto_actuator && !self.state.actuator_set;
-        if auto_actuator {
-            sc.actuator_time_constant = None;
+        for (p, &x) in self.parameter_kinds.iter().zip(values) {
+            crate::scene::limits::check(p.name(), x)
+                .map_err(|e| format!("{} = {}", p.name(), e))?;
         }
-        // Automatic values shown for the material now in the scene.
-        let ph = physics(sc);
-        for (p, x) in self.parameter_kinds.iter().zip(&mut self.state.parameters) {
-            let shows_auto = (sc.auto_damping && p.is_damping())
-                || (auto_actuator && *p == ActuatorTimeConstant);
-            if shows_auto && let Some(v) = p.value(sc, &ph) {
-                *x = v;
-            }
+        let mut scene = self.scene.clone();
+        let mut values = values.to_vec();
+        let auto = (
+            self.auto_damping && !damping_set,
+            self.auto_actuator && !actuator_set,
+        );
+        apply(&self.parameter_kinds, auto, &mut scene, &mut values);
+        crate::scene::limits::check_scene(&scene)?;
+        Ok((scene, values))
+    }
+}
+
+/// Put the values of `kinds` into `sc`. With automatic damping and
+/// actuator time constant (`auto`: whether each is on) the values show
+/// the automatic choices for the material now in the scene.
+fn apply(kinds: &[Parameter], auto: (bool, bool), sc: &mut Scene, values: &mut [f64]) {
+    let (auto_damping, auto_actuator) = auto;
+    sc.auto_damping = auto_damping;
+    for (p, &x) in kinds.iter().zip(values.iter()) {
+        p.apply(sc, x);
+    }
+    if auto_actuator {
+        sc.actuator_time_constant = None;
+    }
+    let ph = physics(sc);
+    for (p, x) in kinds.iter().zip(values.iter_mut()) {
+        let shows_auto =
+            (auto_damping && p.is_damping()) || (auto_actuator && *p == ActuatorTimeConstant);
+        if shows_auto && let Some(v) = p.value(sc, &ph) {
+            *x = v;
         }
     }
 }

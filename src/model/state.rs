@@ -6,7 +6,9 @@
 use super::{Error, Model, Phase};
 use crate::assembly::{Evaluation, State};
 use crate::ids::VertexId;
+use crate::scene::Scene;
 use crate::solver::stepper::{Dynamics, StepperMemory};
+use crate::text::num;
 use serde::{Deserialize, Serialize};
 
 /// A saved model state (see [`Model::save_state`]); serde-serializable.
@@ -85,20 +87,10 @@ impl Model {
         self.state.clone()
     }
 
-    /// Restore a state saved from a model of the same scene.
+    /// Restore a state saved from a model of the same scene. Every value
+    /// is checked first ([`Model::check_state`]); a state that does not fit
+    /// is refused with the reason and nothing changes.
     pub fn restore_state(&mut self, s: &ModelState) -> Result<(), Error> {
-        let n = self.sys.as_ref().map(|s| s.asm.n_dofs()).unwrap_or(0);
-        let dyn_ok = match s.phase {
-            Phase::Setup => true,
-            Phase::Running => {
-                let d = &s.dynamics;
-                [d.q.len(), d.v.len(), d.qdd.len(), d.abar.len()]
-                    .iter()
-                    .all(|&l| l == n)
-                    && s.crease_theta.len()
-                        == self.sys.as_ref().map(|s| s.asm.creases.len()).unwrap_or(0)
-            }
-        };
         let mut s = s.clone();
         if s.input_slopes.is_empty() {
             // A state saved before inputs had slopes.
@@ -109,38 +101,123 @@ impl Model {
             // A state saved before actuators had a response: at rest at their inputs.
             s.actuators = s.inputs_now.iter().take(n_act).map(|&x| [x, 0.0]).collect();
         }
-        let ok = dyn_ok
-            && s.actuators.len() == n_act
-            && s.actuators.iter().flatten().all(|x| x.is_finite())
-            && s.input_slopes.len() == self.inputs.len()
-            && s.inputs_now.len() == self.inputs.len()
-            && s.inputs_next.len() == self.inputs.len()
-            && s.parameters.len() == self.parameters.len()
-            && s.outputs
-                .as_ref()
-                .is_none_or(|o| o.len() == self.outputs.len());
-        if !ok {
-            return Err(Error::State("its sizes do not match this model".into()));
-        }
-        if s.phase == Phase::Running && self.built_with.as_deref() != Some(&s.parameters[..]) {
-            // The saved state ran with other parameters: rebuild for them.
-            let keep = std::mem::replace(&mut self.state.parameters, s.parameters.clone());
-            self.apply_parameters();
-            if let Err(e) = self.build() {
-                self.state.parameters = keep;
-                self.apply_parameters();
-                self.build()?;
-                return Err(e);
+        let (scene, parameters) = self.check_state_scene(&s).map_err(Error::State)?;
+        // The saved state ran with other parameters: a system for them,
+        // built aside so that a failure changes nothing.
+        let mut fresh = match s.phase {
+            Phase::Running if self.built_with.as_deref() != Some(&s.parameters[..]) => {
+                Some(super::system::System::new(&scene)?)
+            }
+            _ => None,
+        };
+        let Some(sys) = fresh.as_mut().or(self.sys.as_mut()) else {
+            return Err(Error::State("the model has no system".into()));
+        };
+        if sys.asm.extra_pairs() != &s.extra_pairs[..] {
+            let old = sys.asm.extra_pairs().to_vec();
+            sys.asm.set_extra_pairs(s.extra_pairs.clone());
+            if let Err(e) = sys.rebuild_solver() {
+                // Put the pattern back (it was factored before).
+                sys.asm.set_extra_pairs(old);
+                let _ = sys.rebuild_solver();
+                return Err(Error::State(e));
             }
         }
-        if let Some(sys) = self.sys.as_mut()
-            && sys.asm.extra_pairs() != &s.extra_pairs[..]
-        {
-            sys.asm.set_extra_pairs(s.extra_pairs.clone());
-            sys.rebuild_solver().map_err(Error::State)?;
+        if let Some(sys) = fresh {
+            self.sys = Some(sys);
+            self.scene = scene;
+            self.built_with = Some(parameters);
         }
         self.state = s;
         self.read_cache = Default::default();
+        Ok(())
+    }
+
+    /// Check a saved state against this model without changing anything:
+    /// every array's length and every index against the model, every
+    /// number finite and within [`crate::scene::limits::MAX_MAGNITUDE`],
+    /// the parameters by the rules of [`crate::scene::limits`] (as
+    /// [`Model::set_parameter`] and the scene reader check them), the inputs
+    /// as [`Model::set_input`] does. The error names the value and says
+    /// what it must be.
+    pub fn check_state(&self, s: &ModelState) -> Result<(), Error> {
+        self.check_state_scene(s).map(|_| ()).map_err(Error::State)
+    }
+
+    /// [`Model::check_state`], returning the scene the state's parameters
+    /// make and the parameter values once applied. One line per field of
+    /// [`ModelState`] (and of the stepper's memory).
+    fn check_state_scene(&self, s: &ModelState) -> Result<(Scene, Vec<f64>), String> {
+        let Some(sys) = self.sys.as_ref() else {
+            return Err("the model has no system".into());
+        };
+        let asm = &sys.asm;
+        let (n, nc) = (asm.n_dofs(), asm.creases.len());
+        let running = s.phase == Phase::Running;
+        // Before initialization the dynamic arrays may be empty.
+        let sizes = |len: usize| if running { vec![len] } else { vec![0, len] };
+        number("time", s.time)?;
+        let d = &s.dynamics;
+        for (what, x) in [("q", &d.q), ("v", &d.v), ("qdd", &d.qdd), ("abar", &d.abar)] {
+            values(&format!("dynamics.{what}"), x, &sizes(n))?;
+        }
+        values("crease_theta", &s.crease_theta, &sizes(nc))?;
+        let ni = self.inputs.len();
+        self.input_values("inputs_now", &s.inputs_now, &[ni])?;
+        self.input_values("inputs_next", &s.inputs_next, &[ni])?;
+        // Empty in a state saved before slopes and actuator responses: the
+        // restore fills them in.
+        self.input_values("input_slopes", &s.input_slopes, &[0, ni])?;
+        let flat: Vec<f64> = s.actuators.iter().flatten().copied().collect();
+        values("actuators", &flat, &[0, 2 * self.scene.actuators.len()])?;
+        check_memory(&s.memory, running, n, nc)?;
+        let checked = self.check_parameters(&s.parameters, s.damping_set, s.actuator_set)?;
+        if let Some(o) = &s.outputs {
+            if o.len() != self.outputs.len() {
+                return Err(format!(
+                    "outputs: {} values; this model has {}",
+                    o.len(),
+                    self.outputs.len()
+                ));
+            }
+            for (spec, &x) in self.outputs.iter().zip(o) {
+                number(&format!("outputs ({})", spec.name), x)?;
+            }
+        }
+        let w = &s.work;
+        number("work.friction", w.friction)?;
+        number("work.contact_damping", w.contact_damping)?;
+        number("work.input", w.input)?;
+        let f = &s.dissipative_force;
+        values("dissipative_force.friction", &f.friction, &[0, n])?;
+        values("dissipative_force.damping", &f.damping, &[0, n])?;
+        let slots = asm.layout.n_slots();
+        for (k, &(a, b)) in s.extra_pairs.iter().enumerate() {
+            let sorted = k == 0 || s.extra_pairs[k - 1] < (a, b);
+            if !(a < b && b < slots && sorted) {
+                return Err(format!(
+                    "extra_pairs[{k}] = ({a}, {b}): slot pairs are sorted, each a < b < {slots} \
+                     (the slots of this model)"
+                ));
+            }
+        }
+        if self.scene.contact.is_none() && s.extra_pairs != asm.extra_pairs() {
+            return Err(format!(
+                "extra_pairs: {} pairs, but a scene without contact never adds any",
+                s.extra_pairs.len()
+            ));
+        }
+        Ok(checked)
+    }
+
+    /// Input values `x` (one per input, or one of `sizes`) by the rules
+    /// of [`Model::set_input`].
+    fn input_values(&self, what: &str, x: &[f64], sizes: &[usize]) -> Result<(), String> {
+        length(what, x.len(), sizes)?;
+        for (spec, &v) in self.inputs.iter().zip(x) {
+            crate::scene::limits::check_number(v)
+                .map_err(|e| format!("{what} ({}) = {e}", spec.name))?;
+        }
         Ok(())
     }
 
@@ -278,19 +355,17 @@ impl Model {
         let d = sys.inputs.drive(u);
         let dynm = &self.state.dynamics;
         let mut ev = Evaluation::default();
-        sys.asm
-            .evaluate(
-                &State {
-                    q: &dynm.q,
-                    v: &dynm.v,
-                    theta0: &d.theta0,
-                    moment: &d.moment,
-                    theta_prev,
-                },
-                &mut ev,
-                None,
-            )
-            .map_err(Error::Scene)?;
+        let st = State {
+            q: &dynm.q,
+            v: &dynm.v,
+            theta0: &d.theta0,
+            moment: &d.moment,
+            theta_prev,
+        };
+        if let Err(e) = sys.asm.evaluate(&st, &mut ev, None) {
+            let term = sys.asm.non_finite_term(&st).unwrap_or("").to_string();
+            return Err(self.not_finite(&e, &term));
+        }
         let mut rhs = vec![0.0; sys.asm.n_free];
         for i in 0..n {
             let fi = sys.asm.free[i];
@@ -301,12 +376,13 @@ impl Model {
         sys.stepper.invalidate_matrix();
         self.state.memory.jacobian = None;
         let mvals = sys.asm.mass_values().to_vec();
-        sys.solver
+        let solved = sys
+            .solver
             .factor(&mvals)
-            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
-        sys.solver
-            .solve_in_place(&mut rhs)
-            .map_err(|e| Error::Scene(format!("mass matrix: {e}")))?;
+            .and_then(|()| sys.solver.solve_in_place(&mut rhs));
+        if let Err(e) = solved {
+            return Err(self.not_finite(&format!("the accelerations: mass matrix: {e}"), ""));
+        }
         let mut qdd = vec![0.0; n];
         for (a, &fi) in qdd.iter_mut().zip(&sys.asm.free) {
             if fi != crate::assembly::FIXED {
@@ -319,5 +395,200 @@ impl Model {
         self.state.outputs = Some(self.compute_outputs(&ev));
         self.read_cache = Default::default();
         Ok(())
+    }
+}
+
+/// The stepper's memory of a saved state: the next step size, the
+/// predictor's counters, the point of the kept iteration matrix (`n`
+/// DOFs, `nc` crease ends; an iteration matrix only once `running`).
+fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result<(), String> {
+    number("memory.h_next", m.h_next)?;
+    if m.h_next <= 0.0 {
+        return Err(format!(
+            "memory.h_next = {}: a step size must be positive",
+            num(m.h_next)
+        ));
+    }
+    let c = &m.newton;
+    for (what, k) in [
+        ("extrapolation_streak", c.extrapolation_streak),
+        ("held_streak", c.held_streak),
+        ("early_forms", c.early_forms),
+    ] {
+        if k > MAX_COUNT {
+            return Err(format!(
+                "memory.newton.{what} = {k} is larger than {MAX_COUNT}"
+            ));
+        }
+    }
+    if let Some(j) = &m.jacobian {
+        if !running {
+            return Err("memory.jacobian: an iteration matrix before initialization".into());
+        }
+        number("memory.jacobian.h", j.h)?;
+        if j.h <= 0.0 {
+            return Err(format!(
+                "memory.jacobian.h = {}: a step size must be positive",
+                num(j.h)
+            ));
+        }
+        values("memory.jacobian.q", &j.q, &[n])?;
+        values("memory.jacobian.v", &j.v, &[n])?;
+        values("memory.jacobian.theta0", &j.theta0, &[nc])?;
+        values("memory.jacobian.moment", &j.moment, &[nc])?;
+        values("memory.jacobian.theta_prev", &j.theta_prev, &[nc])?;
+        values("memory.jacobian.q_start", &j.q_start, &[0, n])?;
+        values("memory.jacobian.v_start", &j.v_start, &[j.q_start.len()])?;
+    }
+    Ok(())
+}
+
+/// The variables that set the forces of each force term (by its name;
+/// "" for the accelerations: the mass and the external forces), for the
+/// message of an evaluation that is not finite. An entry ending in '.'
+/// stands for every parameter it begins; inputs are named by their group.
+const SUSPECTS: &[(&str, &[&str])] = &[
+    (
+        "shell",
+        &[
+            "material.youngs_modulus",
+            "material.poisson_ratio",
+            "material.thickness",
+            "<motions>",
+        ],
+    ),
+    (
+        "crease springs",
+        &[
+            "crease.",
+            "damping.crease",
+            "material.youngs_modulus",
+            "material.thickness",
+            "<actuators>",
+        ],
+    ),
+    (
+        "mass damping",
+        &[
+            "damping.alpha",
+            "damping.beta",
+            "material.density",
+            "material.thickness",
+        ],
+    ),
+    ("contact", &["contact.", "material.", "<motions>"]),
+    (
+        "",
+        &[
+            "material.density",
+            "material.thickness",
+            "gravity.",
+            "<forces>",
+            "<actuators>",
+        ],
+    ),
+];
+
+impl Model {
+    /// The error of an initial evaluation that is not finite (`what`, in
+    /// the force term `term`, "" for the accelerations), naming the
+    /// variables that set it with their values: what to change.
+    fn not_finite(&self, what: &str, term: &str) -> Error {
+        Error::Initialization(format!("{what}{}", self.suspects(term)))
+    }
+
+    /// A failed step's error, with the variables to check where its forces
+    /// were not finite (the assembler names the force term).
+    pub(super) fn with_suspects(&self, e: Error) -> Error {
+        match e {
+            Error::StepFailed { time, reason } => {
+                let term = reason
+                    .split_once("(those of the ")
+                    .and_then(|(_, rest)| rest.split_once(')'))
+                    .map(|(term, _)| term.to_string());
+                let reason = match term {
+                    Some(t) => format!("{reason}{}", self.suspects(&t)),
+                    None => reason,
+                };
+                Error::StepFailed { time, reason }
+            }
+            e => e,
+        }
+    }
+
+    /// "; check name = value, ..." for the variables of force term `term`
+    /// (see [`SUSPECTS`]); "" when it has none.
+    fn suspects(&self, term: &str) -> String {
+        let names = SUSPECTS
+            .iter()
+            .find(|(t, _)| *t == term)
+            .map_or(&[][..], |(_, n)| *n);
+        let n_act = self.scene.actuators.len();
+        let n_force = 3 * self.scene.vertex_forces.len();
+        let mut listed = Vec::new();
+        for &pat in names {
+            let inputs = match pat {
+                "<actuators>" => 0..n_act,
+                "<forces>" => n_act..n_act + n_force,
+                "<motions>" => n_act + n_force..self.inputs.len(),
+                _ => {
+                    let matches = |name: &str| match pat.strip_suffix('.') {
+                        Some(prefix) => name.starts_with(prefix),
+                        None => name == pat,
+                    };
+                    for (spec, &x) in self.parameters.iter().zip(&self.state.parameters) {
+                        if matches(&spec.name) {
+                            listed.push(format!("{} = {}", spec.name, num(x)));
+                        }
+                    }
+                    continue;
+                }
+            };
+            // The inputs of the group set furthest from zero first.
+            let mut group: Vec<(usize, f64)> = inputs
+                .filter_map(|i| Some((i, *self.state.inputs_now.get(i)?)))
+                .collect();
+            group.retain(|g| g.1 != 0.0);
+            group.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+            for (i, x) in group.into_iter().take(3) {
+                listed.push(format!("{} = {}", self.inputs[i].name, num(x)));
+            }
+        }
+        if listed.is_empty() {
+            String::new()
+        } else {
+            format!("; check {}", listed.join(", "))
+        }
+    }
+}
+
+/// Largest count of the stepper's memory a restored state may hold (the
+/// stepper adds one to them).
+const MAX_COUNT: u32 = u32::MAX / 2;
+
+/// `x` finite and of sensible magnitude (what every stored number must be).
+fn number(what: &str, x: f64) -> Result<(), String> {
+    crate::scene::limits::check_number(x).map_err(|e| format!("{what} = {e}"))
+}
+
+/// `len` is one of `sizes`.
+fn length(what: &str, len: usize, sizes: &[usize]) -> Result<(), String> {
+    if sizes.contains(&len) {
+        return Ok(());
+    }
+    let want: Vec<String> = sizes.iter().map(|n| n.to_string()).collect();
+    Err(format!(
+        "{what}: {len} values; this model has {}",
+        want.join(" or ")
+    ))
+}
+
+/// Every value of `x` a [`number`], and its length one of `sizes`.
+fn values(what: &str, x: &[f64], sizes: &[usize]) -> Result<(), String> {
+    length(what, x.len(), sizes)?;
+    let max = crate::scene::limits::MAX_MAGNITUDE;
+    match x.iter().position(|v| v.is_nan() || v.abs() > max) {
+        Some(i) => number(&format!("{what}[{i}]"), x[i]),
+        None => Ok(()),
     }
 }

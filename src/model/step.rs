@@ -8,6 +8,7 @@ use super::system::System;
 use super::{Error, Model, ModelState, Phase};
 use crate::solver::step_control::{StepController, Verdict, equal_substeps};
 use crate::solver::stepper::{Attempt, Dynamics, Failure, Mechanics, Outcome, StepPolicy};
+use crate::text::num;
 use serde::{Deserialize, Serialize};
 
 /// What one [`Model::advance`] did.
@@ -94,7 +95,7 @@ impl Model {
             Err(e) => {
                 self.state = saved;
                 self.read_cache = Default::default();
-                Err(e)
+                Err(self.with_suspects(e))
             }
         }
     }
@@ -286,6 +287,24 @@ impl Advance {
         let big_h = self.big_h;
         let (mut ctl, substeps) = match sys.stepper.policy() {
             StepPolicy::Adaptive => {
+                // Internal steps are at most max_step (the last one up to the
+                // join fraction longer): a step that needs more than the cap
+                // fails before any work.
+                let longest = settings.max_step * (1.0 + settings.integration.join_fraction);
+                let fewest = (big_h / longest).ceil();
+                if fewest > cap as f64 {
+                    return Err(Error::StepFailed {
+                        time: self.t0,
+                        reason: format!(
+                            "the step of {} s needs at least {} internal steps of at most \
+                             solver.max_step = {} s, more than solver.max_internal_steps = \
+                             {cap}; use shorter communication steps or raise the limit",
+                            num(big_h),
+                            num(fewest),
+                            num(settings.max_step)
+                        ),
+                    });
+                }
                 let ctl = StepController::new(
                     settings.integration,
                     settings.min_step,

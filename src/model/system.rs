@@ -7,7 +7,7 @@ use crate::assembly::Assembler;
 use crate::contact::ContactTerm;
 use crate::element::ElementOptions;
 use crate::ids::FoldEdgeId;
-use crate::scene::{ActuatorMode, Fix, Integrator as SceneIntegrator, SolverSettings};
+use crate::scene::{ActuatorMode, Fix, Integrator as SceneIntegrator, Scene, SolverSettings};
 use crate::solver::SparseSolver;
 use crate::solver::central_difference::CentralDifference;
 use crate::solver::generalized_alpha::{self as ga, GeneralizedAlpha};
@@ -58,7 +58,16 @@ impl System {
 impl Model {
     /// Build the system for the scene as it is now (parameters applied).
     pub(super) fn build(&mut self) -> Result<(), Error> {
-        let sc = &self.scene;
+        self.sys = Some(System::new(&self.scene)?);
+        self.built_with = Some(self.state.parameters.clone());
+        Ok(())
+    }
+}
+
+impl System {
+    /// The system of scene `sc` (parameters applied); nothing else changes,
+    /// so a failure leaves the model as it was.
+    pub(super) fn new(sc: &Scene) -> Result<System, Error> {
         let mesh = &sc.mesh;
         let layout = crate::dofs::DofLayout::new(mesh);
         let q_ref = layout.reference_state(mesh);
@@ -197,8 +206,8 @@ impl Model {
             }
         }
         let length = mesh.size().max(f64::MIN_POSITIVE);
-        let stepper = self.stepper(&asm, &q_ref, length)?;
-        let sys = System {
+        let stepper = stepper(sc, &asm, &q_ref, length)?;
+        Ok(System {
             block_coords,
             solver,
             stepper,
@@ -216,53 +225,47 @@ impl Model {
             angle_ends,
             actuator_tau: super::actuator_time_constant(sc),
             asm,
-        };
-        self.sys = Some(sys);
-        self.built_with = Some(self.state.parameters.clone());
-        Ok(())
+        })
     }
 }
 
-impl Model {
-    /// The time integrator the scene asks for: generalized-alpha with its
-    /// Newton settings and DOF scales, or central differences with the
-    /// stable step estimated on the unstressed sheet `q_ref`.
-    fn stepper(
-        &self,
-        asm: &Assembler,
-        q_ref: &[f64],
-        length: f64,
-    ) -> Result<Box<dyn Stepper + Send>, Error> {
-        let sc = &self.scene;
-        let s = &sc.solver;
-        Ok(match s.integrator {
-            SceneIntegrator::CentralDifference => Box::new(
-                CentralDifference::new(asm, q_ref, &vec![std::f64::consts::PI; asm.creases.len()])
-                    .map_err(Error::Scene)?,
-            ),
-            SceneIntegrator::GeneralizedAlpha => {
-                let params = s.integration;
-                let coeffs = ga::Coefficients::new(s.rho_inf);
-                let stick_bound = match &sc.contact {
-                    Some(c) if c.friction > 0.0 => {
-                        ga::stick_bound(coeffs, &params, c.stick_velocity, length)
-                    }
-                    _ => f64::INFINITY,
-                };
-                let settings = ga::Settings {
-                    tolerance: s.tolerance,
-                    newton_tolerance: params
-                        .newton_tolerance(s.tolerance, sc.material.thickness / length),
-                    stick_bound,
-                    max_newton: s.max_newton,
-                    newton: s.newton,
-                };
-                let scales = ga::Scales {
-                    newton: asm.scales(length),
-                    error: crate::assembly::error_scales(&asm.layout, &sc.mesh, length),
-                };
-                Box::new(GeneralizedAlpha::new(s.rho_inf, settings, params, scales))
-            }
-        })
-    }
+/// The time integrator scene `sc` asks for: generalized-alpha with its
+/// Newton settings and DOF scales, or central differences with the stable
+/// step estimated on the unstressed sheet `q_ref`.
+fn stepper(
+    sc: &Scene,
+    asm: &Assembler,
+    q_ref: &[f64],
+    length: f64,
+) -> Result<Box<dyn Stepper + Send>, Error> {
+    let s = &sc.solver;
+    Ok(match s.integrator {
+        SceneIntegrator::CentralDifference => Box::new(
+            CentralDifference::new(asm, q_ref, &vec![std::f64::consts::PI; asm.creases.len()])
+                .map_err(Error::Scene)?,
+        ),
+        SceneIntegrator::GeneralizedAlpha => {
+            let params = s.integration;
+            let coeffs = ga::Coefficients::new(s.rho_inf);
+            let stick_bound = match &sc.contact {
+                Some(c) if c.friction > 0.0 => {
+                    ga::stick_bound(coeffs, &params, c.stick_velocity, length)
+                }
+                _ => f64::INFINITY,
+            };
+            let settings = ga::Settings {
+                tolerance: s.tolerance,
+                newton_tolerance: params
+                    .newton_tolerance(s.tolerance, sc.material.thickness / length),
+                stick_bound,
+                max_newton: s.max_newton,
+                newton: s.newton,
+            };
+            let scales = ga::Scales {
+                newton: asm.scales(length),
+                error: crate::assembly::error_scales(&asm.layout, &sc.mesh, length),
+            };
+            Box::new(GeneralizedAlpha::new(s.rho_inf, settings, params, scales))
+        }
+    })
 }

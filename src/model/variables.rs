@@ -185,15 +185,16 @@ impl Model {
 
     /// Set input `i`. Held inputs (the default): the value is in force from
     /// now and held over the next advance; its slope is reset to zero.
-    /// Ramped inputs: the value the next advance ends at. Non-finite values
-    /// are rejected.
+    /// Ramped inputs: the value the next advance ends at. Non-finite values,
+    /// and values beyond [`crate::scene::limits::MAX_MAGNITUDE`], are
+    /// rejected.
     pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
         let spec = self.input_spec(i)?;
-        if !value.is_finite() {
+        if let Err(reason) = crate::scene::limits::check_number(value) {
             return Err(Error::BadValue {
                 name: spec.name.clone(),
                 value,
-                reason: "not a finite number".into(),
+                reason,
             });
         }
         if self.is_ramped(i) {
@@ -245,8 +246,8 @@ impl Model {
                 "the scene ramps its inputs (solver input_timing \"ramp\"); derivatives need held inputs",
             ));
         }
-        if !value.is_finite() {
-            return Err(bad("not a finite number"));
+        if let Err(reason) = crate::scene::limits::check_number(value) {
+            return Err(bad(&reason));
         }
         if !self.is_ramped(i) {
             self.state.input_slopes[i] = value;

@@ -19,8 +19,10 @@
 //! ```
 
 use super::error::{SceneError, suggestion};
+use crate::text::num;
+use serde_json::value::RawValue;
 use serde_json::{Map, Value};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 
 /// A FOLD edge assignment (`edges_assignment` letters).
@@ -227,7 +229,10 @@ pub(crate) fn expect_array<'a>(v: &'a Value, key: &str) -> Result<&'a Vec<Value>
 pub(crate) fn expect_number(v: &Value, key: &str) -> Result<f64, SceneError> {
     match v.as_f64() {
         Some(x) if x.is_finite() => Ok(x),
-        Some(x) => Err(SceneError::invalid(key, format!("{x} is not finite"))),
+        Some(x) => Err(SceneError::invalid(
+            key,
+            format!("{} is not finite", num(x)),
+        )),
         None => Err(SceneError::invalid(
             key,
             format!("expected a number, found {}", type_name(v)),
@@ -259,7 +264,7 @@ pub(crate) fn expect_index(v: &Value, key: &str) -> Result<usize, SceneError> {
         }
         return Err(SceneError::invalid(
             key,
-            format!("expected a non-negative integer, found {x}"),
+            format!("expected a non-negative integer, found {}", num(x)),
         ));
     }
     Err(SceneError::invalid(
@@ -280,20 +285,185 @@ fn string_list(v: &Value, key: &str) -> Result<Vec<String>, SceneError> {
         .collect()
 }
 
+/// A FOLD file's frames with their keys, the values unparsed (borrowed
+/// from the text): the text is read once, and reading a frame costs the
+/// size of that frame and its parents, so that every frame of a file can
+/// be looked at in time linear in the file (the message of a folded frame
+/// names the frames that are crease patterns). Frame 0 is the top level,
+/// frame `k` is `file_frames[k-1]`.
+pub struct Frames<'a> {
+    frames: Vec<BTreeMap<String, &'a RawValue>>,
+}
+
+/// The JSON type of a raw value, for messages.
+fn raw_type(v: &RawValue) -> &'static str {
+    match v.get().as_bytes().first() {
+        Some(b'{') => "an object",
+        Some(b'[') => "an array",
+        Some(b'"') => "a string",
+        Some(b't' | b'f') => "a boolean",
+        Some(b'n') => "null",
+        _ => "a number",
+    }
+}
+
+/// A raw value parsed (it is valid JSON: the text was checked when read).
+fn value(v: &RawValue) -> Result<Value, SceneError> {
+    serde_json::from_str(v.get()).map_err(|e| SceneError::from_json(&e))
+}
+
+/// A raw object's keys and raw values; `None` when it is not an object.
+fn object(v: &RawValue) -> Option<BTreeMap<String, &RawValue>> {
+    serde_json::from_str(v.get()).ok()
+}
+
+impl<'a> Frames<'a> {
+    /// Read the frames of FOLD text (JSON syntax errors carry line and
+    /// column).
+    pub fn new(text: &'a str) -> Result<Frames<'a>, SceneError> {
+        let root: &RawValue = serde_json::from_str(text).map_err(|e| SceneError::from_json(&e))?;
+        let top = object(root).ok_or_else(|| {
+            SceneError::invalid(
+                "(top level)",
+                format!("a FOLD file is a JSON object, found {}", raw_type(root)),
+            )
+        })?;
+        let mut frames = Vec::new();
+        if let Some(ff) = top.get("file_frames") {
+            let list: Vec<&RawValue> = serde_json::from_str(ff.get()).map_err(|_| {
+                SceneError::invalid(
+                    "file_frames",
+                    format!("expected an array, found {}", raw_type(ff)),
+                )
+            })?;
+            for (i, f) in list.into_iter().enumerate() {
+                frames.push(object(f).ok_or_else(|| {
+                    SceneError::invalid(
+                        format!("file_frames[{i}]"),
+                        format!("expected an object, found {}", raw_type(f)),
+                    )
+                })?);
+            }
+        }
+        frames.insert(0, top);
+        Ok(Frames { frames })
+    }
+
+    /// Number of frames (the top level included).
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Always false: the top level is a frame.
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// The `frame_title` of every frame (`None` where it has none).
+    pub fn titles(&self) -> Vec<Option<String>> {
+        self.frames
+            .iter()
+            .map(|f| {
+                f.get("frame_title")
+                    .and_then(|t| serde_json::from_str::<String>(t.get()).ok())
+            })
+            .collect()
+    }
+
+    /// Pick a frame as [`parse`] does and read it.
+    pub fn frame(
+        &self,
+        frame: Option<&FrameSelector>,
+    ) -> Result<(FoldFile, Vec<String>), SceneError> {
+        let frames = &self.frames;
+        let top = &frames[0];
+        let prefix = |k: usize| {
+            if k == 0 {
+                String::new()
+            } else {
+                format!("file_frames[{}].", k - 1)
+            }
+        };
+        let selected = match frame {
+            None => {
+                if top.contains_key("vertices_coords") || frames.len() == 1 {
+                    0
+                } else {
+                    1
+                }
+            }
+            Some(FrameSelector::Index(k)) => {
+                if *k >= frames.len() {
+                    return Err(SceneError::invalid(
+                        "file_frames",
+                        format!(
+                            "frame {k} was asked for, but the file has {} frame(s) (0 = top level)",
+                            frames.len()
+                        ),
+                    ));
+                }
+                *k
+            }
+            Some(FrameSelector::Title(t)) => self
+                .titles()
+                .iter()
+                .position(|f| f.as_deref() == Some(t.as_str()))
+                .ok_or_else(|| {
+                    SceneError::invalid("frame_title", format!("no frame is titled '{t}'"))
+                })?,
+        };
+
+        // Resolve frame inheritance: the chain from the selected frame up.
+        let mut chain = vec![selected];
+        let mut k = selected;
+        let inherits = |k: usize| {
+            frames[k]
+                .get("frame_inherit")
+                .is_some_and(|v| v.get() == "true")
+        };
+        while k != 0 && inherits(k) {
+            let key = format!("{}frame_parent", prefix(k));
+            let parent = match frames[k].get("frame_parent") {
+                Some(p) => expect_index(&value(p)?, &key)?,
+                None => 0,
+            };
+            if parent >= frames.len() {
+                return Err(SceneError::invalid(
+                    key,
+                    format!("frame {parent} does not exist"),
+                ));
+            }
+            if chain.contains(&parent) {
+                return Err(SceneError::invalid(key, "frame inheritance forms a cycle"));
+            }
+            chain.push(parent);
+            k = parent;
+        }
+        // Merge: parents first, the selected frame last; remember where each
+        // key came from for error messages. file_* and ancf:* keys of the top
+        // level are always visible.
+        let mut merged: HashMap<&str, (&RawValue, String)> = HashMap::new();
+        for (key, v) in top {
+            if key.starts_with("file_") || key.starts_with("ancf:") {
+                merged.insert(key, (*v, String::new()));
+            }
+        }
+        for &k in chain.iter().rev() {
+            for (key, v) in &frames[k] {
+                if key == "file_frames" {
+                    continue;
+                }
+                merged.insert(key, (*v, prefix(k)));
+            }
+        }
+        read_frame(&merged)
+    }
+}
+
 /// The titles of a file's frames (index 0 is the top level, `k` is
 /// `file_frames[k-1]`); `None` for a frame without `frame_title`.
 pub fn frame_titles(text: &str) -> Result<Vec<Option<String>>, SceneError> {
-    let root: Value = serde_json::from_str(text).map_err(|e| SceneError::from_json(&e))?;
-    let title = |f: &Value| {
-        f.get("frame_title")
-            .and_then(Value::as_str)
-            .map(str::to_string)
-    };
-    let mut out = vec![title(&root)];
-    if let Some(Value::Array(ff)) = root.get("file_frames") {
-        out.extend(ff.iter().map(title));
-    }
-    Ok(out)
+    Ok(Frames::new(text)?.titles())
 }
 
 /// Parse FOLD text and pick a frame (`None`: the top level if it has
@@ -303,109 +473,154 @@ pub fn parse(
     text: &str,
     frame: Option<&FrameSelector>,
 ) -> Result<(FoldFile, Vec<String>), SceneError> {
-    let root: Value = serde_json::from_str(text).map_err(|e| SceneError::from_json(&e))?;
-    let top = root.as_object().ok_or_else(|| {
-        SceneError::invalid(
-            "(top level)",
-            format!("a FOLD file is a JSON object, found {}", type_name(&root)),
-        )
-    })?;
-    // Frame 0 is the top level, frame k is file_frames[k-1].
-    let mut frames: Vec<&Map<String, Value>> = vec![top];
-    if let Some(ff) = top.get("file_frames") {
-        for (i, f) in expect_array(ff, "file_frames")?.iter().enumerate() {
-            frames.push(f.as_object().ok_or_else(|| {
-                SceneError::invalid(
-                    format!("file_frames[{i}]"),
-                    format!("expected an object, found {}", type_name(f)),
-                )
-            })?);
+    Frames::new(text)?.frame(frame)
+}
+
+/// How many elements the array `v` has, and how many elements its
+/// elements have in all (0 for elements that are not arrays), without
+/// building either: what the size budget looks at before a large array is
+/// parsed.
+pub(crate) fn array_counts(v: &RawValue) -> (usize, usize) {
+    struct Outer(usize, usize);
+    struct Inner(usize);
+    impl<'de> serde::Deserialize<'de> for Inner {
+        fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V;
+            impl<'de> serde::de::Visitor<'de> for V {
+                type Value = Inner;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("any value")
+                }
+                fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                    self,
+                    mut a: A,
+                ) -> Result<Inner, A::Error> {
+                    let mut n = 0;
+                    while a.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                        n += 1;
+                    }
+                    Ok(Inner(n))
+                }
+                fn visit_map<A: serde::de::MapAccess<'de>>(
+                    self,
+                    mut a: A,
+                ) -> Result<Inner, A::Error> {
+                    while a
+                        .next_entry::<serde::de::IgnoredAny, serde::de::IgnoredAny>()?
+                        .is_some()
+                    {}
+                    Ok(Inner(0))
+                }
+                fn visit_bool<E>(self, _: bool) -> Result<Inner, E> {
+                    Ok(Inner(0))
+                }
+                fn visit_i64<E>(self, _: i64) -> Result<Inner, E> {
+                    Ok(Inner(0))
+                }
+                fn visit_u64<E>(self, _: u64) -> Result<Inner, E> {
+                    Ok(Inner(0))
+                }
+                fn visit_f64<E>(self, _: f64) -> Result<Inner, E> {
+                    Ok(Inner(0))
+                }
+                fn visit_str<E>(self, _: &str) -> Result<Inner, E> {
+                    Ok(Inner(0))
+                }
+                fn visit_unit<E>(self) -> Result<Inner, E> {
+                    Ok(Inner(0))
+                }
+            }
+            d.deserialize_any(V)
         }
     }
-    let prefix = |k: usize| {
-        if k == 0 {
-            String::new()
-        } else {
-            format!("file_frames[{}].", k - 1)
-        }
-    };
-    let selected = match frame {
-        None => {
-            if top.contains_key("vertices_coords") || frames.len() == 1 {
-                0
-            } else {
-                1
+    impl<'de> serde::Deserialize<'de> for Outer {
+        fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V;
+            impl<'de> serde::de::Visitor<'de> for V {
+                type Value = Outer;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("an array")
+                }
+                fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                    self,
+                    mut a: A,
+                ) -> Result<Outer, A::Error> {
+                    let (mut n, mut inner) = (0, 0);
+                    while let Some(Inner(k)) = a.next_element()? {
+                        n += 1;
+                        inner += k;
+                    }
+                    Ok(Outer(n, inner))
+                }
             }
+            d.deserialize_seq(V)
         }
-        Some(FrameSelector::Index(k)) => {
-            if *k >= frames.len() {
-                return Err(SceneError::invalid(
-                    "file_frames",
-                    format!(
-                        "frame {k} was asked for, but the file has {} frame(s) (0 = top level)",
-                        frames.len()
-                    ),
-                ));
-            }
-            *k
-        }
-        Some(FrameSelector::Title(t)) => frames
-            .iter()
-            .position(|f| f.get("frame_title").and_then(Value::as_str) == Some(t.as_str()))
-            .ok_or_else(|| {
-                SceneError::invalid("frame_title", format!("no frame is titled '{t}'"))
-            })?,
-    };
+    }
+    // Not an array: counted as empty; the key's parse says what is wrong.
+    serde_json::from_str::<Outer>(v.get()).map_or((0, 0), |o| (o.0, o.1))
+}
 
-    // Resolve frame inheritance: the chain from the selected frame up.
-    let mut chain = vec![selected];
-    let mut k = selected;
-    while k != 0 && frames[k].get("frame_inherit").and_then(Value::as_bool) == Some(true) {
-        let key = format!("{}frame_parent", prefix(k));
-        let parent = match frames[k].get("frame_parent") {
-            Some(p) => expect_index(p, &key)?,
-            None => 0,
-        };
-        if parent >= frames.len() {
+/// The size budget on the raw arrays of a frame, before they are parsed:
+/// the facets the faces give (or the vertices, for faces traced from the
+/// edges), and the vertices and edges a pattern within the budget can have.
+fn check_budget(merged: &HashMap<&str, (&RawValue, String)>) -> Result<(), SceneError> {
+    use crate::scene::build::{MAX_FACETS, facet_estimate, over_budget};
+    let n = |key: &str| merged.get(key).map(|(v, _)| array_counts(v));
+    let nv = n("vertices_coords").map_or(0, |c| c.0);
+    let faces = n("faces_vertices");
+    let estimate = facet_estimate(nv, faces.filter(|f| f.0 > 0));
+    if estimate > MAX_FACETS {
+        return Err(over_budget(
+            "faces_vertices",
+            estimate,
+            "the pattern would triangulate into about",
+        ));
+    }
+    // Sides of faces within the budget: fewer than 3 per facet; so are
+    // their vertices and edges.
+    let most = 3 * MAX_FACETS;
+    for key in [
+        "vertices_coords",
+        "edges_vertices",
+        "edges_assignment",
+        "edges_foldAngle",
+    ] {
+        if let Some((len, _)) = n(key)
+            && len > most
+        {
             return Err(SceneError::invalid(
                 key,
-                format!("frame {parent} does not exist"),
+                format!(
+                    "{len} entries; a pattern within the size budget of {MAX_FACETS} facets has \
+                     at most {most} (docs/scenes.md, \"Size budget\")"
+                ),
             ));
         }
-        if chain.contains(&parent) {
-            return Err(SceneError::invalid(key, "frame inheritance forms a cycle"));
-        }
-        chain.push(parent);
-        k = parent;
     }
-    // Merge: parents first, the selected frame last; remember where each
-    // key came from for error messages. file_* and ancf:* keys of the top
-    // level are always visible.
-    let mut merged: HashMap<&str, (&Value, String)> = HashMap::new();
-    for (key, v) in top {
-        if key.starts_with("file_") || key.starts_with("ancf:") {
-            merged.insert(key, (v, String::new()));
-        }
-    }
-    for &k in chain.iter().rev() {
-        for (key, v) in frames[k] {
-            if key == "file_frames" {
-                continue;
-            }
-            merged.insert(key, (v, prefix(k)));
-        }
-    }
+    Ok(())
+}
 
+/// Read the keys of one merged frame (`merged`: key -> raw value and the
+/// prefix of the frame it comes from).
+fn read_frame(
+    merged: &HashMap<&str, (&RawValue, String)>,
+) -> Result<(FoldFile, Vec<String>), SceneError> {
+    check_budget(merged)?;
     let mut warnings = Vec::new();
     let mut out = FoldFile::default();
-    let get = |key: &str| merged.get(key).map(|(v, p)| (*v, format!("{p}{key}")));
+    let get = |key: &str| -> Result<Option<(Value, String)>, SceneError> {
+        match merged.get(key) {
+            Some((v, p)) => Ok(Some((value(v)?, format!("{p}{key}")))),
+            None => Ok(None),
+        }
+    };
 
-    if let Some((v, key)) = get("file_spec") {
-        out.file_spec = Some(expect_number(v, &key)?);
+    if let Some((v, key)) = get("file_spec")? {
+        out.file_spec = Some(expect_number(&v, &key)?);
     }
     let opt_string = |key: &str| -> Result<Option<String>, SceneError> {
-        match get(key) {
-            Some((v, k)) => Ok(Some(expect_string(v, &k)?.to_string())),
+        match get(key)? {
+            Some((v, k)) => Ok(Some(expect_string(&v, &k)?.to_string())),
             None => Ok(None),
         }
     };
@@ -420,18 +635,18 @@ pub fn parse(
         (&mut out.frame_classes, "frame_classes"),
         (&mut out.frame_attributes, "frame_attributes"),
     ] {
-        if let Some((v, k)) = get(key) {
-            *field = string_list(v, &k)?;
+        if let Some((v, k)) = get(key)? {
+            *field = string_list(&v, &k)?;
         }
     }
 
-    let (v, key) = get("vertices_coords").ok_or_else(|| {
+    let (v, key) = get("vertices_coords")?.ok_or_else(|| {
         SceneError::invalid(
             "vertices_coords",
             "missing; a scene needs vertices_coords and faces_vertices",
         )
     })?;
-    for (i, c) in expect_array(v, &key)?.iter().enumerate() {
+    for (i, c) in expect_array(&v, &key)?.iter().enumerate() {
         let ki = format!("{key}[{i}]");
         let arr = expect_array(c, &ki)?;
         if arr.len() != 2 && arr.len() != 3 {
@@ -448,9 +663,9 @@ pub fn parse(
         out.vertices_coords.push(p);
     }
 
-    match get("faces_vertices") {
+    match get("faces_vertices")? {
         Some((v, key)) => {
-            for (f, face) in expect_array(v, &key)?.iter().enumerate() {
+            for (f, face) in expect_array(&v, &key)?.iter().enumerate() {
                 let kf = format!("{key}[{f}]");
                 let idx = expect_array(face, &kf)?
                     .iter()
@@ -460,7 +675,7 @@ pub fn parse(
                 out.faces_vertices.push(idx);
             }
         }
-        None if get("edges_vertices").is_none() => {
+        None if !merged.contains_key("edges_vertices") => {
             return Err(SceneError::invalid(
                 "faces_vertices",
                 "missing, and so is edges_vertices; a scene needs the facets as \
@@ -471,9 +686,9 @@ pub fn parse(
         None => {} // traced from edges_vertices by the scene builder
     }
 
-    if let Some((v, key)) = get("edges_vertices") {
+    if let Some((v, key)) = get("edges_vertices")? {
         let mut edges = Vec::new();
-        for (e, ev) in expect_array(v, &key)?.iter().enumerate() {
+        for (e, ev) in expect_array(&v, &key)?.iter().enumerate() {
             let ke = format!("{key}[{e}]");
             let arr = expect_array(ev, &ke)?;
             if arr.len() != 2 {
@@ -489,9 +704,9 @@ pub fn parse(
         }
         out.edges_vertices = Some(edges);
     }
-    if let Some((v, key)) = get("edges_assignment") {
+    if let Some((v, key)) = get("edges_assignment")? {
         let mut asg = Vec::new();
-        for (e, a) in expect_array(v, &key)?.iter().enumerate() {
+        for (e, a) in expect_array(&v, &key)?.iter().enumerate() {
             let ke = format!("{key}[{e}]");
             if a.is_null() {
                 // FOLD tools write null for "not known": unassigned.
@@ -508,7 +723,7 @@ pub fn parse(
         }
         out.edges_assignment = Some(asg);
     }
-    let angles = match (get("edges_foldAngle"), get("edges_foldAngles")) {
+    let angles = match (get("edges_foldAngle")?, get("edges_foldAngles")?) {
         (Some(new), Some(_)) => {
             warnings.push(
                 "edges_foldAngles (pre-1.1 spelling) is ignored because edges_foldAngle is present"
@@ -520,7 +735,7 @@ pub fn parse(
     };
     if let Some((v, key)) = angles {
         let mut out_angles = Vec::new();
-        for (e, a) in expect_array(v, &key)?.iter().enumerate() {
+        for (e, a) in expect_array(&v, &key)?.iter().enumerate() {
             if a.is_null() {
                 out_angles.push(None);
             } else {
@@ -530,9 +745,9 @@ pub fn parse(
         out.edges_fold_angle = Some(out_angles);
     }
 
-    for (key, (v, _)) in &merged {
+    for (key, (v, _)) in merged {
         if key.starts_with("ancf:") {
-            out.ancf.insert(key.to_string(), (*v).clone());
+            out.ancf.insert(key.to_string(), value(v)?);
         } else if !key.contains(':') && !KNOWN_KEYS.contains(key) {
             let hint = suggestion(key, KNOWN_KEYS);
             if !hint.is_empty() {

@@ -32,6 +32,7 @@ use super::{
 use crate::contact::ContactSettings;
 use crate::element::Rule;
 use crate::ids::VertexId;
+use crate::text::num;
 use serde_json::{Map, Value};
 
 /// Every `ancf:` key this version understands.
@@ -200,7 +201,7 @@ impl<'a> Obj<'a> {
         match self.num(f)? {
             Some(x) if !ok(x) => Err(SceneError::invalid(
                 self.path(f),
-                format!("{x} is out of range; it must be {what}"),
+                format!("{} is out of range; it must be {what}", num(x)),
             )),
             x => Ok(x),
         }
@@ -235,7 +236,10 @@ fn number(v: &Value, key: &str) -> Result<f64, SceneError> {
     if x.abs() > MAX_MAGNITUDE {
         return Err(SceneError::invalid(
             key,
-            format!("{x} is too large (at most {MAX_MAGNITUDE:e} in magnitude)"),
+            format!(
+                "{} is too large (at most {MAX_MAGNITUDE:e} in magnitude)",
+                num(x)
+            ),
         ));
     }
     Ok(x)
@@ -376,8 +380,8 @@ pub fn parse(
         import: Import::default(),
         contact: None,
     };
-    let positive = |x: f64| x > 0.0;
-    let non_negative = |x: f64| x >= 0.0;
+    // As scene::limits: positive means at least MIN_POSITIVE.
+    let positive = |x: f64| x >= super::limits::MIN_POSITIVE;
 
     if let Some(v) = ancf.get("ancf:name") {
         let s = expect_string(v, "ancf:name")?;
@@ -598,21 +602,14 @@ pub fn parse(
             }
         };
         let d = ContactSettings::default();
-        let friction = o.num_where("friction", non_negative, "zero or positive")?;
-        let stiffness = o.num_where("stiffness", positive, "positive (N/m)")?;
-        let thickness = o.num_where("thickness", positive, "positive (m)")?;
-        let width = o.num_where(
-            "barrier_width",
-            |x| x > 0.0 && x <= 1.0,
-            "in (0, 1] (a fraction of the thickness)",
-        )?;
-        let stick = o.num_where("stick_velocity", positive, "positive (m/s)")?;
-        let zeta = o.num_where("damping_ratio", non_negative, "zero or positive")?;
-        let subdivisions = o.num_where(
-            "subdivisions",
-            |x| x.fract() == 0.0 && (1.0..=8.0).contains(&x),
-            "a whole number from 1 to 8",
-        )?;
+        // The rules of scene::limits, which the FMU's scene check runs too.
+        let friction = o.num_limited("friction", "contact.friction")?;
+        let stiffness = o.num_limited("stiffness", "contact.stiffness")?;
+        let thickness = o.num_limited("thickness", "contact.thickness")?;
+        let width = o.num_limited("barrier_width", "contact.barrier_width")?;
+        let stick = o.num_limited("stick_velocity", "contact.stick_velocity")?;
+        let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
+        let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
         if enabled {
             p.contact = Some(ContactSettings {
                 // 0 = the sheet thickness (filled in with the material).
@@ -755,7 +752,7 @@ pub fn parse(
 
     if let Some(v) = ancf.get("ancf:import") {
         let o = Obj::new("ancf:import", v, &["size", "unit", "f_edges"])?;
-        p.import.size = o.num_where("size", positive, "positive (m)")?;
+        p.import.size = o.num_where("size", positive, "positive, at least 1e-30 (m)")?;
         if let Some(u) = o.string("unit")? {
             p.import.unit = Some(check_unit(&o.path("unit"), u)?);
         }

@@ -7,17 +7,23 @@
 //! `solver.max_step`, ...); the scene keys map onto them one to one.
 
 use super::{Scene, SolverSettings};
+use crate::text::num;
 
 /// Largest magnitude of a physical number: beyond it, products of a few
 /// parameters would overflow.
 pub const MAX_MAGNITUDE: f64 = 1e30;
+
+/// Smallest value of a quantity that must be positive (a density, a
+/// thickness, a length scale): below it, products of a few parameters
+/// underflow (a mass of 0, a crease stiffness of infinity).
+pub const MIN_POSITIVE: f64 = 1e-30;
 
 /// The admissible set of one value.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Range {
     /// Any finite number.
     Any,
-    /// x > 0.
+    /// x >= [`MIN_POSITIVE`] (positive, and not vanishingly small).
     Positive,
     /// x >= 0.
     NonNegative,
@@ -25,6 +31,8 @@ pub enum Range {
     Open(f64, f64),
     /// lo <= x <= hi.
     Closed(f64, f64),
+    /// lo < x <= hi.
+    OpenClosed(f64, f64),
     /// A whole number in lo..=hi.
     Whole(u64, u64),
 }
@@ -33,10 +41,11 @@ impl Range {
     fn contains(self, x: f64) -> bool {
         match self {
             Range::Any => true,
-            Range::Positive => x > 0.0,
+            Range::Positive => x >= MIN_POSITIVE,
             Range::NonNegative => x >= 0.0,
             Range::Open(lo, hi) => x > lo && x < hi,
             Range::Closed(lo, hi) => (lo..=hi).contains(&x),
+            Range::OpenClosed(lo, hi) => x > lo && x <= hi,
             Range::Whole(lo, hi) => x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64,
         }
     }
@@ -44,10 +53,11 @@ impl Range {
     fn describe(self) -> String {
         match self {
             Range::Any => "a finite number".into(),
-            Range::Positive => "positive".into(),
+            Range::Positive => format!("positive (at least {MIN_POSITIVE:e})"),
             Range::NonNegative => "zero or positive".into(),
-            Range::Open(lo, hi) => format!("in the open interval ({lo}, {hi})"),
-            Range::Closed(lo, hi) => format!("in [{lo}, {hi}]"),
+            Range::Open(lo, hi) => format!("in the open interval ({}, {})", num(lo), num(hi)),
+            Range::Closed(lo, hi) => format!("in [{}, {}]", num(lo), num(hi)),
+            Range::OpenClosed(lo, hi) => format!("in ({}, {}]", num(lo), num(hi)),
             Range::Whole(lo, hi) => format!("a whole number in {lo}..={hi}"),
         }
     }
@@ -68,8 +78,25 @@ const fn lim(name: &'static str, range: Range, unit: &'static str) -> Limit {
     Limit { name, range, unit }
 }
 
-/// Largest `solver.max_internal_steps`.
-pub const MAX_INTERNAL_STEPS: u64 = 1_000_000_000;
+/// Largest `solver.max_internal_steps`: with at most [`MAX_NEWTON`] Newton
+/// iterations per internal step it bounds the work of one communication
+/// step (an `fmi2DoStep`). A small scene takes about 80 us per internal
+/// step, so a call that hits the limit returns within minutes, not hours.
+pub const MAX_INTERNAL_STEPS: u64 = 1_000_000;
+
+/// Largest `solver.max_newton`.
+pub const MAX_NEWTON: u64 = 100;
+
+/// Smallest `solver.tolerance`: below it the local error estimate is
+/// round-off (Newton's tolerance floors at 1e-13) and every step falls to
+/// `solver.min_step`.
+pub const MIN_TOLERANCE: f64 = 1e-12;
+
+/// Largest `solver.tolerance`: an error control that accepts more is none.
+pub const MAX_TOLERANCE: f64 = 0.5;
+
+/// Smallest `solver.min_step` and `solver.max_step` (s).
+pub const MIN_STEP: f64 = 1e-15;
 
 /// Every checked value.
 pub const LIMITS: &[Limit] = &[
@@ -90,10 +117,22 @@ pub const LIMITS: &[Limit] = &[
     lim("gravity.y", Range::Any, "m/s^2"),
     lim("gravity.z", Range::Any, "m/s^2"),
     lim("solver.rho_inf", Range::Closed(0.0, 1.0), ""),
-    lim("solver.max_step", Range::Positive, "s"),
-    lim("solver.min_step", Range::Positive, "s"),
-    lim("solver.tolerance", Range::Open(0.0, 1.0), ""),
-    lim("solver.max_newton", Range::Whole(1, 1000), ""),
+    lim(
+        "solver.max_step",
+        Range::Closed(MIN_STEP, MAX_MAGNITUDE),
+        "s",
+    ),
+    lim(
+        "solver.min_step",
+        Range::Closed(MIN_STEP, MAX_MAGNITUDE),
+        "s",
+    ),
+    lim(
+        "solver.tolerance",
+        Range::Closed(MIN_TOLERANCE, MAX_TOLERANCE),
+        "",
+    ),
+    lim("solver.max_newton", Range::Whole(1, MAX_NEWTON), ""),
     lim(
         "solver.max_internal_steps",
         Range::Whole(1, MAX_INTERNAL_STEPS),
@@ -104,6 +143,16 @@ pub const LIMITS: &[Limit] = &[
     lim("actuator.time_constant", Range::NonNegative, "s"),
     lim("ramp.time", Range::Closed(0.0, 1e9), "s"),
     lim("ramp.shape", Range::Whole(0, 1), ""),
+    lim("contact.stiffness", Range::Positive, "N/m"),
+    lim("contact.thickness", Range::Positive, "m"),
+    lim(
+        "contact.barrier_width",
+        Range::OpenClosed(0.0, 1.0),
+        "a fraction of the thickness",
+    ),
+    lim("contact.stick_velocity", Range::Positive, "m/s"),
+    lim("contact.damping_ratio", Range::NonNegative, ""),
+    lim("contact.subdivisions", Range::Whole(1, 8), ""),
 ];
 
 /// The limit of `name`, if it has one.
@@ -113,14 +162,16 @@ pub fn limit(name: &str) -> Option<&'static Limit> {
 
 /// Check one value: finite, of sensible magnitude, and in the range of
 /// `name` (names without a limit only need to be finite). The error says
-/// what the value must be, e.g. "0 is out of range; it must be positive (m)".
+/// what the value must be, e.g. "0 is out of range; it must be positive (at
+/// least 1e-30) (m)".
 pub fn check(name: &str, x: f64) -> Result<(), String> {
     if !x.is_finite() {
-        return Err(format!("{x} is not a finite number"));
+        return Err(format!("{} is not a finite number", num(x)));
     }
     if x.abs() > MAX_MAGNITUDE {
         return Err(format!(
-            "{x} is too large (at most {MAX_MAGNITUDE:e} in magnitude)"
+            "{} is too large (at most {MAX_MAGNITUDE:e} in magnitude)",
+            num(x)
         ));
     }
     if let Some(l) = limit(name)
@@ -132,11 +183,18 @@ pub fn check(name: &str, x: f64) -> Result<(), String> {
             format!(" ({})", l.unit)
         };
         return Err(format!(
-            "{x} is out of range; it must be {}{unit}",
+            "{} is out of range; it must be {}{unit}",
+            num(x),
             l.range.describe()
         ));
     }
     Ok(())
+}
+
+/// Check a number without a limit of its own (an input, a stored value):
+/// finite and at most [`MAX_MAGNITUDE`] in magnitude.
+pub fn check_number(x: f64) -> Result<(), String> {
+    check("", x)
 }
 
 /// Rules between solver settings: `min_step <= max_step`. Returns the name
@@ -147,7 +205,8 @@ pub fn check_solver_relations(s: &SolverSettings) -> Result<(), (&'static str, S
             "solver.min_step",
             format!(
                 "min_step {} is larger than max_step {}; an internal step must fit between them",
-                s.min_step, s.max_step
+                num(s.min_step),
+                num(s.max_step)
             ),
         ));
     }
@@ -191,6 +250,19 @@ pub fn check_scene(s: &Scene) -> Result<(), String> {
     if let Some(t) = s.actuator_time_constant {
         values.push(("actuator.time_constant", t));
     }
+    if let Some(c) = &s.contact {
+        values.extend([
+            ("contact.friction", c.friction),
+            ("contact.thickness", c.thickness),
+            ("contact.barrier_width", c.width),
+            ("contact.stick_velocity", c.stick_velocity),
+            ("contact.damping_ratio", c.damping_ratio),
+            ("contact.subdivisions", c.subdivisions as f64),
+        ]);
+        if let Some(k) = c.stiffness {
+            values.push(("contact.stiffness", k));
+        }
+    }
     for (name, x) in values {
         check(name, x).map_err(|e| format!("{name}: {e}"))?;
     }
@@ -205,7 +277,11 @@ mod tests {
     fn ranges_and_messages() {
         assert!(check("material.thickness", 1e-4).is_ok());
         let e = check("material.thickness", 0.0).unwrap_err();
-        assert_eq!(e, "0 is out of range; it must be positive (m)");
+        assert_eq!(
+            e,
+            "0 is out of range; it must be positive (at least 1e-30) (m)"
+        );
+        assert!(check("material.density", 1e-300).is_err());
         assert!(check("solver.tolerance", 50.0).is_err());
         assert!(check("solver.tolerance", 1e-6).is_ok());
         assert!(check("material.poisson_ratio", 0.5).is_err());

@@ -148,7 +148,8 @@ pub fn from_str_with(
 /// is a folded state, the error names the frames of the file that are
 /// crease patterns.
 pub fn from_str_report(text: &str, options: &LoadOptions) -> Result<Loaded, SceneError> {
-    let (file, warnings) = fold::parse(text, options.frame.as_ref())?;
+    let frames = fold::Frames::new(text)?;
+    let (file, warnings) = frames.frame(options.frame.as_ref())?;
     match build::from_fold_with(&file, options) {
         Ok(mut loaded) => {
             let mut all = warnings;
@@ -159,21 +160,33 @@ pub fn from_str_report(text: &str, options: &LoadOptions) -> Result<Loaded, Scen
         Err(SceneError::Invalid { key, message }) if build::is_folded_state(&message) => {
             Err(SceneError::Invalid {
                 key,
-                message: format!("{message}{}", crease_pattern_frames(text, &file, options)),
+                message: format!(
+                    "{message}{}",
+                    crease_pattern_frames(&frames, &file, options)
+                ),
             })
         }
         Err(e) => Err(e),
     }
 }
 
+/// At most this many crease-pattern frames are looked for and named.
+const FRAMES_NAMED: usize = 5;
+
 /// "; frame 1 ('cp') is a crease pattern: read it with --frame 1", or what
-/// to do when no frame is one.
-fn crease_pattern_frames(text: &str, failed: &FoldFile, options: &LoadOptions) -> String {
-    let titles = fold::frame_titles(text).unwrap_or_default();
+/// to do when no frame is one. Each frame is read and built once (the
+/// search stops at [`FRAMES_NAMED`]), so this is linear in the file.
+fn crease_pattern_frames(
+    frames: &fold::Frames,
+    failed: &FoldFile,
+    options: &LoadOptions,
+) -> String {
+    let titles = frames.titles();
     let mut good = Vec::new();
+    let mut more = false;
     for (k, title) in titles.iter().enumerate() {
         let sel = FrameSelector::Index(k);
-        let Ok((f, _)) = fold::parse(text, Some(&sel)) else {
+        let Ok((f, _)) = frames.frame(Some(&sel)) else {
             continue;
         };
         if f == *failed {
@@ -184,12 +197,17 @@ fn crease_pattern_frames(text: &str, failed: &FoldFile, options: &LoadOptions) -
             ..options.clone()
         };
         if build::from_fold_with(&f, &o).is_ok() {
+            if good.len() == FRAMES_NAMED {
+                more = true;
+                break;
+            }
             good.push(match title {
                 Some(t) => format!("{k} ('{t}')"),
                 None => format!("{k}"),
             });
         }
     }
+    let more = if more { " and more" } else { "" };
     match good.len() {
         0 if titles.len() > 1 => "; no frame of this file is a flat crease pattern: export the \
              unfolded crease pattern from the program that made it"
@@ -203,7 +221,7 @@ fn crease_pattern_frames(text: &str, failed: &FoldFile, options: &LoadOptions) -
             good[0].split(' ').next().unwrap_or("1")
         ),
         _ => format!(
-            "; frames {} are crease patterns: pick one with --frame N (LoadOptions::frame)",
+            "; frames {}{more} are crease patterns: pick one with --frame N (LoadOptions::frame)",
             good.join(", ")
         ),
     }

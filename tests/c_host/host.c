@@ -7,7 +7,9 @@
  * of the inputs and outputs from modelDescription.xml, and drives one
  * co-simulation: setup, initialization, an input, steps (outputs finite),
  * FMU states (get/set/free and a serialize round trip, both reproducing a
- * step bit for bit), reset, a second run, terminate and free. Between
+ * step bit for bit; a flipped bit or a truncation refused), reset, a
+ * second run, terminate and free (a state not freed by the host goes with
+ * its instance). Between
  * those it calls with NULL, misaligned and foreign arguments and checks
  * that each gets fmi2Error (or NULL from fmi2Instantiate), not a crash.
  * Exit status 0 when every check holds.
@@ -375,6 +377,13 @@ int main(int argc, char **argv) {
     CHECK(F.DeSerializeFMUstate(c, NULL, size, &s2) == fmi2Error && s2 == NULL);
     CHECK(F.DeSerializeFMUstate(c, "{\"no\":1}", 8, &s2) == fmi2Error && s2 == NULL);
     CHECK(F.DeSerializeFMUstate(c, bytes, size, &s2) == fmi2OK && s2 != NULL);
+    /* One flipped bit, or one byte less, and the state is refused. */
+    fmi2FMUstate s3 = NULL;
+    bytes[size / 2] ^= 0x10;
+    CHECK(F.DeSerializeFMUstate(c, bytes, size, &s3) == fmi2Error && s3 == NULL);
+    CHECK(strstr(last_message, "checksum") != NULL);
+    bytes[size / 2] ^= 0x10;
+    CHECK(F.DeSerializeFMUstate(c, bytes, size - 1, &s3) == fmi2Error && s3 == NULL);
     free(bytes);
     CHECK(F.SetFMUstate(c, s2) == fmi2OK);
     step_and_read(c, t, h, 2, b);
@@ -392,8 +401,14 @@ int main(int argc, char **argv) {
     initialize(c);
     CHECK(F.SetReal(c, inputs, 1, &fold) == fmi2OK);
     step_and_read(c, 0.0, h, 1, v);
+    /* A state the host never frees goes with its instance (valgrind would
+     * report it lost); states are freed in every phase. */
+    fmi2FMUstate kept = NULL, late = NULL;
+    CHECK(F.GetFMUstate(c, &kept) == fmi2OK && kept != NULL);
     CHECK(F.Terminate(c) == fmi2OK);
     CHECK(F.DoStep(c, h, h, fmi2True) == fmi2Error);
+    CHECK(F.GetFMUstate(c, &late) == fmi2OK);
+    CHECK(F.FreeFMUstate(c, &late) == fmi2OK && late == NULL);
     F.FreeInstance(c);
 
     /* Two instances at once, each freed. */

@@ -192,3 +192,4 @@ pub fn hinge_velocity(model: &mut Model, w: f64, rate: f64) {
         }
     });
 }
+pub mod fmi;

@@ -220,3 +220,24 @@ def test_contact_friction_is_set_before_initialization_and_not_negative(unzipped
         assert inst.slave.getReal([vr]) == [0.5]
     finally:
         inst.close()
+
+
+def test_contact_outputs_read_their_start_values_before_initialization_and_after_reset(unzipped):
+    """Issue 38: reading the contact outputs before initialization or after
+    fmi2Reset killed the instance (fmi2Fatal); FMI 2.0 allows the read."""
+    inst = Instance(unzipped("diagonal_contact"), "contact-outputs")
+    try:
+        names = ["contact.min_gap", "contact.pairs", "contact.normal_force"]
+        vrs = [inst.vr[n] for n in names]
+        starts = [0.0, 0.0, 0.0]  # docs/fmu.md, "State machine"
+        assert starts == inst.slave.getReal(vrs)
+        inst.initialize()
+        inst.step(0.01, {"fold": 0.5})
+        assert np.all(np.isfinite(inst.slave.getReal(vrs)))
+        inst.slave.reset()
+        assert starts == inst.slave.getReal(vrs)
+        inst.initialize()
+        inst.step(0.01)
+        assert np.all(np.isfinite(inst.get()))
+    finally:
+        inst.close()

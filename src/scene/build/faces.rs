@@ -8,7 +8,7 @@ use crate::mesh::{is_degenerate, mean_side_length2};
 use crate::scene::error::SceneError;
 use crate::scene::fold::FoldFile;
 use crate::scene::planar::shoelace;
-use crate::scene::triangulate::ear_clip;
+use crate::scene::triangulate::{MAX_CORNERS, Untriangulable, ear_clip};
 use nalgebra::{Vector2, Vector3};
 
 /// Relative tolerance (against the size of the sheet) of the flatness test
@@ -293,12 +293,17 @@ pub(super) fn triangulate(
     let mut triangles = Vec::new();
     let mut tri_face = Vec::new();
     for (f, face) in faces.iter().enumerate() {
-        let tris = ear_clip(face, coords).ok_or_else(|| {
-            invalid(
-                format!("faces_vertices[{f}]"),
-                "is not a simple polygon (it cannot be triangulated); check it for \
-                 self-intersections",
-            )
+        let tris = ear_clip(face, coords).map_err(|why| {
+            let message = match why {
+                Untriangulable::NotSimple => "is not a simple polygon (it cannot be \
+                                              triangulated); check it for self-intersections"
+                    .to_string(),
+                Untriangulable::TooManyCorners(n) => format!(
+                    "has {n} corners and is not strictly convex; faces of more than \
+                     {MAX_CORNERS} corners are triangulated only when convex: split it"
+                ),
+            };
+            invalid(format!("faces_vertices[{f}]"), message)
         })?;
         tri_face.extend(std::iter::repeat_n(f, tris.len()));
         triangles.extend(tris);

@@ -84,6 +84,18 @@ pub fn over_budget(key: &str, facets: usize, what: &str) -> SceneError {
     )
 }
 
+/// About how many facets a pattern of `n_vertices` triangulates into:
+/// `faces` (count, corners in all) give `corners - 2 count`; without them
+/// (faces traced from the edges) a planar triangulation has about two
+/// triangles per vertex. What the size budget is checked on, by the FOLD
+/// reader before the arrays are parsed and by the builder after.
+pub fn facet_estimate(n_vertices: usize, faces: Option<(usize, usize)>) -> usize {
+    match faces {
+        Some((count, corners)) => corners.saturating_sub(2 * count),
+        None => 2 * n_vertices,
+    }
+}
+
 /// The phrase that marks an error as "this frame is a folded state": the
 /// loader then names the frames of the file that are crease patterns.
 const FOLDED_STATE: &str = "a folded state";
@@ -141,14 +153,9 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
         return Err(invalid("vertices_coords", "is empty"));
     }
     // The size budget, before anything large is allocated.
-    let estimate: usize = if fold.faces_vertices.is_empty() {
-        2 * nv // a planar triangulation has about two triangles per vertex
-    } else {
-        fold.faces_vertices
-            .iter()
-            .map(|f| f.len().saturating_sub(2))
-            .sum()
-    };
+    let faces = &fold.faces_vertices;
+    let corners = faces.iter().map(Vec::len).sum();
+    let estimate = facet_estimate(nv, (!faces.is_empty()).then_some((faces.len(), corners)));
     if estimate > MAX_FACETS {
         return Err(over_budget(
             "faces_vertices",
