@@ -258,10 +258,7 @@ fn check_triangles(coords: &[Vector2<f64>], triangles: &[[VertexId; 3]]) -> Resu
 
 /// The listed edges, checked (vertices in range, finite targets, no
 /// duplicates), and their index by vertex pair.
-fn listed_edges(
-    edges: Vec<Edge>,
-    nv: usize,
-) -> Result<(Vec<Edge>, EdgeIndex), MeshError> {
+fn listed_edges(edges: Vec<Edge>, nv: usize) -> Result<(Vec<Edge>, EdgeIndex), MeshError> {
     let mut index = EdgeIndex::new();
     let mut all = Vec::with_capacity(edges.len());
     for (e, edge) in edges.into_iter().enumerate() {
