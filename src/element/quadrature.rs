@@ -5,28 +5,11 @@
 //! offered. Points are area coordinates `(xi, eta, zeta)`; weights sum to 1
 //! and are multiplied by the triangle area.
 //!
-//! The 7-point rule is the default (since 2026-12-04; the 12-point rule
-//! before). Its errors equal the 12-point rule's to two digits on every
-//! mesh family and study of `benches/element_families.rs`, with full rank
-//! 21 at the reference and the same lowest tangent eigenvalues to three
-//! digits under 0.1-1 % compression and tension, at 0.60x the cost (605
-//! against 999 ns force, 2990 against 5088 ns force + tangent per element).
-//!
-//! It was not the default while one question was open: on coarse meshes
-//! the two rules' dynamics differ (the undamped free square of
-//! `tests/fmpy/test_second_client.py`, two facets: 3 % of the outputs
-//! within 10 ms, and last-bit differences grew faster under the 7-point
-//! rule), so which is closer to the converged sheet?
-//! `cargo bench --bench quadrature_fidelity` answers it: against the
-//! 128-facet 12-point run, the corners of the 2-facet square are off by
-//! 2.8e-3, 5.6e-3, 3.6e-4, 6.05e-3 m (7-point) and 3.9e-3, 6.8e-3, 2.6e-3,
-//! 6.75e-4 m (12-point) at 0.02, 0.05, 0.1, 0.2 s (0.1 m sheet); at 8
-//! facets 2.9e-3 .. 6.4e-3 against 2.7e-3 .. 7.6e-3 m, at 32 facets equal
-//! to two digits, and at 128 facets the rules agree within 6e-6 .. 6e-5
-//! m. The mesh error dominates and the 7-point rule is no further from
-//! the converged sheet (closer at 6 of the 8 coarse samples). The
-//! two-masters agreement test (1e-9) runs its scenes damped: undamped, the
-//! square is chaotic under either rule (`cargo bench --bench two_masters`).
+//! The 7-point rule is the default: its errors equal the 12-point rule's
+//! to two digits on every mesh family studied, at 0.6x the cost; on coarse
+//! meshes the mesh error dominates and it is no further from the converged
+//! sheet (docs/validation.md, `cargo bench --bench element_families` and
+//! `cargo bench --bench quadrature_fidelity`).
 
 use serde::{Deserialize, Serialize};
 

@@ -354,10 +354,9 @@ pub struct SolverSettings {
     /// How an input set before a step acts over it.
     #[serde(default)]
     pub input_timing: InputTiming,
-    /// Quadrature of the shell energy: the 7-point rule (default since
-    /// 2026-12-04) or the 12-point rule, 1.7x the element's cost with errors
-    /// equal to two digits on refined meshes (`src/element/quadrature.rs`
-    /// says where they differ).
+    /// Quadrature of the shell energy: the 7-point rule (default) or the
+    /// 12-point rule, 1.7x the element's cost with errors equal to two
+    /// digits on refined meshes (`src/element/quadrature.rs`).
     #[serde(default)]
     pub quadrature: crate::element::Rule,
     /// The stepper's numerical constants (Rust API only, not a scene key).

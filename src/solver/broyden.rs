@@ -15,13 +15,10 @@
 //! direction the update extrapolates (the new correction is the plain one
 //! times `s^T W s / s^T W (s - p)`, Aitken's geometric-series sum).
 //!
-//! Measured (`cargo bench --bench rigid_fold`, counts): the Miura folds take
-//! 2-8 % fewer Newton iterations and factorizations (4x4: 987 / 229 to
-//! 961 / 223; 10x10: 972 / 229 to 910 / 209), the BoxPleatPyramid's first
-//! 0.05 s 64 factorizations instead of 78. It does not remove the second
-//! matrix of a folding step: after a rotation the stale matrix is wrong in
-//! many directions at once, and letting the updates run longer before
-//! re-forming it (a second slow contraction) cost 25 % more iterations.
+//! It saves factorizations where a kept matrix contracts slowly along a
+//! few directions; it does not remove the second matrix of a folding step
+//! (after a rotation the stale matrix is wrong in many directions at once).
+//! Whether it earns its place: docs/performance.md, the stepper's rules.
 
 /// The secant history since the matrix was formed.
 #[derive(Default)]

@@ -99,12 +99,8 @@ pub struct SolverStats {
 pub const BLOCK_ORDERING_MIN: usize = 100_000;
 
 /// Systems from this many unknowns on whose blocks' positions are known
-/// are ordered by nested dissection (best of repeated factorizations,
-/// `cargo bench --bench ordering`): the BoxPleatPyramid's 34k unknowns
-/// factorize in 120 against 180 ms under AMD, a 24x24 Miura-ori's 9k in
-/// 12.8 against 16.2-16.5 ms, a 16x16's 4131 in 4.2-4.3 against 4.7-4.8,
-/// a 12x12's 2379 in 1.88 against 1.94-1.97; a 10x10's 1683 are even
-/// and an 8x8's 1107 3 % faster under AMD.
+/// are ordered by nested dissection, below it by AMD: where the two cross
+/// over on Miura-ori sheets (`cargo bench --bench ordering`).
 pub const NESTED_DISSECTION_MIN: usize = 2_000;
 
 /// How a pattern's fill-reducing ordering is computed.

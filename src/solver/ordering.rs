@@ -4,11 +4,10 @@
 //! parts of at most [`ND_LEAF`] vertices (and every separator) are
 //! ordered by minimum degree (faer's AMD).
 //!
-//! On the BoxPleatPyramid's 34k unknowns this factorizes with 25 % fewer
-//! multiply-adds and 11 % fewer factor entries than AMD on the whole graph,
-//! in 120 against 180 ms (`cargo bench --bench ordering`). Breadth-first level sets as
-//! separators (no coordinates) measured 4-6x more flops than AMD on the
-//! same sheets, so without coordinates the solver keeps AMD.
+//! On large sheets this needs fewer multiply-adds and factor entries than
+//! AMD on the whole graph; breadth-first level sets as separators (no
+//! coordinates) need more than AMD, so without coordinates the solver
+//! keeps AMD (`cargo bench --bench ordering`, docs/performance.md).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMat;
