@@ -38,13 +38,6 @@ enum Path {
     Controller,
 }
 
-fn index(names: impl Iterator<Item = String>, name: &str) -> usize {
-    names
-        .into_iter()
-        .position(|n| n == name)
-        .unwrap_or_else(|| panic!("no variable {name}"))
-}
-
 /// One Miura fold: (CPU to stay below `limit`, total CPU, work, final error).
 fn miura(
     panels: usize,
@@ -66,7 +59,7 @@ fn miura(
     }
     let mut m = Model::new(scene).unwrap();
     m.initialize().unwrap();
-    let fold = index(m.inputs().iter().map(|v| v.name.clone()), "fold");
+    let fold = m.input_id("fold").expect("fold input");
     // The first crease output and its full fold angle (the controller's measurement).
     let (crease, full) = m
         .outputs()
@@ -132,7 +125,7 @@ fn crease_step(path: Path, tau: Option<f64>) -> (f64, StepReport, f64) {
     }
     let mut m = Model::new(scene).unwrap();
     m.initialize().unwrap();
-    let fold = index(m.inputs().iter().map(|v| v.name.clone()), "fold");
+    let fold = m.input_id("fold").expect("fold input");
     let angle = m
         .outputs()
         .iter()

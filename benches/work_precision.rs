@@ -26,7 +26,7 @@ use origami_fmu::benchmarks;
 use origami_fmu::cpu_time::Stopwatch;
 use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
-use origami_fmu::model::{Model, StepReport};
+use origami_fmu::model::{InputId, Model, StepReport};
 use origami_fmu::scene::{Fix, Integrator, NewtonMode, Scene, Support, VertexInput};
 use std::fmt::Write as _;
 
@@ -76,7 +76,7 @@ struct Case {
     name: &'static str,
     scene: fn() -> Scene,
     /// Input values at time t (index, value).
-    inputs: fn(&Model, f64) -> Vec<(usize, f64)>,
+    inputs: fn(&Model, f64) -> Vec<(InputId, f64)>,
     stop: f64,
     sample: f64,
 }
@@ -134,8 +134,8 @@ fn crease_scene() -> Scene {
     sc
 }
 
-fn fold_input(m: &Model, t: f64, t1: f64) -> Vec<(usize, f64)> {
-    let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+fn fold_input(m: &Model, t: f64, t1: f64) -> Vec<(InputId, f64)> {
+    let fold = m.input_id("fold").unwrap();
     vec![(fold, smooth_ramp(t, t1))]
 }
 
@@ -188,14 +188,14 @@ fn cantilever_scene() -> Scene {
     sc
 }
 
-fn cantilever_inputs(m: &Model, _t: f64) -> Vec<(usize, f64)> {
+fn cantilever_inputs(m: &Model, _t: f64) -> Vec<(InputId, f64)> {
     // A constant 0.5 uN downwards at each tip corner from t = 0: the strip
     // oscillates about its static deflection, almost purely in mode 1.
     m.inputs()
         .iter()
         .enumerate()
         .filter(|(_, v)| v.name.starts_with("tip") && v.name.ends_with(".z"))
-        .map(|(i, _)| (i, -0.5e-6))
+        .filter_map(|(i, _)| Some((m.input_at(i)?, -0.5e-6)))
         .collect()
 }
 

@@ -655,11 +655,7 @@ pub fn fold_by_ramp_with(
     with_slopes: bool,
     mut after_step: impl FnMut(&crate::model::Model, &crate::model::StepReport),
 ) -> crate::model::StepReport {
-    let fold = m
-        .inputs()
-        .iter()
-        .position(|v| v.name == "fold")
-        .expect("a fold input");
+    let fold = m.input_id("fold").expect("a fold input");
     let mut total = crate::model::StepReport::default();
     for k in 0..steps {
         let t = k as f64 * dt;

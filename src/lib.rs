@@ -33,7 +33,7 @@
 //! model.initialize()?;
 //! assert_eq!(model.phase(), Phase::Running);
 //! // The default actuator `fold` drives the rest angle: 0.1 of the target.
-//! let fold = model.inputs().iter().position(|v| v.name == "fold").unwrap();
+//! let fold = model.input_id("fold").expect("the scene has a fold input");
 //! model.set_input(fold, 0.1)?;
 //! let report = model.advance(0.01)?;
 //! assert!(report.steps >= 1);
@@ -68,5 +68,7 @@ pub mod text;
 
 pub use material::Material;
 pub use mesh::Mesh;
-pub use model::{Error, Model, ModelState, Phase, StepReport, VariableSpec};
+pub use model::{
+    Error, InputId, Model, ModelState, OutputId, ParameterId, Phase, StepReport, VariableSpec,
+};
 pub use scene::{Scene, SceneError};

@@ -19,27 +19,24 @@ fn model() -> Model {
     Model::new(scene).unwrap()
 }
 
-fn index(names: &[origami_fmu::VariableSpec], name: &str) -> usize {
-    names.iter().position(|v| v.name == name).unwrap()
-}
-
 /// Fold angle of the diagonal after `steps` steps of 10 ms.
 fn run(m: &mut Model, steps: usize) -> f64 {
     let angle = m
         .outputs()
         .iter()
         .position(|v| v.name.starts_with("crease["))
+        .and_then(|k| m.output_at(k))
         .unwrap();
     for _ in 0..steps {
         m.advance(0.01).unwrap();
     }
-    m.output(angle)
+    m.output(angle).unwrap()
 }
 
 #[test]
 fn off_by_default_and_on_it_folds_without_a_signal() {
     let mut idle = model();
-    let p = index(idle.parameters(), "ramp.time");
+    let p = idle.parameter_id("ramp.time").unwrap();
     assert_eq!(idle.parameter(p).unwrap(), 0.0);
     idle.initialize().unwrap();
     assert!(run(&mut idle, 30).abs() < 1e-12, "nothing drives fold");
@@ -47,7 +44,7 @@ fn off_by_default_and_on_it_folds_without_a_signal() {
     let mut ramped = model();
     ramped.set_parameter(p, 0.1).unwrap();
     ramped.initialize().unwrap();
-    let fold = index(ramped.inputs(), "fold");
+    let fold = ramped.input_id("fold").unwrap();
     // A master's value is not used while the ramp drives the input.
     ramped.set_input(fold, 0.0).unwrap();
     let angle = run(&mut ramped, 30);
@@ -60,9 +57,9 @@ fn the_ramp_is_the_same_signal_as_a_driven_input() {
     // Driven by hand: value and slope of 0 -> 1 over 0.1 s at each step.
     let mut driven = model();
     driven.initialize().unwrap();
-    let fold = index(driven.inputs(), "fold");
+    let fold = driven.input_id("fold").unwrap();
     let mut ramped = model();
-    let p = index(ramped.parameters(), "ramp.time");
+    let p = ramped.parameter_id("ramp.time").unwrap();
     ramped.set_parameter(p, 0.1).unwrap();
     ramped.initialize().unwrap();
     for k in 0..20 {
@@ -95,7 +92,7 @@ fn the_ramp_is_the_same_signal_as_a_driven_input() {
 #[test]
 fn shape_is_checked_and_smooth_starts_slower() {
     let mut m = model();
-    let s = index(m.parameters(), "ramp.shape");
+    let s = m.parameter_id("ramp.shape").unwrap();
     assert!(m.set_parameter(s, 0.5).is_err());
     let ramp = origami_fmu::scene::InputRamp {
         time: 0.2,

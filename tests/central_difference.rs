@@ -121,7 +121,7 @@ fn folds_like_generalized_alpha() {
     let run = |integrator| {
         let mut m = Model::new(two_panels(integrator)).unwrap();
         m.initialize().unwrap();
-        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        let fold = m.input_id("fold").unwrap();
         let mut traj = Vec::new();
         let mut steps = 0;
         for k in 0..100 {

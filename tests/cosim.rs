@@ -12,16 +12,14 @@ use origami_fmu::assembly::Assembler;
 use origami_fmu::element::ElementOptions;
 use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::square_with_diagonal;
-use origami_fmu::model::{Error, Model, physics};
+use origami_fmu::model::{Error, Model, ParameterId, physics};
 use origami_fmu::scene::{InputTiming, Integrator, Scene};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 const W: f64 = 0.02;
 
-fn parameter(m: &Model, name: &str) -> usize {
-    m.parameters()
-        .iter()
-        .position(|p| p.name == name)
+fn parameter(m: &Model, name: &str) -> ParameterId {
+    m.parameter_id(name)
         .unwrap_or_else(|| panic!("no parameter {name}"))
 }
 
@@ -147,8 +145,14 @@ fn slopes_reproduce_the_ramp_option() {
     scene.solver.input_timing = InputTiming::Ramp;
     let mut m = Model::new(scene).unwrap();
     m.initialize().unwrap();
-    assert!(m.set_input_derivative(0, 1, 1.0).is_err());
-    assert!(m.set_input_derivative(0, 2, 1.0).is_err());
+    assert!(
+        m.set_input_derivative(m.input_at(0).unwrap(), 1, 1.0)
+            .is_err()
+    );
+    assert!(
+        m.set_input_derivative(m.input_at(0).unwrap(), 2, 1.0)
+            .is_err()
+    );
 }
 
 /// A free square sheet with one creased diagonal.
@@ -375,7 +379,7 @@ fn parameter_fuzz_never_panics() {
                 } else {
                     start * (((r >> 8) % 2001) as f64 / 1000.0 - 0.5) * 4.0
                 };
-                let _ = m.set_parameter(i, v);
+                let _ = m.set_parameter(m.parameter_at(i).unwrap(), v);
             }
             if m.initialize().is_ok() {
                 let fold = input(&m, "fold");

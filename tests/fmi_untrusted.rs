@@ -407,7 +407,7 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
 fn model_restore_refuses_forged_states_and_changes_nothing() {
     let mut m = Model::new(contact_square()).unwrap();
     m.initialize().unwrap();
-    m.set_input(0, 0.5).unwrap();
+    m.set_input(m.input_at(0).unwrap(), 0.5).unwrap();
     m.advance(0.01).unwrap();
     let good = m.save_state();
     let n = good.dynamics.q.len();

@@ -36,8 +36,9 @@ fn readme_fold(m: &mut Model, watch: usize) -> (f64, f64) {
     for k in 0..200 {
         let t = k as f64 * dt;
         let (u0, u1) = ((t / 0.6).min(1.0), ((t + dt) / 0.6).min(1.0));
-        m.set_input(0, u0).unwrap();
-        m.set_input_derivative(0, 1, (u1 - u0) / dt).unwrap();
+        m.set_input(m.input_at(0).unwrap(), u0).unwrap();
+        m.set_input_derivative(m.input_at(0).unwrap(), 1, (u1 - u0) / dt)
+            .unwrap();
         m.advance(dt).unwrap();
         max = max.max(m.output_values()[watch]);
     }
@@ -76,8 +77,10 @@ fn load_build_fold(name: &str) -> scene::Loaded {
     m.initialize().unwrap();
     for k in 0..10 {
         // The ramp 0 -> 0.2 over 0.1 s: value at the step start and slope.
-        m.set_input(0, 0.02 * k as f64).unwrap();
-        m.set_input_derivative(0, 1, 2.0).unwrap();
+        m.set_input(m.input_at(0).unwrap(), 0.02 * k as f64)
+            .unwrap();
+        m.set_input_derivative(m.input_at(0).unwrap(), 1, 2.0)
+            .unwrap();
         m.advance(0.01).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
     let out = m.output_values();

@@ -448,7 +448,7 @@ fn load_and_run(text: &str, options: &LoadOptions) {
     if m.initialize().is_err() {
         return;
     }
-    for i in 0..m.inputs().len() {
+    for i in m.input_ids() {
         let _ = m.set_input(i, 0.5);
     }
     if m.advance(1e-3).is_ok() {
@@ -615,7 +615,7 @@ fn run_scene(bytes: &[u8], what: &str) {
         {
             return;
         }
-        for k in 0..model.inputs().len() {
+        for k in model.input_ids() {
             let _ = model.set_input(k, 0.5);
         }
         if model.advance(1e-3).is_ok() {

@@ -33,7 +33,7 @@ fn rest_angle_ramp_folds_to_target() {
     for target in [1.2f64, -2.0, 3.0] {
         let mut m = Model::new(two_panels(target)).unwrap();
         m.initialize().unwrap();
-        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        let fold = m.input_id("fold").unwrap();
         // ramp over 0.2 s, hold 0.8 s
         let steps = 100;
         for k in 1..=steps {
@@ -64,7 +64,7 @@ fn both_quadrature_rules_fold_to_the_target() {
         scene.solver.quadrature = rule;
         let mut m = Model::new(scene).unwrap();
         m.initialize().unwrap();
-        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        let fold = m.input_id("fold").unwrap();
         let mut mid = 0.0;
         for k in 1..=100 {
             let t = k as f64 * 0.01;
@@ -107,7 +107,7 @@ fn energy_conservation_and_decay() {
         // modified Newton stops near it (a 1e-7 m random walk per step).
         scene.solver.newton = origami_fmu::scene::NewtonMode::Full;
         let mut m = Model::new(scene).unwrap();
-        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        let fold = m.input_id("fold").unwrap();
         m.set_input(fold, 1.0).unwrap(); // released from flat with a 1e-4 rad rest angle (linear regime)
         m.initialize().unwrap();
         let total = |m: &Model| m.energies().iter().sum::<f64>();
@@ -162,7 +162,8 @@ fn static_moment_on_a_crease() {
     let mut m = Model::new(scene).unwrap();
     m.initialize().unwrap();
     let moment_per_length = 0.6 * k_per_length; // phi = 0.6 rad
-    m.set_input(0, moment_per_length).unwrap();
+    m.set_input(m.input_at(0).unwrap(), moment_per_length)
+        .unwrap();
     for _ in 0..200 {
         m.advance(0.01).unwrap();
     }

@@ -140,7 +140,7 @@ fn a_folding_series_has_every_time_and_consistent_fields() {
     let _ = std::fs::remove_dir_all(&dir);
     let mut series = Series::new(&dir, "two", &m).unwrap();
     series.write(&m).unwrap();
-    let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+    let fold = m.input_id("fold").unwrap();
     let strain = m
         .outputs()
         .iter()

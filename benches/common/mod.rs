@@ -85,17 +85,13 @@ pub fn flat_iteration_matrix(
 #[allow(dead_code)]
 pub fn square_model(
     edit: impl FnOnce(origami_fmu::scene::Scene) -> origami_fmu::scene::Scene,
-) -> (origami_fmu::model::Model, usize) {
+) -> (origami_fmu::model::Model, origami_fmu::model::InputId) {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fmpy/scenes/square.json");
     let mut scene = origami_fmu::fmi::resources::load_scene_file(&path).expect("square scene");
     scene.solver.input_timing = origami_fmu::scene::InputTiming::Ramp;
     let mut m = origami_fmu::model::Model::new(edit(scene)).expect("model");
     m.initialize().expect("initialize");
-    let fold = m
-        .inputs()
-        .iter()
-        .position(|v| v.name == "fold")
-        .expect("fold input");
+    let fold = m.input_id("fold").expect("fold input");
     (m, fold)
 }

@@ -166,7 +166,7 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
 
 /// Set a parameter of `model` by name (a scene may not have it).
 fn set_parameter(model: &mut Model, name: &str, value: f64) -> Result<bool, String> {
-    match model.parameters().iter().position(|v| v.name == name) {
+    match model.parameter_id(name) {
         Some(i) => {
             model.set_parameter(i, value).map_err(|e| e.to_string())?;
             Ok(true)
@@ -336,7 +336,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     };
     if let Some(sig) = &signals {
         for (i, v) in sig.at(0.0) {
-            model.set_input(i, v).map_err(|e| e.to_string())?;
+            model
+                .set_input(crate::model::InputId(i), v)
+                .map_err(|e| e.to_string())?;
         }
     }
     model.initialize().map_err(|e| e.to_string())?;
@@ -413,6 +415,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         // signal itself, never a staircase.
         if let Some(sig) = &signals {
             for ((i, v0), (_, v1)) in sig.at(t0).into_iter().zip(sig.at(t)) {
+                let i = crate::model::InputId(i);
                 model.set_input(i, v0).map_err(|e| e.to_string())?;
                 model
                     .set_input_derivative(i, 1, (v1 - v0) / h)

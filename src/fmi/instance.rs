@@ -20,7 +20,7 @@ use super::container;
 use super::ptr;
 use super::resources::{self, SCENE_FILE};
 use super::types::{Fmi2Type, StatusKind, fmi2CallbackFunctions, fmi2Status};
-use crate::model::{Error as ModelError, Model, ModelState};
+use crate::model::{Error as ModelError, InputId, Model, ModelState, OutputId, ParameterId};
 use crate::scene::Scene;
 use crate::text::num;
 use serde::{Deserialize, Serialize};
@@ -187,12 +187,12 @@ fn c_string(s: &str) -> CString {
 /// Which variable a value reference designates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VarRef {
-    /// Parameter index.
-    Parameter(usize),
-    /// Input index.
-    Input(usize),
-    /// Output index.
-    Output(usize),
+    /// A parameter.
+    Parameter(ParameterId),
+    /// An input.
+    Input(InputId),
+    /// An output.
+    Output(OutputId),
 }
 
 /// A saved FMU state: the model state plus what the FMI layer adds. This
@@ -432,21 +432,21 @@ impl Instance {
     pub fn resolve(&self, vr: u32) -> Option<VarRef> {
         let vr = vr as usize;
         if vr < self.n_par {
-            Some(VarRef::Parameter(vr))
+            self.model.parameter_at(vr).map(VarRef::Parameter)
         } else if vr < self.n_par + self.n_in {
-            Some(VarRef::Input(vr - self.n_par))
-        } else if vr < self.n_par + self.n_in + self.n_out {
-            Some(VarRef::Output(vr - self.n_par - self.n_in))
+            self.model.input_at(vr - self.n_par).map(VarRef::Input)
         } else {
-            None
+            self.model
+                .output_at(vr - self.n_par - self.n_in)
+                .map(VarRef::Output)
         }
     }
 
     fn var_name(&self, r: VarRef) -> &str {
         match r {
-            VarRef::Parameter(i) => &self.model.parameters()[i].name,
-            VarRef::Input(i) => &self.model.inputs()[i].name,
-            VarRef::Output(i) => &self.model.outputs()[i].name,
+            VarRef::Parameter(i) => &self.model.parameters()[i.index()].name,
+            VarRef::Input(i) => &self.model.inputs()[i.index()].name,
+            VarRef::Output(i) => &self.model.outputs()[i.index()].name,
         }
     }
 
@@ -490,15 +490,10 @@ impl Instance {
     /// simply overwrites). An out-of-range tolerance is not used
     /// (`fmi2Warning`, with the reason logged).
     fn experiment_tolerance(&mut self, tol: f64) -> fmi2Status {
-        let Some(i) = self
-            .model
-            .parameters()
-            .iter()
-            .position(|v| v.name == "solver.tolerance")
-        else {
+        let Some(i) = self.model.parameter_id("solver.tolerance") else {
             return fmi2OK;
         };
-        let start = self.model.parameters()[i].start;
+        let start = self.model.parameters()[i.index()].start;
         let now = self.model.parameter(i).unwrap_or(start);
         if now != start {
             self.log.log(
@@ -622,7 +617,7 @@ impl Instance {
             let v = match r {
                 VarRef::Parameter(i) => self.model.parameter(i).map_err(|e| e.to_string()),
                 VarRef::Input(i) => self.model.input(i).map_err(|e| e.to_string()),
-                VarRef::Output(i) => Ok(self.model.output(i)),
+                VarRef::Output(i) => self.model.output(i).map_err(|e| e.to_string()),
             };
             match v {
                 Ok(x) if x.is_finite() => values[k] = x,

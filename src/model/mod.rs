@@ -37,7 +37,7 @@ mod variables;
 pub use physics::{AUTO_ACTUATOR_BANDWIDTH, AUTO_DAMPING_RATIO, actuator_time_constant, physics};
 pub use state::{ModelState, Work};
 pub use step::StepReport;
-pub use variables::{VariableSpec, fold_edges};
+pub use variables::{InputId, OutputId, ParameterId, VariableSpec, fold_edges};
 
 use crate::scene::Scene;
 use crate::solver::stepper::{Dynamics, StepperMemory};

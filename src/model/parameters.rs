@@ -240,8 +240,9 @@ pub(super) fn parameter_table(scene: &Scene) -> (Vec<Parameter>, Vec<VariableSpe
 }
 
 impl Model {
-    /// Value of parameter `i`.
-    pub fn parameter(&self, i: usize) -> Result<f64, Error> {
+    /// Value of parameter `id`.
+    pub fn parameter(&self, id: super::ParameterId) -> Result<f64, Error> {
+        let i = id.0;
         self.state
             .parameters
             .get(i)
@@ -252,9 +253,10 @@ impl Model {
             })
     }
 
-    /// Set parameter `i`; only before [`Model::initialize`]. A non-finite or
-    /// out-of-range value is rejected and nothing changes.
-    pub fn set_parameter(&mut self, i: usize, value: f64) -> Result<(), Error> {
+    /// Set parameter `id`; only before [`Model::initialize`]. A non-finite
+    /// or out-of-range value is rejected and nothing changes.
+    pub fn set_parameter(&mut self, id: super::ParameterId, value: f64) -> Result<(), Error> {
+        let i = id.0;
         let spec = self.parameters.get(i).ok_or(Error::NoSuchVariable {
             kind: "parameter",
             index: i,

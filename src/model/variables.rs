@@ -152,7 +152,78 @@ pub fn fold_edges(scene: &Scene) -> Vec<FoldEdgeId> {
     es
 }
 
+/// Declares a typed handle to one kind of a model's variables: its
+/// position in the model's table of that kind.
+macro_rules! handle {
+    ($(#[doc = $doc:literal])* $name:ident) => {
+        $(#[doc = $doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub struct $name(pub(crate) usize);
+
+        impl $name {
+            /// Its position in the model's table of this kind (what the
+            /// FMU's value references follow).
+            pub fn index(self) -> usize {
+                self.0
+            }
+        }
+    };
+}
+
+handle! {
+    /// One of a model's parameters ([`Model::parameter_id`]).
+    ParameterId
+}
+handle! {
+    /// One of a model's inputs ([`Model::input_id`]).
+    InputId
+}
+handle! {
+    /// One of a model's outputs ([`Model::output_id`]).
+    OutputId
+}
+
 impl Model {
+    /// The parameter named `name`.
+    pub fn parameter_id(&self, name: &str) -> Option<ParameterId> {
+        self.parameters
+            .iter()
+            .position(|v| v.name == name)
+            .map(ParameterId)
+    }
+    /// The input named `name`.
+    pub fn input_id(&self, name: &str) -> Option<InputId> {
+        self.inputs.iter().position(|v| v.name == name).map(InputId)
+    }
+    /// The output named `name`.
+    pub fn output_id(&self, name: &str) -> Option<OutputId> {
+        self.outputs
+            .iter()
+            .position(|v| v.name == name)
+            .map(OutputId)
+    }
+    /// The parameter at position `i` of [`Model::parameters`], if there is one.
+    pub fn parameter_at(&self, i: usize) -> Option<ParameterId> {
+        (i < self.parameters.len()).then_some(ParameterId(i))
+    }
+    /// The input at position `i` of [`Model::inputs`], if there is one.
+    pub fn input_at(&self, i: usize) -> Option<InputId> {
+        (i < self.inputs.len()).then_some(InputId(i))
+    }
+    /// The output at position `i` of [`Model::outputs`], if there is one.
+    pub fn output_at(&self, k: usize) -> Option<OutputId> {
+        (k < self.outputs.len()).then_some(OutputId(k))
+    }
+
+    /// Every input, in the order of [`Model::inputs`].
+    pub fn input_ids(&self) -> impl Iterator<Item = InputId> + use<> {
+        (0..self.inputs.len()).map(InputId)
+    }
+    /// Every output, in the order of [`Model::outputs`].
+    pub fn output_ids(&self) -> impl Iterator<Item = OutputId> + use<> {
+        (0..self.outputs.len()).map(OutputId)
+    }
+
     /// Parameters (settable before [`Model::initialize`]).
     pub fn parameters(&self) -> &[VariableSpec] {
         &self.parameters
@@ -168,7 +239,8 @@ impl Model {
 
     /// Value of input `i` as last set (in force now; with ramped inputs,
     /// the value the next advance ends at).
-    pub fn input(&self, i: usize) -> Result<f64, Error> {
+    pub fn input(&self, id: InputId) -> Result<f64, Error> {
+        let i = id.0;
         self.input_spec(i)?;
         Ok(match self.scene.solver.input_timing {
             InputTiming::Hold => self.state.inputs_now[i],
@@ -188,7 +260,8 @@ impl Model {
     /// Ramped inputs: the value the next advance ends at. Non-finite values,
     /// and values beyond [`crate::scene::limits::MAX_MAGNITUDE`], are
     /// rejected.
-    pub fn set_input(&mut self, i: usize, value: f64) -> Result<(), Error> {
+    pub fn set_input(&mut self, id: InputId, value: f64) -> Result<(), Error> {
+        let i = id.0;
         let spec = self.input_spec(i)?;
         if let Err(reason) = crate::scene::limits::check_number(value) {
             return Err(Error::BadValue {
@@ -231,7 +304,13 @@ impl Model {
     /// input then grows linearly from its value over the advance, as
     /// `fmi2SetRealInputDerivatives` asks). It applies until the input or
     /// its derivative is set again. Not with ramped inputs.
-    pub fn set_input_derivative(&mut self, i: usize, order: i32, value: f64) -> Result<(), Error> {
+    pub fn set_input_derivative(
+        &mut self,
+        id: InputId,
+        order: i32,
+        value: f64,
+    ) -> Result<(), Error> {
+        let i = id.0;
         let spec = self.input_spec(i)?;
         let bad = |reason: &str| Error::BadValue {
             name: format!("derivative of order {order} of {}", spec.name),
@@ -257,7 +336,7 @@ impl Model {
 
     /// Whether input `i` follows the built-in ramp (`ramp.time` > 0 and a
     /// rest-angle actuator) instead of the values set on it.
-    pub fn is_ramped(&self, i: usize) -> bool {
+    pub(super) fn is_ramped(&self, i: usize) -> bool {
         self.state.phase == Phase::Running
             && self.scene.ramp.is_on()
             && self
@@ -269,7 +348,9 @@ impl Model {
 
     /// Current values of all outputs, in the order of [`Model::outputs`].
     pub fn output_values(&self) -> Vec<f64> {
-        (0..self.outputs.len()).map(|k| self.output(k)).collect()
+        (0..self.outputs.len())
+            .map(|k| self.output_value(k))
+            .collect()
     }
 
     /// Current value of output `k` (in the order of [`Model::outputs`]).
@@ -281,7 +362,18 @@ impl Model {
     /// energy); where the step evaluated the outputs, those of its end. The
     /// contact search's outputs (smallest gap, pairs, normal force) are
     /// likewise searched on their first read of a state.
-    pub fn output(&self, k: usize) -> f64 {
+    pub fn output(&self, id: OutputId) -> Result<f64, Error> {
+        if id.0 >= self.outputs.len() {
+            return Err(Error::NoSuchVariable {
+                kind: "output",
+                index: id.0,
+            });
+        }
+        Ok(self.output_value(id.0))
+    }
+
+    /// [`Model::output`] at position `k` (in range).
+    pub(crate) fn output_value(&self, k: usize) -> f64 {
         if let Some(o) = &self.state.outputs {
             return self.contact_output(k).unwrap_or(o[k]);
         }
@@ -362,7 +454,11 @@ impl Model {
     /// Kinetic, strain and crease energy now (J).
     pub fn energies(&self) -> [f64; 3] {
         if let Some(k) = self.outputs.iter().position(|v| v.name == "energy.kinetic") {
-            [self.output(k), self.output(k + 1), self.output(k + 2)]
+            [
+                self.output_value(k),
+                self.output_value(k + 1),
+                self.output_value(k + 2),
+            ]
         } else {
             [f64::NAN; 3]
         }
@@ -471,7 +567,7 @@ mod tests {
     fn outputs_read_from_the_state_equal_a_full_evaluation() {
         let mut m = Model::new(crate::benchmarks::miura_scene(1)).unwrap();
         m.initialize().unwrap();
-        let fold = m.inputs().iter().position(|v| v.name == "fold").unwrap();
+        let fold = m.input_id("fold").unwrap();
         m.set_input(fold, 0.5).unwrap();
         for _ in 0..3 {
             m.advance(0.01).unwrap();
@@ -492,7 +588,7 @@ mod tests {
                 "{name}: full {a}, read {b}"
             );
             assert_eq!(
-                m.output(k),
+                m.output(m.output_at(k).unwrap()).unwrap(),
                 *b,
                 "{name}: output(k) and output_values differ"
             );

@@ -5,7 +5,7 @@ use nalgebra::{Matrix3x2, Vector2, Vector3};
 use origami_fmu::dofs::DofLayout;
 use origami_fmu::ids::{FacetId, VertexId};
 use origami_fmu::mesh::builders::grid;
-use origami_fmu::model::{Model, StepReport};
+use origami_fmu::model::{InputId, Model, StepReport};
 use origami_fmu::scene::{CreaseStiffness, Fix, Integrator, Scene, Support};
 
 /// The integrators every dynamics test runs with: add a row here to run the
@@ -59,11 +59,9 @@ pub fn total_energy(model: &Model) -> f64 {
 }
 
 /// Index of the input called `name`.
-pub fn input(model: &Model, name: &str) -> usize {
+pub fn input(model: &Model, name: &str) -> InputId {
     model
-        .inputs()
-        .iter()
-        .position(|v| v.name == name)
+        .input_id(name)
         .unwrap_or_else(|| panic!("no input {name}"))
 }
 
