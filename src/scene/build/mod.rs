@@ -54,10 +54,11 @@ use super::planar;
 use super::{FlatEdges, LoadOptions, Loaded, Scene, refine};
 use crate::ids::{FacetId, FoldEdgeId, VertexId, vertex_ids};
 use crate::mesh::{Edge, EdgeKind, Mesh, MeshError};
-use edges::{Sides, fold_edges, read_edges};
+use edges::{FoldEdges, Listed, Sides, fold_edges, read_edges};
 use faces::{
     check_areas, check_faces, check_used, has_slit, orient, reference_coords, triangulate,
 };
+use nalgebra::Vector2;
 use physics::apply_physics;
 use size::{check_extent, choose_scale};
 use split::split;
@@ -152,17 +153,7 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     if nv == 0 {
         return Err(invalid("vertices_coords", "is empty"));
     }
-    // The size budget, before anything large is allocated.
-    let faces = &fold.faces_vertices;
-    let corners = faces.iter().map(Vec::len).sum();
-    let estimate = facet_estimate(nv, (!faces.is_empty()).then_some((faces.len(), corners)));
-    if estimate > MAX_FACETS {
-        return Err(over_budget(
-            "faces_vertices",
-            estimate,
-            "the pattern would triangulate into about",
-        ));
-    }
+    check_size_budget(fold, nv)?;
     let listed = read_edges(fold, nv, &mut warnings)?;
 
     let f_mode = options.f_edges.or(physics.import.f_edges).unwrap_or(
@@ -173,82 +164,22 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
         },
     );
 
-    // The flat reference in metres, and the faces (given, or traced).
-    let traced = fold.faces_vertices.is_empty();
-    if traced && listed.is_none() {
-        return Err(invalid(
-            "faces_vertices",
-            "is empty and there is no edges_vertices to trace faces from; a scene needs at \
-             least one face",
-        ));
-    }
-    if !traced {
-        check_faces(&fold.faces_vertices, nv)?;
-    }
-    let given = (!traced).then_some(&fold.faces_vertices[..]);
-    let mut coords = reference_coords(&fold.vertices_coords, given, fold)?;
-    let (scale, size_note) = choose_scale(fold, options, &physics.import, &coords)?;
-    for c in &mut coords {
-        *c *= scale;
-    }
-    check_extent(&coords)?;
-    let mut faces: Vec<Vec<usize>> = match &listed {
-        Some(l) if traced => {
-            let boundary: Vec<bool> = l
-                .assignment
-                .iter()
-                .map(|&a| a == Assignment::Boundary)
-                .collect();
-            let faces = planar::trace_faces(&coords, &l.v, &boundary)?;
-            if faces.is_empty() {
-                return Err(invalid(
-                    "edges_vertices",
-                    "no face can be traced from the edges: they enclose no area (a scene \
-                     needs at least one face)",
-                ));
-            }
-            notes.push(format!(
-                "faces: faces_vertices is missing; {} faces were traced from the edges (planar \
-                 graph)",
-                faces.len()
-            ));
-            faces
-        }
-        _ => fold.faces_vertices.clone(),
-    };
-    check_areas(&faces, &coords)?;
-    orient(&mut coords, &faces, fold, &mut warnings)?;
-    notes.push(size_note);
-    let slits = faces.iter().filter(|f| has_slit(f)).count();
-    if slits > 0 {
-        notes.push(format!(
-            "slits: {slits} face(s) run along an edge and back (a crease or cut ending \
-             inside the face); such a crease folds and stops in the paper, such a cut opens"
-        ));
-    }
-
+    let (mut coords, mut faces) = reference_and_faces(
+        fold,
+        options,
+        &physics.import,
+        listed.as_ref(),
+        &mut warnings,
+        &mut notes,
+    )?;
     let sides = Sides::new(&faces)?;
     let edges = fold_edges(listed, &sides, f_mode, &mut warnings)?;
-    let n_flat = (0..edges.v.len())
-        .filter(|&e| edges.assignment[e] == Assignment::Flat && edges.kind[e] != EdgeKind::Boundary)
-        .count();
-    if n_flat > 0 {
-        notes.push(match f_mode {
-            FlatEdges::Crease => format!(
-                "F edges: {n_flat} read as creases with target 0 unless edges_foldAngle gives \
-                 one (FOLD: a flat fold line); --f-edges smooth or ancf:import.f_edges reads \
-                 them as triangulation lines"
-            ),
-            FlatEdges::Smooth => format!(
-                "F edges: {n_flat} read as smooth edges (triangulation lines{}); --f-edges \
-                 crease reads them as creases",
-                if options.f_edges.or(physics.import.f_edges).is_none() {
-                    ", as Origami Simulator writes them"
-                } else {
-                    ""
-                }
-            ),
-        });
+    if let Some(note) = flat_edges_note(
+        &edges,
+        f_mode,
+        options.f_edges.or(physics.import.f_edges).is_none(),
+    ) {
+        notes.push(note);
     }
 
     check_used(&faces, nv)?;
@@ -282,16 +213,7 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
             "the pattern triangulates into",
         ));
     }
-    let refined = triangles
-        .len()
-        .saturating_mul(4usize.saturating_pow(physics.refine as u32));
-    if refined > MAX_FACETS {
-        return Err(over_budget(
-            "ancf:refine",
-            refined,
-            &format!("{} level(s) of refinement would make", physics.refine),
-        ));
-    }
+    check_refined_budget(triangles.len(), physics.refine)?;
 
     // The faces hold mesh vertices now (split copies after the FOLD ones).
     let triangles = triangles.into_iter().map(vertex_ids).collect();
@@ -311,19 +233,7 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     // after the FOLD edges are diagonals and cut sides, never creases).
     apply_physics(&mut scene, physics.clone(), &edges, &copies, &mut warnings)?;
 
-    // Thin-shell sanity: thickness against the shortest edge.
-    let shortest = scene
-        .mesh
-        .edge_ids()
-        .map(|e| scene.mesh.edge_length(e))
-        .fold(f64::INFINITY, f64::min);
-    if scene.material.thickness > 0.1 * shortest {
-        warnings.push(format!(
-            "ancf:material.thickness: {:.3e} m is more than a tenth of the shortest edge \
-             ({shortest:.3e} m); the thin-shell model may be inaccurate",
-            scene.material.thickness
-        ));
-    }
+    warnings.extend(thin_shell_warning(&scene));
 
     if physics.refine > 0 {
         scene = refine::refine(&scene, physics.refine)?;
@@ -332,6 +242,144 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
         scene,
         warnings,
         notes,
+    })
+}
+
+/// The size budget, before anything large is allocated: the facets the
+/// FOLD arrays would triangulate into.
+fn check_size_budget(fold: &FoldFile, nv: usize) -> Result<(), SceneError> {
+    let faces = &fold.faces_vertices;
+    let corners = faces.iter().map(Vec::len).sum();
+    let estimate = facet_estimate(nv, (!faces.is_empty()).then_some((faces.len(), corners)));
+    if estimate > MAX_FACETS {
+        return Err(over_budget(
+            "faces_vertices",
+            estimate,
+            "the pattern would triangulate into about",
+        ));
+    }
+    Ok(())
+}
+
+/// The facets left after `levels` of refinement within the budget.
+fn check_refined_budget(triangles: usize, levels: usize) -> Result<(), SceneError> {
+    let refined = triangles.saturating_mul(4usize.saturating_pow(levels as u32));
+    if refined > MAX_FACETS {
+        return Err(over_budget(
+            "ancf:refine",
+            refined,
+            &format!("{levels} level(s) of refinement would make"),
+        ));
+    }
+    Ok(())
+}
+
+/// Faces as lists of vertex indices, counter-clockwise.
+type Faces = Vec<Vec<usize>>;
+
+/// The flat reference in metres, and the faces (given, or traced from
+/// the edges), oriented and checked.
+fn reference_and_faces(
+    fold: &FoldFile,
+    options: &LoadOptions,
+    import: &keys::Import,
+    listed: Option<&Listed>,
+    warnings: &mut Vec<String>,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<Vector2<f64>>, Faces), SceneError> {
+    let nv = fold.vertices_coords.len();
+    // The flat reference in metres, and the faces (given, or traced).
+    let traced = fold.faces_vertices.is_empty();
+    if traced && listed.is_none() {
+        return Err(invalid(
+            "faces_vertices",
+            "is empty and there is no edges_vertices to trace faces from; a scene needs at \
+             least one face",
+        ));
+    }
+    if !traced {
+        check_faces(&fold.faces_vertices, nv)?;
+    }
+    let given = (!traced).then_some(&fold.faces_vertices[..]);
+    let mut coords = reference_coords(&fold.vertices_coords, given, fold)?;
+    let (scale, size_note) = choose_scale(fold, options, import, &coords)?;
+    for c in &mut coords {
+        *c *= scale;
+    }
+    check_extent(&coords)?;
+    let faces: Vec<Vec<usize>> = match listed {
+        Some(l) if traced => {
+            let boundary: Vec<bool> = l
+                .assignment
+                .iter()
+                .map(|&a| a == Assignment::Boundary)
+                .collect();
+            let faces = planar::trace_faces(&coords, &l.v, &boundary)?;
+            if faces.is_empty() {
+                return Err(invalid(
+                    "edges_vertices",
+                    "no face can be traced from the edges: they enclose no area (a scene \
+                     needs at least one face)",
+                ));
+            }
+            notes.push(format!(
+                "faces: faces_vertices is missing; {} faces were traced from the edges (planar \
+                 graph)",
+                faces.len()
+            ));
+            faces
+        }
+        _ => fold.faces_vertices.clone(),
+    };
+    check_areas(&faces, &coords)?;
+    orient(&mut coords, &faces, fold, warnings)?;
+    notes.push(size_note);
+    let slits = faces.iter().filter(|f| has_slit(f)).count();
+    if slits > 0 {
+        notes.push(format!(
+            "slits: {slits} face(s) run along an edge and back (a crease or cut ending \
+             inside the face); such a crease folds and stops in the paper, such a cut opens"
+        ));
+    }
+    Ok((coords, faces))
+}
+
+/// What the loader made of the FOLD file's flat (F) edges, if it has any.
+fn flat_edges_note(edges: &FoldEdges, f_mode: FlatEdges, by_default: bool) -> Option<String> {
+    let n_flat = (0..edges.v.len())
+        .filter(|&e| edges.assignment[e] == Assignment::Flat && edges.kind[e] != EdgeKind::Boundary)
+        .count();
+    (n_flat > 0).then(|| match f_mode {
+        FlatEdges::Crease => format!(
+            "F edges: {n_flat} read as creases with target 0 unless edges_foldAngle gives \
+                 one (FOLD: a flat fold line); --f-edges smooth or ancf:import.f_edges reads \
+                 them as triangulation lines"
+        ),
+        FlatEdges::Smooth => format!(
+            "F edges: {n_flat} read as smooth edges (triangulation lines{}); --f-edges \
+                 crease reads them as creases",
+            if by_default {
+                ", as Origami Simulator writes them"
+            } else {
+                ""
+            }
+        ),
+    })
+}
+
+/// Thin-shell sanity: the thickness against the shortest edge.
+fn thin_shell_warning(scene: &Scene) -> Option<String> {
+    let shortest = scene
+        .mesh
+        .edge_ids()
+        .map(|e| scene.mesh.edge_length(e))
+        .fold(f64::INFINITY, f64::min);
+    (scene.material.thickness > 0.1 * shortest).then(|| {
+        format!(
+            "ancf:material.thickness: {:.3e} m is more than a tenth of the shortest edge \
+             ({shortest:.3e} m); the thin-shell model may be inaccurate",
+            scene.material.thickness
+        )
     })
 }
 
