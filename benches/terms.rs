@@ -119,7 +119,6 @@ fn main() {
         k: 1.0,
         c: 100.0,
         m: 1e4,
-        exact: false,
     };
     // Rounds interleave the cases, so a slow spell of the shared machine
     // hits them alike; each keeps its best time.

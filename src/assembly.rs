@@ -183,9 +183,6 @@ pub struct MatrixCoeffs {
     pub m: f64,
     /// Damping coefficient.
     pub c: f64,
-    /// The exact tangent even where the assembler lags the membrane's
-    /// geometric stiffness ([`Assembler::lag_membrane_stiffness`]).
-    pub exact: bool,
 }
 
 /// The assembled system of one mesh.

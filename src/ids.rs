@@ -96,6 +96,7 @@ impl FoldEdgeId {
     }
 }
 
+#[doc(hidden)]
 /// Vertex ids from numbers: `vertex_ids([0, 1, 2])` is a triangle.
 pub fn vertex_ids<const N: usize>(v: [usize; N]) -> [VertexId; N] {
     v.map(VertexId)

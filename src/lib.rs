@@ -44,26 +44,46 @@
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
-pub mod assembly;
-pub mod benchmarks;
-pub mod cli;
-pub mod contact;
-pub mod cpu_time;
-pub mod crease;
-pub mod curves;
-pub mod dofs;
-pub mod element;
-pub mod fmi;
+// The public API: what a user of the Rust library needs (the README's
+// "Rust API" lists it).
 pub mod ids;
 pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod paraview;
-pub mod pictures;
-pub mod rigid;
-pub mod rng;
 pub mod scene;
+
+// Internals, public only for the crate's own benches, CLI binary and tests
+// (hidden from the documentation; no stability promised).
+#[doc(hidden)]
+pub mod assembly;
+#[doc(hidden)]
+pub mod benchmarks;
+#[doc(hidden)]
+pub mod cli;
+#[doc(hidden)]
+pub mod contact;
+#[doc(hidden)]
+pub mod cpu_time;
+#[doc(hidden)]
+pub mod crease;
+#[doc(hidden)]
+pub mod curves;
+#[doc(hidden)]
+pub mod dofs;
+#[doc(hidden)]
+pub mod element;
+#[doc(hidden)]
+pub mod fmi;
+#[doc(hidden)]
+pub mod pictures;
+#[doc(hidden)]
+pub mod rigid;
+#[doc(hidden)]
+pub mod rng;
+#[doc(hidden)]
 pub mod solver;
+#[doc(hidden)]
 pub mod text;
 
 pub use material::Material;
@@ -72,3 +92,8 @@ pub use model::{
     Error, InputId, Model, ModelState, OutputId, ParameterId, Phase, StepReport, VariableSpec,
 };
 pub use scene::{Scene, SceneError};
+
+/// The README's Rust example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

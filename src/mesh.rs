@@ -535,6 +535,7 @@ impl Mesh {
             .map(EdgeId)
     }
 
+    #[doc(hidden)]
     /// The triangles around vertex `v`, ordered counter-clockwise, with the
     /// edges between them: `edges[i]` precedes `faces[i]` and `edges[i+1]`
     /// follows it. For an interior vertex the fan is closed
@@ -550,6 +551,7 @@ impl Mesh {
         self.fan_of(v, &faces)
     }
 
+    #[doc(hidden)]
     /// The fans of all vertices, in vertex order (linear in the mesh size,
     /// where calling [`Mesh::fan`] for every vertex is quadratic).
     pub fn fans(&self) -> Result<Vec<Fan>, MeshError> {
@@ -629,6 +631,7 @@ impl Mesh {
     }
 }
 
+#[doc(hidden)]
 /// The counter-clockwise fan of triangles around one vertex (see [`Mesh::fan`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Fan {

@@ -27,6 +27,7 @@ const VTK_TRIANGLE: u8 = 5;
 /// VTK cell type of a line.
 const VTK_LINE: u8 = 3;
 
+#[doc(hidden)]
 /// One frame of the series: the mesh at one time and its fields.
 pub struct Frame<'a> {
     /// Current vertex positions (m).
@@ -81,6 +82,7 @@ impl std::fmt::Display for Exp {
     }
 }
 
+#[doc(hidden)]
 /// The text of one `.vtu` file. Fails when the frame's arrays disagree in
 /// length or hold a non-finite value (VTK's ASCII reader cannot read NaN).
 pub fn vtu_text(fr: &Frame) -> Result<String, String> {
@@ -260,6 +262,7 @@ fn xml_attr(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
+#[doc(hidden)]
 /// The text of a `.pvd` collection: one `DataSet` per (time, file name
 /// relative to the `.pvd`).
 pub fn pvd_text(entries: &[(f64, String)]) -> String {
@@ -294,11 +297,58 @@ pub struct Series {
     line_output: Vec<Option<usize>>,
 }
 
+/// Why a [`Series`] could not be written.
+#[derive(Debug)]
+pub enum SeriesError {
+    /// A directory could not be created or a file not be written.
+    Io {
+        /// What was being done ("create" or "write").
+        action: &'static str,
+        /// Where.
+        path: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// The frame's arrays do not fit the mesh.
+    Frame(String),
+}
+
+impl std::fmt::Display for SeriesError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SeriesError::Io {
+                action,
+                path,
+                source,
+            } => write!(f, "cannot {action} {}: {source}", path.display()),
+            SeriesError::Frame(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for SeriesError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            SeriesError::Io { source, .. } => Some(source),
+            SeriesError::Frame(_) => None,
+        }
+    }
+}
+
+/// The I/O error of `action` on `path`.
+fn io_error(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> SeriesError {
+    let path = path.to_path_buf();
+    move |source| SeriesError::Io {
+        action,
+        path,
+        source,
+    }
+}
+
 impl Series {
     /// Start a series of `model`'s mesh in `dir` (created if missing).
-    pub fn new(dir: &Path, stem: &str, model: &Model) -> Result<Series, String> {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    pub fn new(dir: &Path, stem: &str, model: &Model) -> Result<Series, SeriesError> {
+        std::fs::create_dir_all(dir).map_err(io_error("create", dir))?;
         let mesh = &model.scene().mesh;
         let reference = mesh.coords().iter().map(|x| [x.x, x.y, 0.0]).collect();
         let areas = mesh.facet_ids().map(|t| mesh.area(t)).collect();
@@ -334,7 +384,7 @@ impl Series {
     }
 
     /// Write the model's current state as the next frame at its time.
-    pub fn write(&mut self, model: &Model) -> Result<(), String> {
+    pub fn write(&mut self, model: &Model) -> Result<(), SeriesError> {
         let mesh = &model.scene().mesh;
         let points: Vec<[f64; 3]> = mesh
             .vertex_ids()
@@ -356,19 +406,19 @@ impl Series {
             facet_area: &self.areas,
             lines: &self.lines,
             line_angle: &angles,
-        })?;
+        })
+        .map_err(SeriesError::Frame)?;
         let name = format!("{}_{:05}.vtu", self.stem, self.entries.len());
         let path = self.dir.join(&name);
-        std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        std::fs::write(&path, text).map_err(io_error("write", &path))?;
         self.entries.push((model.time(), name));
         Ok(())
     }
 
     /// Write the `.pvd` collection of the frames so far; returns its path.
-    pub fn finish(&self) -> Result<PathBuf, String> {
+    pub fn finish(&self) -> Result<PathBuf, SeriesError> {
         let path = self.dir.join(format!("{}.pvd", self.stem));
-        std::fs::write(&path, pvd_text(&self.entries))
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        std::fs::write(&path, pvd_text(&self.entries)).map_err(io_error("write", &path))?;
         Ok(path)
     }
 }

@@ -226,7 +226,6 @@ fn barrier_force_and_tangent_match_finite_differences() {
         k: 1.0,
         m: 0.0,
         c: 0.0,
-        exact: false,
     };
     eval_at(&asm, &q, &zeros, Some((&mut k, co)));
     let err = matrix_fd_error(&asm, &q, &zeros, &k, false, 1e-8);
@@ -253,7 +252,6 @@ fn dashpot_and_friction_damping_match_finite_differences() {
         k: 0.0,
         m: 0.0,
         c: 1.0,
-        exact: false,
     };
     let ev = eval_at(&asm, &q, &v, Some((&mut c, co)));
     assert!(ev.contact_damping_power > 0.0 && ev.friction_power > 0.0);

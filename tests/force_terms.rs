@@ -178,7 +178,6 @@ fn an_outside_term_adds_force_energy_matrix_and_hook() {
         k: 1.0,
         m: 0.0,
         c: 0.0,
-        exact: false,
     };
     let mut vals = vec![0.0; asm.nnz()];
     let mut ev2 = Evaluation::default();

@@ -84,7 +84,6 @@ fn residual_and_energy(mesh: &Mesh, interp: Interpolation, u: &[f64], h: f64) ->
         k: 1.0,
         m: 0.0,
         c: 0.0,
-        exact: false,
     };
     asm.evaluate(&st, &mut ev, Some((&mut vals, co))).unwrap();
     // No slot is fixed: free index == DOF index.

@@ -71,7 +71,6 @@ pub fn flat_iteration_matrix(
                 k: 1.0,
                 c: 0.6 / (0.3 * h),
                 m: 1.0 / (0.3 * h * h),
-                exact: false,
             },
         )),
     )

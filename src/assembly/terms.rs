@@ -151,7 +151,6 @@ impl ForceTerm for Shell {
             .map(|(_, co)| co.k + co.c * p.beta)
             .unwrap_or(0.0);
         let need_tangent = matrix.is_some() || p.beta != 0.0;
-        let exact = matrix.as_ref().is_some_and(|(_, co)| co.exact);
         let mut fe = SVector::<f64, 27>::zeros();
         let mut ke = SMatrix::<f64, 27, 27>::zeros();
         for (f, el) in asm.elements.iter().enumerate() {
@@ -162,7 +161,7 @@ impl ForceTerm for Shell {
                 &e,
                 &mut fe,
                 if need_tangent { Some(&mut ke) } else { None },
-                if exact { None } else { self.lagged.get(f) },
+                self.lagged.get(f),
             );
             out.strain_energy += en.membrane + en.bending;
             if p.beta != 0.0 {

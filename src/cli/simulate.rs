@@ -396,8 +396,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "scene".into());
-            let mut s = crate::paraview::Series::new(dir, &stem, &model)?;
-            s.write(&model)?;
+            let mut s =
+                crate::paraview::Series::new(dir, &stem, &model).map_err(|e| e.to_string())?;
+            s.write(&model).map_err(|e| e.to_string())?;
             Some(s)
         }
         None => None,
@@ -435,7 +436,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             p.record(k, &model, &values);
         }
         if let Some(s) = series.as_mut() {
-            s.write(&model)?;
+            s.write(&model).map_err(|e| e.to_string())?;
         }
         progress.update(k, t, total.steps);
     }
@@ -446,7 +447,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
     if let Some(s) = &series {
-        super::err(&format!("ParaView series -> {}\n", s.finish()?.display()));
+        super::err(&format!(
+            "ParaView series -> {}\n",
+            s.finish().map_err(|e| e.to_string())?.display()
+        ));
     }
     if let Some(p) = &pictures {
         p.write(args, &title)?;

@@ -17,7 +17,7 @@
 //! magic number, the version, the checksum and the GUID, so that a
 //! truncated, extended or corrupted state, or one of another scene, is
 //! refused before its payload is parsed. The checksum detects corruption
-//! (every single-byte change, see [`super::resources::hash128`]), not
+//! (every single-byte change, see `hash128`), not
 //! malice: a forged payload with a recomputed checksum passes here and is
 //! refused by the checks of every value it holds
 //! ([`crate::model::Model::check_state`]). The payload is opaque to this

@@ -34,10 +34,16 @@ mod step;
 mod system;
 mod variables;
 
-pub use physics::{AUTO_ACTUATOR_BANDWIDTH, AUTO_DAMPING_RATIO, actuator_time_constant, physics};
-pub use state::{ModelState, Work};
+pub use physics::actuator_time_constant;
+#[doc(hidden)]
+pub use physics::{AUTO_ACTUATOR_BANDWIDTH, AUTO_DAMPING_RATIO, physics};
+pub use state::ModelState;
+#[doc(hidden)]
+pub use state::Work;
 pub use step::StepReport;
-pub use variables::{InputId, OutputId, ParameterId, VariableSpec, fold_edges};
+#[doc(hidden)]
+pub use variables::fold_edges;
+pub use variables::{InputId, OutputId, ParameterId, VariableSpec};
 
 use crate::scene::Scene;
 use crate::solver::stepper::{Dynamics, StepperMemory};
@@ -248,6 +254,7 @@ impl Model {
 }
 
 impl Model {
+    #[doc(hidden)]
     /// Contact at the current state (None without contact, and before
     /// [`Model::initialize`], when there are no positions to search):
     /// smallest gap, active pairs, normal force.
@@ -265,12 +272,14 @@ impl Model {
         )
     }
 
+    #[doc(hidden)]
     /// Work so far: dissipated by contact (friction and normal dashpots)
     /// and done by the inputs.
     pub fn work(&self) -> state::Work {
         self.state.work
     }
 
+    #[doc(hidden)]
     /// Run the intersection checker on the current state: facets sampled
     /// with `m` subdivisions, distances searched up to `search` (m).
     pub fn check_intersections(

@@ -31,7 +31,7 @@ pub fn physics(sc: &Scene) -> Physics {
 
 /// Default damping: mass-proportional damping of the deformation rate
 /// (rigid motion undamped, see [`crate::rigid`]) with damping ratio
-/// [`AUTO_DAMPING_RATIO`] on the folding mode ([`folding_omega`]). Every
+/// [`AUTO_DAMPING_RATIO`] on the folding mode (`folding_omega`). Every
 /// deformation mode then decays at the same rate alpha / 2, so a fold
 /// settles within a few of its periods.
 fn auto_alpha(sc: &Scene, k_per_length: f64) -> f64 {
@@ -55,7 +55,7 @@ pub const AUTO_ACTUATOR_BANDWIDTH: f64 = 4.0;
 
 /// The actuators' time constant (s): the scene's, or automatic: the
 /// natural frequency [`AUTO_ACTUATOR_BANDWIDTH`] times the folding mode's
-/// ([`folding_omega`]), fast against the sheet's folding and slow against
+/// (`folding_omega`), fast against the sheet's folding and slow against
 /// its facets' bending, so a held or stepped input folds the sheet without
 /// ringing the facets. 0 where the folding frequency is not positive (no
 /// crease stiffness).

@@ -11,57 +11,74 @@ use crate::solver::stepper::{Dynamics, StepperMemory};
 use crate::text::num;
 use serde::{Deserialize, Serialize};
 
-/// A saved model state (see [`Model::save_state`]); serde-serializable.
+/// A saved model state (see [`Model::save_state`]): an opaque snapshot,
+/// serde-serializable; its fields are the crate's internals.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ModelState {
     /// Simulation time.
+    #[doc(hidden)]
     pub time: f64,
     /// Positions, velocities, accelerations (all DOFs; empty before initialization).
+    #[doc(hidden)]
     pub dynamics: Dynamics,
     /// Unwrapped angle of every crease end at `time` (continuity through 0 = 2 pi).
+    #[doc(hidden)]
     pub crease_theta: Vec<f64>,
     /// Input values in force at `time`.
+    #[doc(hidden)]
     pub inputs_now: Vec<f64>,
     /// Input values at the end of the next advance before slopes (equal to
     /// `inputs_now` unless the scene ramps its inputs).
+    #[doc(hidden)]
     pub inputs_next: Vec<f64>,
     /// First time derivative of each input over the next advance.
     #[serde(default)]
+    #[doc(hidden)]
     pub input_slopes: Vec<f64>,
     /// Whether a damping parameter was set (automatic damping is then off).
     #[serde(default)]
+    #[doc(hidden)]
     pub damping_set: bool,
     /// Whether `actuator.time_constant` was set (the automatic one is then off).
     #[serde(default)]
+    #[doc(hidden)]
     pub actuator_set: bool,
     /// Each actuator's value and rate: what its input has moved it to
     /// ([`crate::model::actuator_time_constant`]).
     #[serde(default)]
+    #[doc(hidden)]
     pub actuators: Vec<[f64; 2]>,
     /// What the stepper carries from one advance to the next: the step it
     /// proposes, the predictor's memory, where its iteration matrix was
     /// formed.
+    #[doc(hidden)]
     pub memory: StepperMemory,
     /// Parameter values.
+    #[doc(hidden)]
     pub parameters: Vec<f64>,
     /// Phase.
+    #[doc(hidden)]
     pub phase: Phase,
     /// Output values at `time` where the last step evaluated them (its
     /// state was evaluated in full); None: they are evaluated from this
     /// state when read ([`Model::output_values`]), so a communication step
     /// pays for its outputs only if the master reads them.
     #[serde(default)]
+    #[doc(hidden)]
     pub outputs: Option<Vec<f64>>,
     /// Work done so far.
     #[serde(default)]
+    #[doc(hidden)]
     pub work: Work,
     /// Friction's and the contact dashpots' forces at the last accepted
     /// state (their work over the next step starts from them).
     #[serde(default)]
+    #[doc(hidden)]
     pub dissipative_force: crate::assembly::DissipativeForce,
     /// Slot pairs the matrix pattern holds beyond the sheet's own (contact
     /// pairs met so far): a restore factors with the same pattern.
     #[serde(default)]
+    #[doc(hidden)]
     pub extra_pairs: Vec<(usize, usize)>,
 }
 
@@ -120,7 +137,7 @@ impl Model {
                 // Put the pattern back (it was factored before).
                 sys.asm.set_extra_pairs(old);
                 let _ = sys.rebuild_solver();
-                return Err(Error::State(e));
+                return Err(Error::State(e.to_string()));
             }
         }
         if let Some(sys) = fresh {
@@ -221,6 +238,7 @@ impl Model {
         Ok(())
     }
 
+    #[doc(hidden)]
     /// Give the sheet a rigid velocity field v(x) = linear + angular x (x -
     /// center), on every free DOF (supports and prescribed motions keep
     /// theirs), and make the accelerations consistent with it. Allowed after
@@ -265,6 +283,7 @@ impl Model {
         self.accelerations_or_roll_back(saved)
     }
 
+    #[doc(hidden)]
     /// Move the listed vertices rigidly, `x -> R x + t` (their gradients
     /// turn with `R`), and make the accelerations consistent: to start a
     /// scene with parts placed apart from the flat pattern (a panel above
@@ -413,7 +432,6 @@ fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result
     for (what, k) in [
         ("extrapolation_streak", c.extrapolation_streak),
         ("held_streak", c.held_streak),
-        ("early_forms", c.early_forms),
     ] {
         if k > MAX_COUNT {
             return Err(format!(

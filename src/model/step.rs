@@ -155,6 +155,7 @@ impl Model {
         Ok(report)
     }
 
+    #[doc(hidden)]
     /// Counts and times of the implicit stepper's sparse solver so far
     /// (None before initialize or with an explicit integrator): which
     /// factorizations (Cholesky, LDLT, LU) the iteration matrices needed.
@@ -340,8 +341,7 @@ impl Advance {
                 }
                 (None, None) => unreachable!("a policy gives a controller or substeps"),
             };
-            let may_shorten = ctl.as_ref().is_some_and(|c| c.may_shorten(h));
-            let out = match self.attempt(sys, state, h, s_end, may_shorten) {
+            let out = match self.attempt(sys, state, h, s_end) {
                 Ok(out) => out,
                 Err(Failure { reason, outcome }) => {
                     // The failed attempt's work counts too.
@@ -392,7 +392,6 @@ impl Advance {
         state: &ModelState,
         h: f64,
         s_end: f64,
-        may_shorten: bool,
     ) -> Result<Outcome, Failure> {
         let mut u = std::mem::take(&mut self.u);
         self.inputs_at(s_end, &mut u);
@@ -411,7 +410,6 @@ impl Advance {
             h,
             drive: &drive,
             memory: state.memory.newton,
-            may_shorten,
         };
         let mech = Mechanics {
             asm: &sys.asm,

@@ -8,10 +8,10 @@ use crate::contact::ContactTerm;
 use crate::element::ElementOptions;
 use crate::ids::FoldEdgeId;
 use crate::scene::{ActuatorMode, Fix, Integrator as SceneIntegrator, Scene, SolverSettings};
-use crate::solver::SparseSolver;
 use crate::solver::central_difference::CentralDifference;
 use crate::solver::generalized_alpha::{self as ga, GeneralizedAlpha};
 use crate::solver::stepper::Stepper;
+use crate::solver::{LinearError, SparseSolver};
 use std::collections::HashMap;
 
 /// Everything built from the scene and parameters: by [`Model::new`], and
@@ -40,7 +40,7 @@ pub(super) struct System {
 impl System {
     /// A new sparse solver for the assembler's pattern as it is now (after
     /// the pattern grew or was restored); the iteration matrix is gone.
-    pub(super) fn rebuild_solver(&mut self) -> Result<(), String> {
+    pub(super) fn rebuild_solver(&mut self) -> Result<(), LinearError> {
         let stats = self.solver.stats();
         self.solver = SparseSolver::new_blocked(
             self.asm.n_free,
@@ -158,7 +158,7 @@ impl System {
             3,
             Some(&block_coords),
         )
-        .map_err(Error::Scene)?;
+        .map_err(|e| Error::Scene(e.to_string()))?;
         let nends = asm.creases.len();
         let mut rest = vec![Vec::new(); nends];
         let mut torque = vec![Vec::new(); nends];

@@ -479,6 +479,7 @@ impl Model {
         }
     }
 
+    #[doc(hidden)]
     /// Strain energy (membrane + bending, J) of each mesh triangle now, in
     /// the order of `scene().mesh.triangles()`; zeros before initialization
     /// (the flat reference state is stress-free).

@@ -285,6 +285,7 @@ fn string_list(v: &Value, key: &str) -> Result<Vec<String>, SceneError> {
         .collect()
 }
 
+#[doc(hidden)]
 /// A FOLD file's frames with their keys, the values unparsed (borrowed
 /// from the text): the text is read once, and reading a frame costs the
 /// size of that frame and its parents, so that every frame of a file can

@@ -44,17 +44,25 @@ use crate::mesh::Mesh;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+#[doc(hidden)]
 pub mod build;
 mod error;
 pub mod fold;
+#[doc(hidden)]
 pub mod keys;
+#[doc(hidden)]
 pub mod limits;
 pub mod patterns;
 mod planar;
+#[doc(hidden)]
 pub mod refine;
+#[doc(hidden)]
 pub mod triangulate;
 
+pub use crate::contact::ContactSettings;
+pub use crate::element::Rule as Quadrature;
 pub use crate::material::Material;
+pub use crate::solver::IntegrationParameters;
 pub use build::from_fold;
 pub use error::SceneError;
 pub use fold::{FoldFile, FrameSelector};

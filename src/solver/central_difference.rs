@@ -43,7 +43,8 @@ impl CentralDifference {
     /// Factor the mass matrix and estimate `omega_max` at the state `q`
     /// (crease rest angles `theta0`) by power iteration on `M^-1 K`.
     pub fn new(asm: &Assembler, q: &[f64], theta0: &[f64]) -> Result<Self, String> {
-        let mut mass = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())?;
+        let mut mass = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
+            .map_err(|e| format!("mass matrix: {e}"))?;
         mass.factor(asm.mass_values())
             .map_err(|e| format!("mass matrix: {e}"))?;
         let n = asm.n_dofs();
@@ -67,7 +68,6 @@ impl CentralDifference {
                     k: 1.0,
                     m: 0.0,
                     c: 0.0,
-                    exact: false,
                 },
             )),
         )?;
@@ -240,7 +240,7 @@ fn power_iteration(asm: &Assembler, k: &[f64], mass: &mut SparseSolver) -> Resul
                 y[asm.row_idx[p]] += k[p] * xj;
             }
         }
-        mass.solve_in_place(&mut y)?;
+        mass.solve_in_place(&mut y).map_err(|e| e.to_string())?;
         let ny = y.iter().map(|a| a * a).sum::<f64>().sqrt();
         let nx = x.iter().map(|a| a * a).sum::<f64>().sqrt();
         let new = ny / nx;

@@ -21,6 +21,65 @@ use faer::{Conj, MatMut, Par, Side};
 use nalgebra::DMatrix;
 // Phase times are CPU time: the calling thread's clock, not the wall.
 use crate::cpu_time::CpuInstant as Instant;
+
+/// Why the sparse solver could not analyse, factor or solve.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinearError {
+    /// The fill-reducing ordering failed.
+    Ordering(String),
+    /// faer's symbolic analysis failed (`what`: Cholesky or LU).
+    Symbolic {
+        /// Which factorization.
+        what: &'static str,
+        /// faer's error.
+        detail: String,
+    },
+    /// The matrix has entries that are not finite.
+    NonFiniteMatrix,
+    /// No factorization (Cholesky, LDLT or LU) succeeded.
+    Singular(String),
+    /// A low-rank part of the wrong size.
+    LowRankSize {
+        /// Values of `U`.
+        values: usize,
+        /// Unknowns of the matrix.
+        unknowns: usize,
+        /// Rank of the part.
+        rank: usize,
+    },
+    /// The low-rank part makes the matrix singular.
+    LowRankSingular,
+    /// A solve produced values that are not finite.
+    NonFiniteSolution,
+    /// A solve before any factorization.
+    NotFactored,
+}
+
+impl std::fmt::Display for LinearError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LinearError::Ordering(e) => write!(f, "{e}"),
+            LinearError::Symbolic { what, detail } => {
+                write!(f, "symbolic {what} failed: {detail}")
+            }
+            LinearError::NonFiniteMatrix => write!(f, "matrix has non-finite entries"),
+            LinearError::Singular(detail) => write!(f, "matrix is singular: {detail}"),
+            LinearError::LowRankSize {
+                values,
+                unknowns,
+                rank,
+            } => write!(
+                f,
+                "low-rank part: U has {values} values for {unknowns} unknowns and rank {rank}"
+            ),
+            LinearError::LowRankSingular => write!(f, "low-rank part makes the matrix singular"),
+            LinearError::NonFiniteSolution => write!(f, "linear solve produced non-finite values"),
+            LinearError::NotFactored => write!(f, "no factorization"),
+        }
+    }
+}
+
+impl std::error::Error for LinearError {}
 use std::time::Duration;
 
 /// A dense low-rank part of a matrix that its sparse pattern cannot hold:
@@ -151,7 +210,7 @@ fn block_ordering(
     pattern: &SymbolicSparseColMat<usize>,
     block: usize,
     nested: Option<&[[f64; 3]]>,
-) -> Result<(Vec<usize>, Vec<usize>), String> {
+) -> Result<(Vec<usize>, Vec<usize>), LinearError> {
     let n = pattern.nrows();
     let nb = n / block;
     let (xadj, adj) = block_graph(pattern, block);
@@ -162,7 +221,8 @@ fn block_ordering(
                 adj: &adj,
             },
             coords,
-        )?,
+        )
+        .map_err(LinearError::Ordering)?,
         None => {
             // AMD wants the diagonal too.
             let mut bcol = Vec::with_capacity(nb + 1);
@@ -173,7 +233,7 @@ fn block_ordering(
                 brow.extend_from_slice(&adj[xadj[j]..xadj[j + 1]]);
                 bcol.push(brow.len());
             }
-            super::ordering::amd(nb, bcol, brow)?
+            super::ordering::amd(nb, bcol, brow).map_err(LinearError::Ordering)?
         }
     };
     let sfwd: Vec<usize> = fwd
@@ -267,7 +327,7 @@ impl PermutedLower {
 impl SparseSolver {
     /// Analyse the pattern given as CSC column pointers and sorted row
     /// indices (both triangles present).
-    pub fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Result<Self, String> {
+    pub fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Result<Self, LinearError> {
         Self::new_blocked(n, col_ptr, row_idx, 1, None)
     }
 
@@ -285,7 +345,7 @@ impl SparseSolver {
         row_idx: Vec<usize>,
         block: usize,
         coords: Option<&[[f64; 3]]>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, LinearError> {
         let blocked = block > 1 && n.is_multiple_of(block);
         let ordering = match coords {
             Some(coords) if blocked && n >= NESTED_DISSECTION_MIN => {
@@ -303,7 +363,7 @@ impl SparseSolver {
         col_ptr: Vec<usize>,
         row_idx: Vec<usize>,
         ordering: Ordering,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, LinearError> {
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let perm = match ordering {
             Ordering::Amd => None,
@@ -332,7 +392,10 @@ impl SparseSolver {
                 ..Default::default()
             },
         )
-        .map_err(|e| format!("symbolic Cholesky failed: {e:?}"))?;
+        .map_err(|e| LinearError::Symbolic {
+            what: "Cholesky",
+            detail: format!("{e:?}"),
+        })?;
         let mem = MemBuffer::new(StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
@@ -416,7 +479,7 @@ impl SparseSolver {
 
     /// Factor the matrix with these values (in pattern order). Any
     /// low-rank part of the previous matrix is dropped.
-    pub fn factor(&mut self, values: &[f64]) -> Result<(), String> {
+    pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         let start = Instant::now();
         self.low_rank = None;
         let r = self.factor_inner(values);
@@ -429,22 +492,23 @@ impl SparseSolver {
     /// solves now, and per solve two products with `U` and `A^-1 U` and a
     /// `rank x rank` solve. Errors if nothing is factored, `U` has the
     /// wrong size, or the sum is singular.
-    pub fn set_low_rank(&mut self, lr: LowRank) -> Result<(), String> {
+    pub fn set_low_rank(&mut self, lr: LowRank) -> Result<(), LinearError> {
         let start = Instant::now();
         let r = self.set_low_rank_inner(lr);
         self.stats.factor_time += start.elapsed();
         r
     }
 
-    fn set_low_rank_inner(&mut self, lr: LowRank) -> Result<(), String> {
+    fn set_low_rank_inner(&mut self, lr: LowRank) -> Result<(), LinearError> {
         self.low_rank = None;
         let n = self.pattern.nrows();
         let rank = lr.rank();
         if lr.u.len() != n * rank || lr.s.ncols() != rank {
-            return Err(format!(
-                "low-rank part: U has {} values for {n} unknowns and rank {rank}",
-                lr.u.len()
-            ));
+            return Err(LinearError::LowRankSize {
+                values: lr.u.len(),
+                unknowns: n,
+                rank,
+            });
         }
         if rank == 0 {
             return Ok(());
@@ -456,7 +520,7 @@ impl SparseSolver {
             let x = MatMut::from_column_major_slice_mut(&mut z, n, rank);
             f.solve_in_place_with_conj(Conj::No, x, Par::Seq, MemStack::new(&mut self.mem));
             if z.iter().any(|v| !v.is_finite()) {
-                return Err("linear solve produced non-finite values".into());
+                return Err(LinearError::NonFiniteSolution);
             }
         } else {
             for col in z.chunks_mut(n) {
@@ -477,7 +541,7 @@ impl SparseSolver {
         let c = (&c + c.transpose()) * 0.5;
         let capacitance = c.lu();
         if !capacitance.is_invertible() {
-            return Err("low-rank part makes the matrix singular".into());
+            return Err(LinearError::LowRankSingular);
         }
         self.low_rank = Some(Woodbury {
             u: lr.u,
@@ -487,10 +551,10 @@ impl SparseSolver {
         Ok(())
     }
 
-    fn factor_inner(&mut self, values: &[f64]) -> Result<(), String> {
+    fn factor_inner(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.kind = None;
         if values.iter().any(|v| !v.is_finite()) {
-            return Err("matrix has non-finite entries".into());
+            return Err(LinearError::NonFiniteMatrix);
         }
         // Not positive definite by the one route: LDLT next.
         let mut llt_failed = false;
@@ -561,14 +625,16 @@ impl SparseSolver {
         self.factor_lu(values)
     }
 
-    fn factor_lu(&mut self, values: &[f64]) -> Result<(), String> {
+    fn factor_lu(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.kind = None;
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
         if self.sym_lu.is_none() {
-            self.sym_lu = Some(
-                SymbolicLu::try_new(self.pattern.as_ref())
-                    .map_err(|e| format!("symbolic LU failed: {e:?}"))?,
-            );
+            self.sym_lu = Some(SymbolicLu::try_new(self.pattern.as_ref()).map_err(|e| {
+                LinearError::Symbolic {
+                    what: "LU",
+                    detail: format!("{e:?}"),
+                }
+            })?);
         }
         let sym = self.sym_lu.clone().expect("just set");
         match Lu::try_new_with_symbolic(sym, a) {
@@ -578,13 +644,13 @@ impl SparseSolver {
                 self.kind = Some(FactorKind::Lu);
                 Ok(())
             }
-            Err(e) => Err(format!("matrix is singular: {e:?}")),
+            Err(e) => Err(LinearError::Singular(format!("{e:?}"))),
         }
     }
 
     /// Solve with the latest factorization, overwriting `rhs` with the
     /// solution. Errors if nothing is factored or the result is not finite.
-    pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), String> {
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), LinearError> {
         let start = Instant::now();
         let r = self
             .solve_inner(rhs)
@@ -594,10 +660,10 @@ impl SparseSolver {
         r
     }
 
-    fn solve_inner(&mut self, rhs: &mut [f64]) -> Result<(), String> {
+    fn solve_inner(&mut self, rhs: &mut [f64]) -> Result<(), LinearError> {
         let n = rhs.len();
         match self.kind {
-            None => return Err("no factorization".into()),
+            None => return Err(LinearError::NotFactored),
             Some(FactorKind::Llt) => {
                 let f = LltRef::new(&self.symbolic, &self.l_values);
                 let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
@@ -626,14 +692,14 @@ impl SparseSolver {
             }
         }
         if rhs.iter().any(|v| !v.is_finite()) {
-            return Err("linear solve produced non-finite values".into());
+            return Err(LinearError::NonFiniteSolution);
         }
         Ok(())
     }
 
     /// `x += Z C^-1 U^T x` (with `x = A^-1 b` on entry): the solution with
     /// the low-rank part in force, if any.
-    fn apply_low_rank(&self, x: &mut [f64]) -> Result<(), String> {
+    fn apply_low_rank(&self, x: &mut [f64]) -> Result<(), LinearError> {
         let Some(w) = &self.low_rank else {
             return Ok(());
         };
@@ -649,7 +715,7 @@ impl SparseSolver {
         let y = w
             .capacitance
             .solve(&ux)
-            .ok_or("low-rank part makes the matrix singular")?;
+            .ok_or(LinearError::LowRankSingular)?;
         for (j, zj) in w.z.chunks(n).enumerate() {
             let yj = y[j];
             for (xi, zi) in x.iter_mut().zip(zj) {
@@ -657,7 +723,7 @@ impl SparseSolver {
             }
         }
         if x.iter().any(|v| !v.is_finite()) {
-            return Err("linear solve produced non-finite values".into());
+            return Err(LinearError::NonFiniteSolution);
         }
         Ok(())
     }
@@ -854,6 +920,14 @@ mod tests {
                 s: DMatrix::identity(2, 2),
             })
             .unwrap_err();
-        assert!(err.contains("low-rank"), "{err}");
+        assert_eq!(
+            err,
+            LinearError::LowRankSize {
+                values: n,
+                unknowns: n,
+                rank: 2
+            }
+        );
+        assert!(err.to_string().contains("low-rank"), "{err}");
     }
 }

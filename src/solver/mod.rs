@@ -14,5 +14,5 @@ pub mod step_control;
 pub mod stepper;
 
 pub use generalized_alpha::NewtonMode;
-pub use linear::{FactorKind, LowRank, Ordering, SolverStats, SparseSolver};
+pub use linear::{FactorKind, LinearError, LowRank, Ordering, SolverStats, SparseSolver};
 pub use parameters::{IntegrationParameters, Rule};

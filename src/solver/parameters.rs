@@ -26,9 +26,6 @@ pub struct IntegrationParameters {
     pub observed_order: Option<f64>,
     /// Factor after a step whose Newton iteration failed.
     pub factor_failed: f64,
-    /// Largest growth right after a rejected step (Hairer & Wanner II,
-    /// IV.8: no increase there, so a step that failed is not retried at once).
-    pub max_growth_after_rejection: f64,
     /// Land on the communication point with the last two steps equal halves
     /// of what is left, so they share one step size and iteration matrix.
     pub equal_last_steps: bool,
@@ -73,25 +70,12 @@ pub struct IntegrationParameters {
     /// ... for up to this many iterations in a row (0: the rule is off):
     /// the rate of two tiny corrections says little.
     pub near_chances: u32,
-    /// A fresh matrix whose first correction is more than this times the one
-    /// before (Newton's global phase) makes the step's later matrices the
-    /// exact tangent instead of the one with the membrane stiffness lagged.
-    pub exact_after_rate: f64,
-    /// Newton gives up early (where the step may be retried shorter) when a
-    /// matrix formed at the iterate corrects by more than this times each of
-    /// the last two corrections: even its own tangent sends the iterate away.
-    pub diverged_fresh_rate: f64,
     /// Modified Newton's matrix takes the membrane's geometric stiffness
     /// from the step start (it changes fast as facets turn, and an exact
     /// one would need forming at every iterate).
     pub lag_membrane_stiffness: bool,
     /// Broyden secant updates of a kept matrix within a step.
     pub secant_updates: bool,
-    /// Where the kept matrix's second correction grew in the last step that
-    /// tried it, the next steps form their matrix at the second iterate at
-    /// once, for up to this many steps before trying the kept one again (0:
-    /// the rule is off).
-    pub early_forms_before_recheck: u32,
 
     // Predictor.
     /// Start Newton from the better of two guesses (positions held, or
@@ -119,7 +103,6 @@ impl Default for IntegrationParameters {
             max_factor_rejected: 0.9,
             observed_order: Some(0.5),
             factor_failed: 0.25,
-            max_growth_after_rejection: 1.0,
             equal_last_steps: true,
             join_fraction: 1e-3,
             at_min_step: 1.000001,
@@ -134,11 +117,8 @@ impl Default for IntegrationParameters {
             max_rate: 0.25,
             near_factor: 10.0,
             near_chances: 3,
-            exact_after_rate: 0.5,
-            diverged_fresh_rate: 3.0,
             lag_membrane_stiffness: true,
             secant_updates: true,
-            early_forms_before_recheck: 4,
             two_guess_predictor: true,
             skip_loser_after: 4,
             recheck_every: 8,
@@ -173,14 +153,6 @@ impl IntegrationParameters {
                 },
             },
             Rule {
-                name: "no-growth-after-rejection",
-                what: "no step growth right after a rejected step",
-                off: |p| IntegrationParameters {
-                    max_growth_after_rejection: p.max_growth,
-                    ..p
-                },
-            },
-            Rule {
                 name: "equal-last-steps",
                 what: "the last two steps of an advance are equal halves",
                 off: |p| IntegrationParameters {
@@ -197,22 +169,6 @@ impl IntegrationParameters {
                 },
             },
             Rule {
-                name: "exact-after-slow",
-                what: "the exact tangent after a fresh matrix contracted slowly",
-                off: |p| IntegrationParameters {
-                    exact_after_rate: f64::INFINITY,
-                    ..p
-                },
-            },
-            Rule {
-                name: "early-give-up",
-                what: "Newton gives up when a fresh matrix diverges",
-                off: |p| IntegrationParameters {
-                    diverged_fresh_rate: f64::INFINITY,
-                    ..p
-                },
-            },
-            Rule {
                 name: "lagged-membrane",
                 what: "the kept matrix's membrane stiffness from the step start",
                 off: |p| IntegrationParameters {
@@ -225,14 +181,6 @@ impl IntegrationParameters {
                 what: "Broyden updates of the kept matrix",
                 off: |p| IntegrationParameters {
                     secant_updates: false,
-                    ..p
-                },
-            },
-            Rule {
-                name: "early-forms",
-                what: "form the matrix at the second iterate after a grown correction",
-                off: |p| IntegrationParameters {
-                    early_forms_before_recheck: 0,
                     ..p
                 },
             },

@@ -242,7 +242,8 @@ impl<'a> Newton<'a> {
             asm,
             theta0,
             load,
-            solver: SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())?,
+            solver: SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
+                .map_err(|e| e.to_string())?,
             zeros: vec![0.0; n],
             moment: vec![0.0; asm.creases.len()],
             ev: Evaluation::default(),
@@ -276,7 +277,6 @@ impl<'a> Newton<'a> {
                 k: 1.0,
                 m: 0.0,
                 c: 0.0,
-                exact: false,
             };
             self.asm
                 .evaluate(&st, &mut self.ev, Some((&mut self.mat, co)))?;

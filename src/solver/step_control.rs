@@ -1,6 +1,6 @@
 //! Step-size control, apart from the schemes' formulas: which step to try
 //! next within one advance, and what an attempt's error or failure means
-//! for the step after it (Hairer, Norsett & Wanner I, II.4 and II, IV.8).
+//! for the step after it (Hairer, Norsett & Wanner I, II.4).
 
 use crate::solver::IntegrationParameters;
 
@@ -13,8 +13,6 @@ pub struct StepController {
     h: f64,
     /// The last attempt, where it was rejected for its error: size, error.
     last_rejected: Option<(f64, f64)>,
-    /// Whether the last attempt was rejected (error or Newton failure).
-    after_rejection: bool,
     /// Whether the step proposed before fitting it to the rest was at the minimum.
     proposal_at_min: bool,
 }
@@ -43,7 +41,6 @@ impl StepController {
             max_step,
             h: h_start.min(max_step),
             last_rejected: None,
-            after_rejection: false,
             proposal_at_min: false,
         }
     }
@@ -94,17 +91,10 @@ impl StepController {
             } else {
                 p.max_growth
             };
-            let max_growth = if self.after_rejection {
-                p.max_growth_after_rejection
-            } else {
-                p.max_growth
-            };
-            self.after_rejection = false;
             self.last_rejected = None;
-            self.h = self.bounded(h * grow.clamp(p.min_factor, max_growth));
+            self.h = self.bounded(h * grow.clamp(p.min_factor, p.max_growth));
             Verdict::Accept { next: self.h }
         } else {
-            self.after_rejection = true;
             let factor = self.rejected_factor(h, error);
             self.last_rejected = Some((h, error));
             self.h = self.bounded(h * factor);
@@ -116,7 +106,6 @@ impl StepController {
     /// fall below the minimum step.
     pub fn failed(&mut self, h: f64) -> bool {
         self.last_rejected = None;
-        self.after_rejection = true;
         self.h = h * self.params.factor_failed;
         self.h >= self.min_step
     }
@@ -201,17 +190,20 @@ mod tests {
         assert_eq!(c.next_step(0.05), 0.01);
     }
 
-    /// No growth right after a rejection; a failure cuts the step by the
+    /// A first rejection shrinks the step by the error's h^3 rule within
+    /// its bounds, an accepted step grows by at most the largest growth
+    /// (right after a rejection too); a failure cuts the step by the
     /// failure factor and reports when the retry would be below the minimum.
     #[test]
     fn rejections_and_failures() {
         let mut c = controller();
+        let h0 = c.next_step(1.0);
+        assert_eq!(c.judge(h0, 2.0), Verdict::Reject);
         let h = c.next_step(1.0);
-        assert_eq!(c.judge(h, 2.0), Verdict::Reject);
-        let h = c.next_step(1.0);
-        assert_eq!(c.judge(h, 1e-9), Verdict::Accept { next: h });
-        let h = c.next_step(1.0);
+        assert!((h / h0 - 0.9 * 2f64.powf(-1.0 / 3.0)).abs() < 1e-12, "{h}");
         assert_eq!(c.judge(h, 1e-9), Verdict::Accept { next: 2.0 * h });
+        assert_eq!(c.judge(h, 1e3), Verdict::Reject);
+        assert_eq!(c.next_step(1.0), 0.2 * h);
         let mut c = StepController::new(IntegrationParameters::default(), 1e-3, 1.0, 2e-3);
         assert!(!c.failed(2e-3));
     }

@@ -64,12 +64,6 @@ pub struct NewtonMemory {
     pub extrapolation_streak: u32,
     /// How many steps in a row the held guess has won.
     pub held_streak: u32,
-    /// Whether the kept matrix's second correction grew the last time it
-    /// was tried.
-    pub kept_second_grew: bool,
-    /// Steps since then that formed their matrix at the second iterate
-    /// without trying the kept one.
-    pub early_forms: u32,
 }
 
 /// Everything the stepper carries from one advance to the next besides the
@@ -120,15 +114,6 @@ pub enum StepError {
         /// Iterations done.
         iterations: usize,
     },
-    /// A matrix formed at the iterate sent it away (the step may be retried shorter).
-    DivergedFresh {
-        /// The correction (scaled).
-        correction: f64,
-        /// The iteration whose matrix it was.
-        iteration: usize,
-        /// The growth factor that counts as divergence.
-        rate: f64,
-    },
     /// Newton's correction is not finite.
     NonFinite,
     /// Contact admits no part of a Newton correction.
@@ -138,7 +123,7 @@ pub enum StepError {
     /// Forces could not be evaluated (an undefined crease angle, non-finite forces).
     Assembly(String),
     /// The sparse solver failed.
-    Linear(String),
+    Linear(crate::solver::linear::LinearError),
 }
 
 impl fmt::Display for StepError {
@@ -154,15 +139,6 @@ impl fmt::Display for StepError {
                 f,
                 "Newton diverged (correction {correction:.3e} after {iterations} iterations)"
             ),
-            StepError::DivergedFresh {
-                correction,
-                iteration,
-                rate,
-            } => write!(
-                f,
-                "Newton diverged (the matrix formed at iteration {iteration} corrects by \
-                 {correction:.3e}, more than {rate} times each of the two corrections before)"
-            ),
             StepError::NonFinite => write!(f, "Newton produced non-finite values"),
             StepError::NoCollisionFreeStep => {
                 write!(f, "contact: no collision-free Newton step")
@@ -171,7 +147,8 @@ impl fmt::Display for StepError {
                 f,
                 "central differences produced non-finite values (unstable step)"
             ),
-            StepError::Assembly(m) | StepError::Linear(m) => write!(f, "{m}"),
+            StepError::Assembly(m) => write!(f, "{m}"),
+            StepError::Linear(e) => write!(f, "{e}"),
         }
     }
 }
@@ -214,8 +191,6 @@ pub struct Attempt<'a> {
     pub drive: &'a Drive<'a>,
     /// The memory of the steps accepted so far.
     pub memory: NewtonMemory,
-    /// Whether a failure will be retried with a shorter step.
-    pub may_shorten: bool,
 }
 
 /// A time integration scheme: one step of a given size from a state.

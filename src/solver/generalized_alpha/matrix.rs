@@ -32,11 +32,6 @@ pub struct JacobianPoint {
     /// Velocities at the step start.
     #[serde(default)]
     pub v_start: Vec<f64>,
-    /// Whether the matrix is the exact tangent rather than the one with
-    /// the membrane stiffness lagged
-    /// ([`crate::solver::IntegrationParameters::exact_after_rate`]).
-    #[serde(default)]
-    pub exact: bool,
 }
 
 /// Factor the iteration matrix formed at `q` (its sparse values in
@@ -66,7 +61,6 @@ pub(super) fn record(
     next: &Dynamics,
     cur: &Dynamics,
     drive: &Drive,
-    exact: bool,
 ) {
     let mut jp = jp.unwrap_or_default();
     jp.h = h;
@@ -80,7 +74,6 @@ pub(super) fn record(
     jp.theta_prev.extend_from_slice(drive.theta_prev);
     jp.q_start.clone_from(&cur.q);
     jp.v_start.clone_from(&cur.v);
-    jp.exact = exact;
     ws.jacobian = Some(jp);
 }
 
@@ -116,10 +109,7 @@ pub(super) fn restore(
         theta_prev: &p.theta_prev,
     };
     let mut scratch = Evaluation::default();
-    let coeffs = MatrixCoeffs {
-        exact: p.exact,
-        ..co.matrix(p.h)
-    };
+    let coeffs = co.matrix(p.h);
     asm.evaluate(&st, &mut scratch, Some((&mut ws.matrix[..], coeffs)))
         .map_err(StepError::Assembly)?;
     factor(asm, solver, &ws.matrix, &p.q, coeffs)?;

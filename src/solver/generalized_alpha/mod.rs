@@ -18,7 +18,7 @@
 //! (`predictor`), the Newton iteration (`newton`: evaluate, form and factor
 //! the iteration matrix where its rules ask (`matrix`), solve, screen the
 //! correction, apply it, check convergence), then the local error estimate
-//! ([`local_error`]). Accepting or rejecting the step is the step control's
+//! (`local_error`). Accepting or rejecting the step is the step control's
 //! (`crate::solver::step_control`).
 
 mod matrix;
@@ -72,7 +72,6 @@ impl Coefficients {
             k: 1.0,
             c: self.gamma / (self.beta * h),
             m: (1.0 - self.am) / ((1.0 - self.af) * bh2),
-            exact: false,
         }
     }
 }
@@ -277,8 +276,6 @@ impl GeneralizedAlpha {
             scales: &self.scales,
             params: &self.params,
             settings: &self.settings,
-            memory: attempt.memory,
-            may_shorten: attempt.may_shorten,
         };
         let have_rhs = predictor::predict(&ctx, next, ws, out);
         newton::iterate(&ctx, solver, have_rhs, next, ws, out)?;
@@ -305,10 +302,6 @@ struct StepContext<'a> {
     scales: &'a Scales,
     params: &'a IntegrationParameters,
     settings: &'a Settings,
-    /// The memory of the steps accepted before this one.
-    memory: crate::solver::stepper::NewtonMemory,
-    /// Whether a failure will be retried shorter.
-    may_shorten: bool,
 }
 
 impl StepContext<'_> {

@@ -8,8 +8,7 @@
 //! badly: a correction that grows, a contraction slower than
 //! [`IntegrationParameters::max_rate`], a step size far from the one it was
 //! formed for. Its matrix takes the membrane's geometric stiffness from the
-//! step start, or is the exact tangent after a fresh matrix contracted
-//! slowly (Newton's global phase).
+//! step start.
 //!
 //! Near contact Newton searches along each correction d: the residual is
 //! the gradient of the step's incremental potential Phi (up to the
@@ -81,7 +80,7 @@ pub(super) fn iterate(
     let max_newton = ctx.settings.max_newton;
     let mut nw = Newton::start(ctx, ws);
     for it in 0..max_newton {
-        nw.choose_matrix(ctx, it, out);
+        nw.choose_matrix();
         ctx.update_rates(next);
         nw.evaluate(ctx, it, have_rhs, next, ws, out)?;
         // Whether the matrix was formed at this iterate (else it is stale:
@@ -95,7 +94,7 @@ pub(super) fn iterate(
             .map_err(StepError::Linear)?;
         out.iterations = it + 1;
         let (rate, norm) = nw.measure(ctx.asm, &ctx.scales.newton, stale, ws);
-        if let Screen::Drop = nw.screen(ctx, it, stale, rate, norm, ws, out)? {
+        if let Screen::Drop = nw.screen(ctx, it, stale, rate, norm, ws)? {
             continue;
         }
         let fraction = nw.apply(ctx.asm, stale, next, ws, out)?;
@@ -147,25 +146,9 @@ impl Newton {
         }
     }
 
-    /// Full Newton forms the matrix at every iterate; modified Newton forms
-    /// it at the second iterate at once where the kept matrix's second
-    /// correction grew in the last step that tried it (a folding sheet:
-    /// the first correction turns the facets, and a matrix formed before
-    /// the turn maps bending onto membrane stretch), trying the kept one
-    /// again every [`IntegrationParameters::early_forms_before_recheck`] steps.
-    fn choose_matrix(&mut self, ctx: &StepContext, it: usize, out: &mut Outcome) {
+    /// Full Newton forms the matrix at every iterate.
+    fn choose_matrix(&mut self) {
         self.refresh |= !self.modified;
-        let start = ctx.memory;
-        if it == 1
-            && self.modified
-            && start.kept_second_grew
-            && start.early_forms < ctx.params.early_forms_before_recheck
-        {
-            if !self.refresh {
-                out.memory.early_forms = start.early_forms + 1;
-            }
-            self.refresh = true;
-        }
     }
 
     /// The residual at the iterate (and the matrix where it is to be
@@ -230,7 +213,7 @@ impl Newton {
     ) -> Result<(), StepError> {
         let jp = ws.jacobian.take();
         matrix::factor(ctx.asm, solver, &ws.matrix, &next.q, self.coeffs)?;
-        matrix::record(ws, jp, ctx.h, next, ctx.cur, ctx.drive, self.coeffs.exact);
+        matrix::record(ws, jp, ctx.h, next, ctx.cur, ctx.drive);
         out.factorizations += 1;
         self.refresh = false;
         ws.secant.clear();
@@ -268,10 +251,8 @@ impl Newton {
         (rate, norm)
     }
 
-    /// Refuse a non-finite or (fresh matrix) diverging correction; switch
-    /// to the exact tangent after a slow fresh matrix; drop a growing
-    /// correction of a kept matrix and form one here.
-    #[allow(clippy::too_many_arguments)]
+    /// Refuse a non-finite correction; drop a growing correction of a kept
+    /// matrix and form one here.
     fn screen(
         &mut self,
         ctx: &StepContext,
@@ -280,31 +261,9 @@ impl Newton {
         rate: f64,
         norm: f64,
         ws: &mut Workspace,
-        out: &mut Outcome,
     ) -> Result<Screen, StepError> {
-        let p = ctx.params;
         if !norm.is_finite() {
             return Err(StepError::NonFinite);
-        }
-        // Only where a failure is retried shorter: a large growth can
-        // still converge, and a fixed step must keep the whole budget.
-        if ctx.may_shorten
-            && !stale
-            && it >= 2
-            && norm > p.diverged_fresh_rate * self.last_norm.max(self.norm_before_last)
-        {
-            return Err(StepError::DivergedFresh {
-                correction: norm,
-                iteration: it + 1,
-                rate: p.diverged_fresh_rate,
-            });
-        }
-        if !stale && it >= 1 && rate > p.exact_after_rate {
-            self.coeffs.exact = true;
-        }
-        if it == 1 && stale {
-            out.memory.kept_second_grew = rate > 1.0;
-            out.memory.early_forms = 0;
         }
         if self.modified && stale && rate > 1.0 && it + 1 < ctx.settings.max_newton {
             // A matrix formed elsewhere sends the iterate away: drop this
