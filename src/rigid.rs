@@ -61,6 +61,12 @@ impl RigidModes {
         }
     }
 
+    /// Keep the supports declared on `old` (modes of the same slots rebuilt
+    /// for another mass matrix or pattern).
+    pub fn keep_constraints(&mut self, old: RigidModes) {
+        self.allowed = old.allowed;
+    }
+
     /// Declare the supported scalar DOFs (never moving) at positions `q`:
     /// only rigid modes that leave them at rest remain (the null space of
     /// the modes restricted to them; rotations scaled by the sheet size
