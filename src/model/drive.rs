@@ -10,21 +10,30 @@ use crate::solver::stepper::Drive;
 const INSTANT: f64 = 1e-12;
 
 /// An actuator's value and rate `e` seconds after `start` (value, rate)
-/// under the input `u0 + slope t`: the critically damped response of
-/// natural frequency 1 / `tau`, in closed form,
-/// `a'' + 2 a' / tau + a / tau^2 = u / tau^2`. With `tau` 0 the input itself.
+/// under the input `u0 + s1 t + s2 t^2 / 2` (`[s1, s2]` = `slopes`): the
+/// critically damped response of natural frequency 1 / `tau`, in closed
+/// form, `a'' + 2 a' / tau + a / tau^2 = u / tau^2`. With `tau` 0 the input
+/// itself.
 pub(super) fn actuator_response(
     tau: f64,
     start: [f64; 2],
     u0: f64,
-    slope: f64,
+    [s1, s2]: [f64; 2],
     e: f64,
 ) -> [f64; 2] {
+    let input = |t: f64| [u0 + s1 * t + 0.5 * s2 * t * t, s1 + s2 * t];
     if tau.is_nan() || tau <= INSTANT {
-        return [u0 + slope * e, slope];
+        return input(e);
     }
-    // The particular solution of a ramp lags it by 2 tau.
-    respond(tau, start, e, |t| [u0 + slope * (t - 2.0 * tau), slope])
+    // The particular solution of a polynomial input: u - 2 tau u' + 3 tau^2 u''
+    // (a ramp lags by 2 tau).
+    respond(tau, start, e, |t| {
+        let [u, du] = input(t);
+        [
+            u - 2.0 * tau * du + 3.0 * tau * tau * s2,
+            du - 2.0 * tau * s2,
+        ]
+    })
 }
 
 /// An actuator's value and rate `e` seconds after `start` under the
@@ -246,7 +255,7 @@ mod tests {
     #[test]
     fn actuator_response_solves_its_equation() {
         let (tau, start, u0, s) = (0.02, [0.3, -1.5], 1.0, 2.0);
-        let at = |t: f64| actuator_response(tau, start, u0, s, t);
+        let at = |t: f64| actuator_response(tau, start, u0, [s, 0.0], t);
         let [a0, r0] = at(0.0);
         assert!((a0 - start[0]).abs() < 1e-15 && (r0 - start[1]).abs() < 1e-15);
         let d = 1e-6;
@@ -264,7 +273,24 @@ mod tests {
         let [a, r] = at(2.0);
         assert!((a - (u0 + s * (2.0 - 2.0 * tau))).abs() < 1e-12);
         assert!((r - s).abs() < 1e-12);
-        assert_eq!(actuator_response(0.0, start, u0, s, 0.5), [u0 + s * 0.5, s]);
+        assert_eq!(
+            actuator_response(0.0, start, u0, [s, 0.0], 0.5),
+            [u0 + s * 0.5, s]
+        );
+        // A second derivative: the equation with u0 + s t + c t^2 / 2.
+        let c = -3.0;
+        let at = |t: f64| actuator_response(tau, start, u0, [s, c], t);
+        for t in [0.001, 0.03, 0.2] {
+            let [a, r] = at(t);
+            let rate = (at(t + d)[0] - at(t - d)[0]) / (2.0 * d);
+            let acc = (at(t + d)[1] - at(t - d)[1]) / (2.0 * d);
+            assert!((rate - r).abs() < 1e-6 * (1.0 + r.abs()), "{rate} vs {r}");
+            let u = u0 + s * t + 0.5 * c * t * t;
+            let residual = tau * tau * acc + 2.0 * tau * r + a - u;
+            assert!(residual.abs() < 1e-6, "residual {residual} at {t}");
+        }
+        let [a, r] = at(0.0);
+        assert!((a - start[0]).abs() < 1e-15 && (r - start[1]).abs() < 1e-14);
     }
 
     /// The ramp's response solves the same equation on both sides of the

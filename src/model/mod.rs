@@ -160,6 +160,7 @@ impl Model {
             inputs_now: inputs.iter().map(|v| v.start).collect(),
             inputs_next: inputs.iter().map(|v| v.start).collect(),
             input_slopes: vec![0.0; inputs.len()],
+            input_second_derivatives: vec![0.0; inputs.len()],
             damping_set: false,
             actuator_set: false,
             actuators: scene.actuators.iter().map(|a| [a.start, 0.0]).collect(),

@@ -28,6 +28,10 @@ pub struct ModelState {
     /// First time derivative of each input over the next advance.
     #[serde(default)]
     pub input_slopes: Vec<f64>,
+    /// Second time derivative of each input over the next advance (empty
+    /// in a state saved before inputs had them: zero).
+    #[serde(default)]
+    pub input_second_derivatives: Vec<f64>,
     /// Whether a damping parameter was set (automatic damping is then off).
     #[serde(default)]
     pub damping_set: bool,
@@ -95,6 +99,10 @@ impl Model {
         if s.input_slopes.is_empty() {
             // A state saved before inputs had slopes.
             s.input_slopes = vec![0.0; s.inputs_now.len()];
+        }
+        if s.input_second_derivatives.is_empty() {
+            // A state saved before inputs had second derivatives.
+            s.input_second_derivatives = vec![0.0; s.inputs_now.len()];
         }
         let n_act = self.scene.actuators.len();
         if s.actuators.is_empty() && n_act > 0 {
@@ -165,9 +173,14 @@ impl Model {
         let ni = self.inputs.len();
         self.input_values("inputs_now", &s.inputs_now, &[ni])?;
         self.input_values("inputs_next", &s.inputs_next, &[ni])?;
-        // Empty in a state saved before slopes and actuator responses: the
-        // restore fills them in.
+        // Empty in a state saved before slopes, second derivatives and
+        // actuator responses: the restore fills them in.
         self.input_values("input_slopes", &s.input_slopes, &[0, ni])?;
+        self.input_values(
+            "input_second_derivatives",
+            &s.input_second_derivatives,
+            &[0, ni],
+        )?;
         let flat: Vec<f64> = s.actuators.iter().flatten().copied().collect();
         values("actuators", &flat, &[0, 2 * self.scene.actuators.len()])?;
         check_memory(&s.memory, running, n, nc)?;

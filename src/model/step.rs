@@ -128,6 +128,15 @@ impl Model {
         for (k, a) in state.actuators.iter_mut().enumerate() {
             *a = adv.actuator(k, big_h);
         }
+        // An input with a second derivative goes on along its parabola
+        // until it is set again.
+        for (s1, s2) in state
+            .input_slopes
+            .iter_mut()
+            .zip(&state.input_second_derivatives)
+        {
+            *s1 += s2 * big_h;
+        }
         let mut u = std::mem::take(&mut adv.u);
         adv.commands_at(big_h, &mut u);
         let report = adv.report;
@@ -172,10 +181,12 @@ impl Model {
 struct Advance {
     big_h: f64,
     t0: f64,
-    /// Inputs at the start, at the end before slopes, and their slopes.
+    /// Inputs at the start, at the end before slopes, and their first and
+    /// second derivatives.
     u0: Vec<f64>,
     u1: Vec<f64>,
     slopes: Vec<f64>,
+    second: Vec<f64>,
     /// The actuators' time constant, and their values and rates at the start.
     tau: f64,
     act0: Vec<[f64; 2]>,
@@ -207,6 +218,7 @@ impl Advance {
             t0: state.time,
             u1: state.inputs_next.clone(),
             slopes: state.input_slopes.clone(),
+            second: state.input_second_derivatives.clone(),
             tau: sys.actuator_tau,
             act0: state.actuators.clone(),
             u: state.inputs_now.clone(),
@@ -241,7 +253,10 @@ impl Advance {
 
     /// Input `k` as the master set it at elapsed time `e`.
     fn command(&self, k: usize, e: f64) -> f64 {
-        self.u0[k] + (self.u1[k] - self.u0[k]) * (e / self.big_h) + self.slopes[k] * e
+        let s2 = self.second.get(k).copied().unwrap_or(0.0);
+        self.u0[k]
+            + (self.u1[k] - self.u0[k]) * (e / self.big_h)
+            + (self.slopes[k] + 0.5 * s2 * e) * e
     }
 
     /// The inputs acting on the sheet at elapsed time `e`: the commands,
@@ -262,10 +277,11 @@ impl Advance {
             return ramp_response(self.tau, self.act0[k], &self.ramp.0, self.t0, e);
         }
         let slope = (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k];
+        let s2 = self.second.get(k).copied().unwrap_or(0.0);
         if self.tau > 0.0 {
-            actuator_response(self.tau, self.act0[k], self.u0[k], slope, e)
+            actuator_response(self.tau, self.act0[k], self.u0[k], [slope, s2], e)
         } else {
-            [self.command(k, e), slope]
+            [self.command(k, e), slope + s2 * e]
         }
     }
 

@@ -297,13 +297,18 @@ impl Model {
             self.state.inputs_now[i] = value;
         }
         self.state.input_slopes[i] = 0.0;
+        if let Some(s2) = self.state.input_second_derivatives.get_mut(i) {
+            *s2 = 0.0;
+        }
         Ok(())
     }
 
-    /// Set the `order`-th time derivative of input `i` (only order 1: the
-    /// input then grows linearly from its value over the advance, as
-    /// `fmi2SetRealInputDerivatives` asks). It applies until the input or
-    /// its derivative is set again. Not with ramped inputs.
+    /// Set the `order`-th time derivative of input `id` (order 1 or 2: the
+    /// input then follows its Taylor polynomial from its value over the
+    /// advance, as `fmi2SetRealInputDerivatives` asks). It applies until the
+    /// input or the derivative is set again (an input with a second
+    /// derivative goes on along its parabola: its first derivative grows
+    /// by the second times each advance). Not with ramped inputs.
     pub fn set_input_derivative(
         &mut self,
         id: InputId,
@@ -317,8 +322,8 @@ impl Model {
             value,
             reason: reason.into(),
         };
-        if order != 1 {
-            return Err(bad("only first derivatives are taken (order 1)"));
+        if !(1..=2).contains(&order) {
+            return Err(bad("first and second derivatives are taken (order 1 or 2)"));
         }
         if self.scene.solver.input_timing == InputTiming::Ramp {
             return Err(bad(
@@ -329,7 +334,14 @@ impl Model {
             return Err(bad(&reason));
         }
         if !self.is_ramped(i) {
-            self.state.input_slopes[i] = value;
+            if order == 1 {
+                self.state.input_slopes[i] = value;
+            } else {
+                self.state
+                    .input_second_derivatives
+                    .resize(self.inputs.len(), 0.0);
+                self.state.input_second_derivatives[i] = value;
+            }
         }
         Ok(())
     }
