@@ -54,6 +54,7 @@ pub mod curves;
 pub mod dofs;
 pub mod element;
 pub mod fmi;
+pub mod frame;
 pub mod ids;
 pub mod material;
 pub mod mesh;
