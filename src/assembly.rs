@@ -541,8 +541,8 @@ impl Assembler {
         let positions: Vec<usize> = self.layout.position_slot.clone();
         let old = std::mem::take(&mut self.rigid);
         self.rigid = RigidModes::new(n_slots, positions, |x, y| self.mass_mul(x, y));
-        // The supports stay declared: the pattern grows with contact pairs
-        // and a restore sets it, the supports do not change.
+        // The supports (and frames) stay declared: the pattern grows with
+        // contact pairs and a restore sets it, the supports do not change.
         self.rigid.keep_constraints(old);
     }
 

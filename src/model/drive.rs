@@ -2,7 +2,9 @@
 //! external forces and prescribed DOFs.
 
 use super::Model;
+use super::attach::FrameInput;
 use crate::assembly::Assembler;
+use crate::frame::Pose;
 use crate::scene::InputRamp;
 use crate::solver::stepper::Drive;
 
@@ -122,6 +124,8 @@ pub(super) struct InputMap {
     pub(super) motion: Vec<(usize, usize)>,
     /// Scalar index of each force input component (input index, scalar).
     pub(super) force: Vec<(usize, usize)>,
+    /// The attachments: their pose inputs and held slots.
+    pub(super) frames: Vec<FrameInput>,
     pub(super) n_dofs: usize,
 }
 
@@ -133,6 +137,8 @@ pub(super) struct DriveValues {
     pub(super) moment: Vec<f64>,
     pub(super) f_ext: Vec<f64>,
     pub(super) prescribed: Vec<(usize, f64)>,
+    /// The attachments' frames.
+    pub(super) frames: Vec<Pose>,
 }
 
 impl InputMap {
@@ -165,6 +171,12 @@ impl InputMap {
         d.prescribed.clone_from(&self.supported);
         d.prescribed
             .extend(self.motion.iter().map(|&(k, i)| (i, u[k])));
+        d.frames.clear();
+        for f in &self.frames {
+            let pose = f.pose(u);
+            f.held.prescribe(&pose, &mut d.prescribed);
+            d.frames.push(pose);
+        }
     }
 
     /// Work done at once when input `i` jumps from `u[i]` to `new` while

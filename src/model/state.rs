@@ -355,9 +355,10 @@ impl Model {
     }
 
     /// Accelerations from the equation of motion at the current positions
-    /// and velocities, M qdd = f_ext - f_int on the free DOFs (the mass
-    /// matrix is factored in the stepper's solver, so its iteration matrix
-    /// is forgotten); also the crease angles and outputs.
+    /// and velocities, M qdd = f_ext - f_int on the free DOFs, the fixed
+    /// DOFs' accelerations as they are (the mass matrix is factored in the
+    /// stepper's solver, so its iteration matrix is forgotten); also the
+    /// crease angles and outputs.
     pub(super) fn consistent_accelerations(
         &mut self,
         u: &[f64],
@@ -379,11 +380,21 @@ impl Model {
             let term = sys.asm.non_finite_term(&st).unwrap_or("").to_string();
             return Err(self.not_finite(&e, &term));
         }
+        // The fixed DOFs' accelerations (a moving frame's) push the free ones.
+        let mut m_fixed = vec![0.0; n];
+        let fixed_qdd: Vec<f64> = (0..n)
+            .map(|i| match sys.asm.free[i] {
+                crate::assembly::FIXED => dynm.qdd.get(i).copied().unwrap_or(0.0),
+                _ => 0.0,
+            })
+            .collect();
+        if fixed_qdd.iter().any(|&a| a != 0.0) {
+            sys.asm.mass_mul(&fixed_qdd, &mut m_fixed);
+        }
         let mut rhs = vec![0.0; sys.asm.n_free];
-        for i in 0..n {
-            let fi = sys.asm.free[i];
+        for (i, &fi) in sys.asm.free.iter().enumerate() {
             if fi != crate::assembly::FIXED {
-                rhs[fi] = d.f_ext[i] - ev.force[i];
+                rhs[fi] = d.f_ext[i] - ev.force[i] - m_fixed[i];
             }
         }
         sys.stepper.invalidate_matrix();
@@ -396,7 +407,7 @@ impl Model {
         if let Err(e) = solved {
             return Err(self.not_finite(&format!("the accelerations: mass matrix: {e}"), ""));
         }
-        let mut qdd = vec![0.0; n];
+        let mut qdd = fixed_qdd;
         for (a, &fi) in qdd.iter_mut().zip(&sys.asm.free) {
             if fi != crate::assembly::FIXED {
                 *a = rhs[fi];
@@ -405,7 +416,7 @@ impl Model {
         self.state.dynamics.abar = qdd.clone();
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
-        self.state.outputs = Some(self.compute_outputs(&ev));
+        self.state.outputs = Some(self.compute_outputs(&ev, &d));
         self.read_cache = Default::default();
         Ok(())
     }

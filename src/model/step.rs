@@ -122,9 +122,18 @@ impl Model {
         adv.report.solve_time = (solve_time - adv.linear_times.1).as_secs_f64();
         sys.stepper.end_advance(&mut state.memory);
         state.extra_pairs = sys.asm.extra_pairs().to_vec();
-        // The outputs now, where the last step evaluated its state in full;
-        // else they are evaluated from the state when read.
-        let ev = sys.stepper.evaluation().cloned();
+        // The outputs now, where the last step evaluated its state in full
+        // or the scene reports reactions (they need the forces at the step
+        // end); else they are evaluated from the state when read.
+        let d_end = std::mem::take(&mut adv.d_start);
+        let ev = match sys.stepper.evaluation() {
+            Some(ev) => Some(ev.clone()),
+            None if sys.reactions.is_empty() => None,
+            None => Some(
+                sys.evaluate(&state.dynamics, &d_end, &state.crease_theta)
+                    .map_err(|reason| Error::StepFailed { time: t0, reason })?,
+            ),
+        };
         for (k, a) in state.actuators.iter_mut().enumerate() {
             *a = adv.actuator(k, big_h);
         }
@@ -143,7 +152,7 @@ impl Model {
         self.state.time = t0 + big_h;
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
-        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev));
+        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         self.read_cache = Default::default();
         let d = &self.state.dynamics;
         let finite = match &self.state.outputs {
