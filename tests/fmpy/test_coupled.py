@@ -7,6 +7,8 @@ import re
 import subprocess
 import sys
 
+from fmpy.validation import validate_fmu
+
 from fmu_helpers import ROOT
 
 
@@ -31,3 +33,4 @@ def test_the_payload_oscillates_at_the_frequency_of_the_static_curve(tmp_path):
     assert drift < 1.0, p.stdout
     assert (out / "coupled_payload.csv").stat().st_size > 10_000
     assert (out / "coupled_payload.png").stat().st_size > 10_000
+    assert validate_fmu(str(tmp_path / "payload_spring.fmu")) == []
