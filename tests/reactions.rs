@@ -141,13 +141,11 @@ fn a_frame_accelerated_at_a_constant_rate_pushes_the_sheet_with_m_a_minus_g() {
 /// the sheet on its circle with the centripetal force, so the sheet pulls
 /// the frame outwards with m omega^2 r_cm (r_cm the centre of mass's
 /// distance from the axis), within 1e-3 at every communication point of
-/// the second half second. The wrench is as accurate as the integrator's
-/// accelerations: here internal steps of 2 ms, all equal (the 10 ms
-/// communication step is a multiple), and tolerance 1e-5 (Newton's
-/// iteration error reaches the accelerations divided by beta h^2): largest
-/// error 1.3e-4. At the default settings (steps of about 1e-2 s that change
-/// size within each communication step, where generalized-alpha's
-/// accelerations are only first order) 17 % (docs/fmu.md, "Reactions").
+/// the second half second. The wrench is as accurate as the integrated
+/// motion: Newton's iteration error makes the sheet vibrate about the
+/// steady turn. Here internal steps of 2 ms, all equal (the 10 ms
+/// communication step is a multiple), and tolerance 1e-5: largest error
+/// 1.3e-4. At the default settings 17 % (docs/fmu.md, "Reactions").
 #[test]
 fn a_frame_turning_at_a_constant_rate_feels_the_centripetal_force() {
     let omega = 10.0;
