@@ -536,7 +536,11 @@ impl Assembler {
         }
         self.mass_values = vals;
         let positions: Vec<usize> = self.layout.position_slot.clone();
+        let old = std::mem::take(&mut self.rigid);
         self.rigid = RigidModes::new(n_slots, positions, |x, y| self.mass_mul(x, y));
+        // The supports (and frames) stay declared: the pattern grows with
+        // contact pairs and a restore sets it, the supports do not change.
+        self.rigid.keep_constraints(old);
     }
 
     /// Number of scalar DOFs (free and fixed).
@@ -1020,6 +1024,31 @@ mod tests {
             zmx.abs() > 0.0 && (zmx - xmz).abs() < 1e-12 * zmx.abs(),
             "{zmx} {xmz}"
         );
+    }
+
+    /// The rigid modes the supports allow outlive a change of the pattern
+    /// (contact pairs joining it, a restored state's pattern): a clamped
+    /// strip has none before and after.
+    #[test]
+    fn supports_stay_declared_when_the_pattern_grows() {
+        let mesh = strip(0.4, 0.1, 4, 2);
+        let physics = crate::benchmarks::plate_physics(1e6, 0.3, 1e-3);
+        let mut asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
+        let q = asm.layout.reference_state(&mesh);
+        let v0 = crate::ids::VertexId(0);
+        let held: Vec<usize> = asm
+            .layout
+            .vertex_slots(v0)
+            .into_iter()
+            .chain(asm.layout.vertex_slots(crate::ids::VertexId(5)))
+            .flat_map(|s| 3 * s..3 * s + 3)
+            .collect();
+        asm.rigid.set_supports(&held, &q, 0.4);
+        assert_eq!(asm.rigid.n_allowed(), 0);
+        let far = asm.layout.n_slots() - 1;
+        asm.set_extra_pairs(vec![(0, far)]);
+        assert!(asm.has_pair(0, far));
+        assert_eq!(asm.rigid.n_allowed(), 0, "the clamp is remembered");
     }
 
     /// A 0.4 x 0.1 strip of 8 x 2 square cells (two triangles each): positions

@@ -76,6 +76,8 @@ pub mod element;
 #[doc(hidden)]
 pub mod fmi;
 #[doc(hidden)]
+pub mod frame;
+#[doc(hidden)]
 pub mod pictures;
 #[doc(hidden)]
 pub mod rigid;

@@ -8,7 +8,14 @@
 //! translate). With the constant mass matrix M = M_s (x) I3, the six modes
 //! R and their Gram matrix G = R^T M R follow from M q and the slots' share
 //! of the total mass alone, so the projection costs one mass product.
+//!
+//! A sheet held by moving frames (attachments) has no rigid motion of its
+//! own: what is not deformation there is the frames' motion. Its damping
+//! acts on the velocity relative to the rigid field that fits the held
+//! slots' velocities ([`RigidModes::frame_velocity`]): exactly the frame's
+//! for one attachment (or several moving together), zero for supports.
 
+use crate::frame::cross_matrix;
 use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 
 /// Per-slot data the projection needs, fixed by the mesh.
@@ -24,14 +31,13 @@ pub struct RigidModes {
     /// for a free sheet, none for a clamped one, the rotations about the
     /// pin for a pinned one.
     allowed: Option<DMatrix<f64>>,
+    /// Slots held by frames and supports when the sheet has attachments
+    /// (empty otherwise): the rigid field they move with is not damped.
+    held: Vec<usize>,
 }
 
 fn v3(x: &[f64], s: usize) -> Vector3<f64> {
     Vector3::new(x[3 * s], x[3 * s + 1], x[3 * s + 2])
-}
-
-fn cross_matrix(c: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -c.z, c.y, c.z, 0.0, -c.x, -c.y, c.x, 0.0)
 }
 
 impl RigidModes {
@@ -58,7 +64,61 @@ impl RigidModes {
             pos_mass: (0..n_slots).map(|s| y[3 * s]).collect(),
             is_position,
             allowed: None,
+            held: Vec::new(),
         }
+    }
+
+    /// Keep the supports and held slots declared on `old` (modes of the
+    /// same slots rebuilt for another mass matrix or pattern).
+    pub fn keep_constraints(&mut self, old: RigidModes) {
+        self.allowed = old.allowed;
+        self.held = old.held;
+    }
+
+    /// Declare the slots held by frames (and supports) of a sheet with
+    /// attachments: damping then acts on the velocity relative to their
+    /// rigid motion (see the module docs). Empty: no frames.
+    pub fn set_held(&mut self, held: Vec<usize>) {
+        self.held = held;
+    }
+
+    /// The slots declared with [`RigidModes::set_held`].
+    pub fn held(&self) -> &[usize] {
+        &self.held
+    }
+
+    /// The rigid velocity field (translation `t`, angular velocity `w`
+    /// about `c`, the mean held position) that fits the velocities `v` of
+    /// the held slots at positions `q` in the least-squares sense: exact
+    /// where they move rigidly. None without held slots or where the fit
+    /// is singular (no position, or gradients of one direction only).
+    pub fn frame_velocity(&self, q: &[f64], v: &[f64]) -> Option<[Vector3<f64>; 3]> {
+        let (mut c, mut np) = (Vector3::zeros(), 0usize);
+        for &s in self.held.iter().filter(|&&s| self.is_position[s]) {
+            c += v3(q, s);
+            np += 1;
+        }
+        if np == 0 {
+            return None;
+        }
+        c /= np as f64;
+        // Rows: position v_s = t - [(q_s - c) x] w, gradient v_s = -[q_s x] w.
+        let (mut a, mut b) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
+        for &s in &self.held {
+            let pos = self.is_position[s];
+            let arm = if pos { v3(q, s) - c } else { v3(q, s) };
+            let mut rows = nalgebra::Matrix3x6::<f64>::zeros();
+            if pos {
+                rows.fixed_view_mut::<3, 3>(0, 0)
+                    .copy_from(&Matrix3::identity());
+            }
+            rows.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&-cross_matrix(&arm));
+            a += rows.transpose() * rows;
+            b += rows.transpose() * v3(v, s);
+        }
+        let y = a.cholesky()?.solve(&b);
+        Some([y.fixed_rows::<3>(0).into(), y.fixed_rows::<3>(3).into(), c])
     }
 
     /// Declare the supported scalar DOFs (never moving) at positions `q`:
@@ -99,6 +159,21 @@ impl RigidModes {
             })
             .collect();
         self.allowed = Some(DMatrix::from_fn(6, cols.len(), |r, c| cols[c][r]));
+    }
+
+    /// The total mass and the centre of mass at positions `q`: `m = sum
+    /// over the position slots of their mass share`, `m c = sum over all
+    /// slots of (M_s p)_s q_s` (the shape functions of the positions sum to
+    /// one, so `(M_s p)_s` is the integral of `rho h N_s`).
+    pub fn mass_center(&self, q: &[f64]) -> (f64, Vector3<f64>) {
+        let (mut m, mut c) = (0.0, Vector3::zeros());
+        for (s, &pos) in self.is_position.iter().enumerate() {
+            if pos {
+                m += self.pos_mass[s];
+            }
+            c += self.pos_mass[s] * v3(q, s);
+        }
+        (m, if m > 0.0 { c / m } else { c })
     }
 
     /// Number of rigid modes the supports allow.

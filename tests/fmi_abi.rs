@@ -816,8 +816,9 @@ fn the_logger_is_called_only_for_enabled_categories() {
 }
 
 /// canInterpolateInputs: a first derivative set with the value makes the
-/// input grow linearly over the step (the input reads u + du h after it);
-/// other orders, non-inputs and non-finite values are refused.
+/// input grow linearly over the step (the input reads u + du h after it), a
+/// second one along a parabola; orders above 2, non-inputs and non-finite
+/// values are refused.
 #[test]
 fn input_derivatives_extrapolate_over_the_step() {
     let f = Fmu::initialized("derivatives");
@@ -835,12 +836,27 @@ fn input_derivatives_extrapolate_over_the_step() {
         assert_eq!(f.set(&i[..1], &[0.7]), fmi2OK);
         assert_eq!(fmi2DoStep(f.c, 0.1, 0.1, 0), fmi2OK);
         assert_eq!(f.get(&i[..1])[0], 0.7);
+        // A second derivative: the parabola 0.7 + t^2 / 2 over the step.
         let order2 = [2 as fmi2Integer];
         assert_eq!(
             fmi2SetRealInputDerivatives(f.c, i.as_ptr(), 1, order2.as_ptr(), [1.0].as_ptr()),
+            fmi2OK
+        );
+        assert_eq!(fmi2DoStep(f.c, 0.2, 0.1, 0), fmi2OK);
+        assert!((f.get(&i[..1])[0] - 0.705).abs() < 1e-12);
+        // Not set again: it goes on along the parabola (slope 0.1 now).
+        assert_eq!(fmi2DoStep(f.c, 0.3, 0.1, 0), fmi2OK);
+        assert!((f.get(&i[..1])[0] - 0.72).abs() < 1e-12);
+        let order3 = [3 as fmi2Integer];
+        assert_eq!(
+            fmi2SetRealInputDerivatives(f.c, i.as_ptr(), 1, order3.as_ptr(), [1.0].as_ptr()),
             fmi2Error
         );
-        assert!(f.last_error().contains("order 1"));
+        assert!(
+            f.last_error().contains("order 1 or 2"),
+            "{}",
+            f.last_error()
+        );
         assert_eq!(
             fmi2SetRealInputDerivatives(f.c, p.as_ptr(), 1, order1.as_ptr(), [1.0].as_ptr()),
             fmi2Error

@@ -322,6 +322,11 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
             "fold",
         ),
         (
+            "a second derivative of 1e308",
+            Box::new(|v| put(v, "/model/input_second_derivatives/0", json!(1e308))),
+            "input_second_derivatives",
+        ),
+        (
             "the model's phase before initialization with the FMU stepping",
             Box::new(|v| put(v, "/model/phase", json!("Setup"))),
             "phase",

@@ -16,7 +16,7 @@ use origami_fmu::fmi::{self, resources::scene_bytes};
 use origami_fmu::ids::{EdgeId, FoldEdgeId, VertexId, vertex_ids};
 use origami_fmu::mesh::{Edge, Mesh, builders};
 use origami_fmu::scene::{
-    Actuator, ActuatorMode, CreaseStiffness, Fix, Scene, Support, VertexInput,
+    Actuator, ActuatorMode, Attachment, CreaseStiffness, Fix, Scene, Support, VertexInput,
 };
 use std::f64::consts::PI;
 use std::path::Path;
@@ -173,6 +173,27 @@ fn diagonal_contact() -> Scene {
     s
 }
 
+/// The strip of `strip()` spanning between a wall and a robot's gripper:
+/// clamped to a support at its left end, its right end (vertices 4 and 9)
+/// attached to the frame `mount`, with gravity and the reaction outputs:
+/// the attachment's inputs and wrench, the support's reaction.
+fn bridge() -> Scene {
+    let mesh = builders::grid(0.2, 0.05, 4, 1, &[(2, PI / 2.0)]);
+    let mut s = tag_fold_edges(Scene::with_defaults("bridge", mesh));
+    s.material.thickness = 5e-4;
+    s.supports.push(Support {
+        vertices: vec![VertexId(0), VertexId(5)],
+        fix: Fix::Clamped,
+    });
+    s.attachments.push(Attachment {
+        name: "mount".into(),
+        vertices: vec![VertexId(4), VertexId(9)],
+    });
+    s.gravity = Some([0.0, 0.0, -9.81]);
+    s.outputs.reactions = true;
+    s
+}
+
 fn examples() -> Vec<Scene> {
     vec![
         square(),
@@ -181,6 +202,7 @@ fn examples() -> Vec<Scene> {
         case_c_nocut(),
         miura(),
         diagonal_contact(),
+        bridge(),
     ]
 }
 

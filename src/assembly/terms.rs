@@ -261,7 +261,8 @@ impl ForceTerm for CreaseSprings {
 }
 
 /// Mass damping `alpha M (v - P v)`, `P v` the M-orthogonal rigid part of
-/// `v` that the supports allow (rigid motion is not damped).
+/// `v` that the supports allow (rigid motion is not damped); on a sheet
+/// held by frames, `alpha M (v - v_F)`, `v_F` the frames' rigid motion.
 struct MassDamping;
 
 impl ForceTerm for MassDamping {
@@ -291,14 +292,25 @@ impl ForceTerm for MassDamping {
         let n = asm.n_dofs();
         let mut mv = vec![0.0; n];
         let mut pv = vec![0.0; n];
-        // A clamped sheet has no rigid motion: nothing to project.
-        if asm.rigid.n_allowed() > 0 {
+        if !asm.rigid.held().is_empty() {
+            // Held by frames: the velocity relative to their rigid motion.
+            // (Its dependence on q, alpha M [w x] on the positions, is left
+            // out of the matrix: alpha |w| against its c alpha M.)
+            let mut rel = st.v.to_vec();
+            if let Some([t, w, c]) = asm.rigid.frame_velocity(st.q, st.v) {
+                let mut vr = vec![0.0; n];
+                asm.rigid.rigid_velocity(st.q, t, w, c, &mut vr);
+                rel.iter_mut().zip(&vr).for_each(|(x, r)| *x -= r);
+            }
+            asm.mass_mul(&rel, &mut mv);
+        } else if asm.rigid.n_allowed() > 0 {
             let mut mq = vec![0.0; n];
             asm.mass_mul_n([st.v, st.q], [&mut mv, &mut mq]);
             if asm.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
                 pv.fill(0.0);
             }
         } else {
+            // A clamped sheet has no rigid motion: nothing to project.
             asm.mass_mul(st.v, &mut mv);
         }
         for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {

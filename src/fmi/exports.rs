@@ -672,7 +672,7 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
 // ---------------------------------------------------------------------------
 // Co-simulation.
 
-/// `fmi2SetRealInputDerivatives`: first derivatives of inputs over the
+/// `fmi2SetRealInputDerivatives`: first and second derivatives of inputs over the
 /// next communication steps (canInterpolateInputs is true).
 ///
 /// # Safety

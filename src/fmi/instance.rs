@@ -707,8 +707,8 @@ impl Instance {
         fmi2OK
     }
 
-    /// `fmi2SetRealInputDerivatives`: first derivatives of inputs (all
-    /// checked before any is applied). A derivative applies from the current
+    /// `fmi2SetRealInputDerivatives`: first and second derivatives of
+    /// inputs (all checked before any is applied). A derivative applies from the current
     /// communication point until it or the input's value is set again.
     pub fn set_input_derivatives(
         &mut self,
@@ -734,26 +734,26 @@ impl Instance {
                     return self.error(format!("{F}: no Real variable with value reference {vr}"));
                 }
             };
-            if order != 1 {
+            if !(1..=2).contains(&order) {
                 return self.error(format!(
-                    "{F}: order {order} for {}: this FMU takes first derivatives (order 1) only; \
-                     nothing was changed",
+                    "{F}: order {order} for {}: this FMU takes first and second derivatives \
+                     (order 1 or 2); nothing was changed",
                     self.var_name(VarRef::Input(i))
                 ));
             }
-            inputs.push(i);
+            inputs.push((i, order));
         }
-        if let Some((&i, &v)) = inputs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
+        if let Some((&(i, _), &v)) = inputs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
             return self.error(format!(
                 "{F}: the derivative of {} = {} is not a finite number; nothing was changed",
                 self.var_name(VarRef::Input(i)),
                 num(v)
             ));
         }
-        for (&i, &v) in inputs.iter().zip(values) {
+        for (&(i, order), &v) in inputs.iter().zip(values) {
             // Finite values fail only for a reason shared by every input
             // (ramped inputs), so nothing has been applied when one fails.
-            if let Err(e) = self.model.set_input_derivative(i, 1, v) {
+            if let Err(e) = self.model.set_input_derivative(i, order, v) {
                 return self.error(format!("{F}: {e}; nothing was changed"));
             }
         }

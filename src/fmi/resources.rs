@@ -166,6 +166,19 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             })?;
         }
     }
+    for (i, a) in s.attachments.iter().enumerate() {
+        check(!a.vertices.is_empty(), || {
+            format!("attachments[{i}] ({}): no vertices", a.name)
+        })?;
+        for &v in &a.vertices {
+            check(v.index() < nv, || {
+                format!(
+                    "attachments[{i}] ({}): vertex {v} out of range (mesh has {nv} vertices)",
+                    a.name
+                )
+            })?;
+        }
+    }
     for (what, list) in [
         ("vertex_forces", &s.vertex_forces),
         ("vertex_motions", &s.vertex_motions),

@@ -2,7 +2,9 @@
 //! external forces and prescribed DOFs.
 
 use super::Model;
+use super::attach::FrameInput;
 use crate::assembly::Assembler;
+use crate::frame::Pose;
 use crate::scene::InputRamp;
 use crate::solver::stepper::Drive;
 
@@ -10,21 +12,30 @@ use crate::solver::stepper::Drive;
 const INSTANT: f64 = 1e-12;
 
 /// An actuator's value and rate `e` seconds after `start` (value, rate)
-/// under the input `u0 + slope t`: the critically damped response of
-/// natural frequency 1 / `tau`, in closed form,
-/// `a'' + 2 a' / tau + a / tau^2 = u / tau^2`. With `tau` 0 the input itself.
+/// under the input `u0 + s1 t + s2 t^2 / 2` (`[s1, s2]` = `slopes`): the
+/// critically damped response of natural frequency 1 / `tau`, in closed
+/// form, `a'' + 2 a' / tau + a / tau^2 = u / tau^2`. With `tau` 0 the input
+/// itself.
 pub(super) fn actuator_response(
     tau: f64,
     start: [f64; 2],
     u0: f64,
-    slope: f64,
+    [s1, s2]: [f64; 2],
     e: f64,
 ) -> [f64; 2] {
+    let input = |t: f64| [u0 + s1 * t + 0.5 * s2 * t * t, s1 + s2 * t];
     if tau.is_nan() || tau <= INSTANT {
-        return [u0 + slope * e, slope];
+        return input(e);
     }
-    // The particular solution of a ramp lags it by 2 tau.
-    respond(tau, start, e, |t| [u0 + slope * (t - 2.0 * tau), slope])
+    // The particular solution of a polynomial input: u - 2 tau u' + 3 tau^2 u''
+    // (a ramp lags by 2 tau).
+    respond(tau, start, e, |t| {
+        let [u, du] = input(t);
+        [
+            u - 2.0 * tau * du + 3.0 * tau * tau * s2,
+            du - 2.0 * tau * s2,
+        ]
+    })
 }
 
 /// An actuator's value and rate `e` seconds after `start` under the
@@ -113,6 +124,8 @@ pub(super) struct InputMap {
     pub(super) motion: Vec<(usize, usize)>,
     /// Scalar index of each force input component (input index, scalar).
     pub(super) force: Vec<(usize, usize)>,
+    /// The attachments: their pose inputs and held slots.
+    pub(super) frames: Vec<FrameInput>,
     pub(super) n_dofs: usize,
 }
 
@@ -124,6 +137,8 @@ pub(super) struct DriveValues {
     pub(super) moment: Vec<f64>,
     pub(super) f_ext: Vec<f64>,
     pub(super) prescribed: Vec<(usize, f64)>,
+    /// The attachments' frames.
+    pub(super) frames: Vec<Pose>,
 }
 
 impl InputMap {
@@ -156,6 +171,12 @@ impl InputMap {
         d.prescribed.clone_from(&self.supported);
         d.prescribed
             .extend(self.motion.iter().map(|&(k, i)| (i, u[k])));
+        d.frames.clear();
+        for f in &self.frames {
+            let pose = f.pose(u);
+            f.held.prescribe(&pose, &mut d.prescribed);
+            d.frames.push(pose);
+        }
     }
 
     /// Work done at once when input `i` jumps from `u[i]` to `new` while
@@ -246,7 +267,7 @@ mod tests {
     #[test]
     fn actuator_response_solves_its_equation() {
         let (tau, start, u0, s) = (0.02, [0.3, -1.5], 1.0, 2.0);
-        let at = |t: f64| actuator_response(tau, start, u0, s, t);
+        let at = |t: f64| actuator_response(tau, start, u0, [s, 0.0], t);
         let [a0, r0] = at(0.0);
         assert!((a0 - start[0]).abs() < 1e-15 && (r0 - start[1]).abs() < 1e-15);
         let d = 1e-6;
@@ -264,7 +285,24 @@ mod tests {
         let [a, r] = at(2.0);
         assert!((a - (u0 + s * (2.0 - 2.0 * tau))).abs() < 1e-12);
         assert!((r - s).abs() < 1e-12);
-        assert_eq!(actuator_response(0.0, start, u0, s, 0.5), [u0 + s * 0.5, s]);
+        assert_eq!(
+            actuator_response(0.0, start, u0, [s, 0.0], 0.5),
+            [u0 + s * 0.5, s]
+        );
+        // A second derivative: the equation with u0 + s t + c t^2 / 2.
+        let c = -3.0;
+        let at = |t: f64| actuator_response(tau, start, u0, [s, c], t);
+        for t in [0.001, 0.03, 0.2] {
+            let [a, r] = at(t);
+            let rate = (at(t + d)[0] - at(t - d)[0]) / (2.0 * d);
+            let acc = (at(t + d)[1] - at(t - d)[1]) / (2.0 * d);
+            assert!((rate - r).abs() < 1e-6 * (1.0 + r.abs()), "{rate} vs {r}");
+            let u = u0 + s * t + 0.5 * c * t * t;
+            let residual = tau * tau * acc + 2.0 * tau * r + a - u;
+            assert!(residual.abs() < 1e-6, "residual {residual} at {t}");
+        }
+        let [a, r] = at(0.0);
+        assert!((a - start[0]).abs() < 1e-15 && (r - start[1]).abs() < 1e-14);
     }
 
     /// The ramp's response solves the same equation on both sides of the

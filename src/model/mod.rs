@@ -23,9 +23,11 @@
 //! - `system`: what is built from the scene and parameters (assembly,
 //!   solver, stepper settings);
 //! - `drive`: how input values become loads and prescribed DOFs;
+//! - `attach`: the attachments' frames and the reaction outputs;
 //! - `step`: the step controller ([`Model::advance`], [`StepReport`]);
 //! - `state`: [`ModelState`], save and restore, consistent accelerations.
 
+mod attach;
 mod drive;
 mod parameters;
 mod physics;
@@ -166,6 +168,7 @@ impl Model {
             inputs_now: inputs.iter().map(|v| v.start).collect(),
             inputs_next: inputs.iter().map(|v| v.start).collect(),
             input_slopes: vec![0.0; inputs.len()],
+            input_second_derivatives: vec![0.0; inputs.len()],
             damping_set: false,
             actuator_set: false,
             actuators: scene.actuators.iter().map(|a| [a.start, 0.0]).collect(),
@@ -233,18 +236,25 @@ impl Model {
         }
         let sys = self.sys.as_mut().expect("built");
         let n = sys.asm.n_dofs();
-        let mut q = sys.asm.layout.reference_state(&self.scene.mesh);
         let u = self.state.inputs_now.clone();
-        for &(i, x) in &sys.inputs.drive(&u).prescribed {
-            q[i] = x;
-        }
-        let theta_prev = vec![std::f64::consts::PI; sys.asm.creases.len()];
-        self.state.dynamics = Dynamics {
-            q,
+        // At rest in the reference; with attachments, carried along by the
+        // first one's frame as its inputs place and move it.
+        let mut dynamics = Dynamics {
+            q: sys.asm.layout.reference_state(&self.scene.mesh),
             v: vec![0.0; n],
             qdd: vec![0.0; n],
             abar: vec![0.0; n],
         };
+        let slopes = (
+            &self.state.input_slopes[..],
+            &self.state.input_second_derivatives[..],
+        );
+        attach::start_with_frames(&sys.asm, &sys.inputs, &u, slopes, &mut dynamics);
+        for &(i, x) in &sys.inputs.drive(&u).prescribed {
+            dynamics.q[i] = x;
+        }
+        let theta_prev = vec![std::f64::consts::PI; sys.asm.creases.len()];
+        self.state.dynamics = dynamics;
         self.state.memory.newton = Default::default();
         self.consistent_accelerations(&u, &theta_prev)?;
         self.state.memory.h_next = self.sys.as_ref().expect("built").settings.max_step;

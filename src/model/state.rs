@@ -35,6 +35,10 @@ pub struct ModelState {
     #[serde(default)]
     #[doc(hidden)]
     pub input_slopes: Vec<f64>,
+    /// Second time derivative of each input over the next advance (empty
+    /// in a state saved before inputs had them: zero).
+    #[serde(default)]
+    pub input_second_derivatives: Vec<f64>,
     /// Whether a damping parameter was set (automatic damping is then off).
     #[serde(default)]
     #[doc(hidden)]
@@ -113,6 +117,10 @@ impl Model {
             // A state saved before inputs had slopes.
             s.input_slopes = vec![0.0; s.inputs_now.len()];
         }
+        if s.input_second_derivatives.is_empty() {
+            // A state saved before inputs had second derivatives.
+            s.input_second_derivatives = vec![0.0; s.inputs_now.len()];
+        }
         let n_act = self.scene.actuators.len();
         if s.actuators.is_empty() && n_act > 0 {
             // A state saved before actuators had a response: at rest at their inputs.
@@ -182,9 +190,14 @@ impl Model {
         let ni = self.inputs.len();
         self.input_values("inputs_now", &s.inputs_now, &[ni])?;
         self.input_values("inputs_next", &s.inputs_next, &[ni])?;
-        // Empty in a state saved before slopes and actuator responses: the
-        // restore fills them in.
+        // Empty in a state saved before slopes, second derivatives and
+        // actuator responses: the restore fills them in.
         self.input_values("input_slopes", &s.input_slopes, &[0, ni])?;
+        self.input_values(
+            "input_second_derivatives",
+            &s.input_second_derivatives,
+            &[0, ni],
+        )?;
         let flat: Vec<f64> = s.actuators.iter().flatten().copied().collect();
         values("actuators", &flat, &[0, 2 * self.scene.actuators.len()])?;
         check_memory(&s.memory, running, n, nc)?;
@@ -361,9 +374,10 @@ impl Model {
     }
 
     /// Accelerations from the equation of motion at the current positions
-    /// and velocities, M qdd = f_ext - f_int on the free DOFs (the mass
-    /// matrix is factored in the stepper's solver, so its iteration matrix
-    /// is forgotten); also the crease angles and outputs.
+    /// and velocities, M qdd = f_ext - f_int on the free DOFs, the fixed
+    /// DOFs' accelerations as they are (the mass matrix is factored in the
+    /// stepper's solver, so its iteration matrix is forgotten); also the
+    /// crease angles and outputs.
     pub(super) fn consistent_accelerations(
         &mut self,
         u: &[f64],
@@ -385,11 +399,21 @@ impl Model {
             let term = sys.asm.non_finite_term(&st).unwrap_or("").to_string();
             return Err(self.not_finite(&e, &term));
         }
+        // The fixed DOFs' accelerations (a moving frame's) push the free ones.
+        let mut m_fixed = vec![0.0; n];
+        let fixed_qdd: Vec<f64> = (0..n)
+            .map(|i| match sys.asm.free[i] {
+                crate::assembly::FIXED => dynm.qdd.get(i).copied().unwrap_or(0.0),
+                _ => 0.0,
+            })
+            .collect();
+        if fixed_qdd.iter().any(|&a| a != 0.0) {
+            sys.asm.mass_mul(&fixed_qdd, &mut m_fixed);
+        }
         let mut rhs = vec![0.0; sys.asm.n_free];
-        for i in 0..n {
-            let fi = sys.asm.free[i];
+        for (i, &fi) in sys.asm.free.iter().enumerate() {
             if fi != crate::assembly::FIXED {
-                rhs[fi] = d.f_ext[i] - ev.force[i];
+                rhs[fi] = d.f_ext[i] - ev.force[i] - m_fixed[i];
             }
         }
         sys.stepper.invalidate_matrix();
@@ -402,7 +426,7 @@ impl Model {
         if let Err(e) = solved {
             return Err(self.not_finite(&format!("the accelerations: mass matrix: {e}"), ""));
         }
-        let mut qdd = vec![0.0; n];
+        let mut qdd = fixed_qdd;
         for (a, &fi) in qdd.iter_mut().zip(&sys.asm.free) {
             if fi != crate::assembly::FIXED {
                 *a = rhs[fi];
@@ -411,7 +435,7 @@ impl Model {
         self.state.dynamics.abar = qdd.clone();
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
-        self.state.outputs = Some(self.compute_outputs(&ev));
+        self.state.outputs = Some(self.compute_outputs(&ev, &d));
         self.read_cache = Default::default();
         Ok(())
     }

@@ -122,11 +122,29 @@ impl Model {
         adv.report.solve_time = (solve_time - adv.linear_times.1).as_secs_f64();
         sys.stepper.end_advance(&mut state.memory);
         state.extra_pairs = sys.asm.extra_pairs().to_vec();
-        // The outputs now, where the last step evaluated its state in full;
-        // else they are evaluated from the state when read.
-        let ev = sys.stepper.evaluation().cloned();
+        // The outputs now, where the last step evaluated its state in full
+        // or the scene reports reactions (they need the forces at the step
+        // end); else they are evaluated from the state when read.
+        let d_end = std::mem::take(&mut adv.d_start);
+        let ev = match sys.stepper.evaluation() {
+            Some(ev) => Some(ev.clone()),
+            None if sys.reactions.is_empty() => None,
+            None => Some(
+                sys.evaluate(&state.dynamics, &d_end, &state.crease_theta)
+                    .map_err(|reason| Error::StepFailed { time: t0, reason })?,
+            ),
+        };
         for (k, a) in state.actuators.iter_mut().enumerate() {
             *a = adv.actuator(k, big_h);
+        }
+        // An input with a second derivative goes on along its parabola
+        // until it is set again.
+        for (s1, s2) in state
+            .input_slopes
+            .iter_mut()
+            .zip(&state.input_second_derivatives)
+        {
+            *s1 += s2 * big_h;
         }
         let mut u = std::mem::take(&mut adv.u);
         adv.commands_at(big_h, &mut u);
@@ -134,7 +152,7 @@ impl Model {
         self.state.time = t0 + big_h;
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
-        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev));
+        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         self.read_cache = Default::default();
         let d = &self.state.dynamics;
         let finite = match &self.state.outputs {
@@ -173,10 +191,12 @@ impl Model {
 struct Advance {
     big_h: f64,
     t0: f64,
-    /// Inputs at the start, at the end before slopes, and their slopes.
+    /// Inputs at the start, at the end before slopes, and their first and
+    /// second derivatives.
     u0: Vec<f64>,
     u1: Vec<f64>,
     slopes: Vec<f64>,
+    second: Vec<f64>,
     /// The actuators' time constant, and their values and rates at the start.
     tau: f64,
     act0: Vec<[f64; 2]>,
@@ -208,6 +228,7 @@ impl Advance {
             t0: state.time,
             u1: state.inputs_next.clone(),
             slopes: state.input_slopes.clone(),
+            second: state.input_second_derivatives.clone(),
             tau: sys.actuator_tau,
             act0: state.actuators.clone(),
             u: state.inputs_now.clone(),
@@ -242,7 +263,10 @@ impl Advance {
 
     /// Input `k` as the master set it at elapsed time `e`.
     fn command(&self, k: usize, e: f64) -> f64 {
-        self.u0[k] + (self.u1[k] - self.u0[k]) * (e / self.big_h) + self.slopes[k] * e
+        let s2 = self.second.get(k).copied().unwrap_or(0.0);
+        self.u0[k]
+            + (self.u1[k] - self.u0[k]) * (e / self.big_h)
+            + (self.slopes[k] + 0.5 * s2 * e) * e
     }
 
     /// The inputs acting on the sheet at elapsed time `e`: the commands,
@@ -263,10 +287,11 @@ impl Advance {
             return ramp_response(self.tau, self.act0[k], &self.ramp.0, self.t0, e);
         }
         let slope = (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k];
+        let s2 = self.second.get(k).copied().unwrap_or(0.0);
         if self.tau > 0.0 {
-            actuator_response(self.tau, self.act0[k], self.u0[k], slope, e)
+            actuator_response(self.tau, self.act0[k], self.u0[k], [slope, s2], e)
         } else {
-            [self.command(k, e), slope]
+            [self.command(k, e), slope + s2 * e]
         }
     }
 

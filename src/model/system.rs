@@ -1,15 +1,19 @@
 //! The system built from the scene and parameters: assembly, sparse
 //! solver, stepper settings and the input map ([`Model::build`]).
 
-use super::drive::InputMap;
+use super::attach::{self, About, FrameInput, Reaction, Reactions};
+use super::drive::{DriveValues, InputMap};
 use super::{Error, Model, fold_edges, physics};
-use crate::assembly::Assembler;
+use crate::assembly::{Assembler, Evaluation, State};
 use crate::contact::ContactTerm;
+use crate::dofs::{DofLayout, SlotKind};
 use crate::element::ElementOptions;
+use crate::frame::HeldSlots;
 use crate::ids::FoldEdgeId;
 use crate::scene::{ActuatorMode, Fix, Integrator as SceneIntegrator, Scene, SolverSettings};
 use crate::solver::central_difference::CentralDifference;
 use crate::solver::generalized_alpha::{self as ga, GeneralizedAlpha};
+use crate::solver::stepper::Dynamics;
 use crate::solver::stepper::Stepper;
 use crate::solver::{LinearError, SparseSolver};
 use std::collections::HashMap;
@@ -35,9 +39,69 @@ pub(super) struct System {
     /// Where each free slot is in the reference sheet (the ordering of
     /// large systems cuts by it).
     pub(super) block_coords: Vec<[f64; 3]>,
+    /// The reaction outputs (attachments' wrenches; supports' and
+    /// motions' forces where the scene asks for them).
+    pub(super) reactions: Reactions,
+}
+
+/// The reaction outputs of scene `sc` (see [`Reactions`]): the frames'
+/// wrenches, and with the `reactions` output group each support's (about
+/// its centroid) and each motion's force.
+fn reactions(
+    sc: &Scene,
+    layout: &DofLayout,
+    frames: &[FrameInput],
+    support_slots: Vec<Vec<(usize, bool)>>,
+) -> Reactions {
+    let mut groups: Vec<Reaction> = frames
+        .iter()
+        .enumerate()
+        .map(|(k, f)| Reaction {
+            slots: f.held.slots.iter().map(|h| (h.slot, h.position)).collect(),
+            about: About::Frame(k),
+            moment: true,
+        })
+        .collect();
+    if sc.outputs.reactions {
+        for (sup, slots) in sc.supports.iter().zip(support_slots) {
+            groups.push(Reaction {
+                slots,
+                about: About::Point(attach::centroid(sc, &sup.vertices)),
+                moment: attach::support_has_moment(sup),
+            });
+        }
+        for m in &sc.vertex_motions {
+            groups.push(Reaction {
+                slots: vec![(layout.position_slot[m.vertex.index()], true)],
+                about: About::Point(nalgebra::Vector3::zeros()),
+                moment: false,
+            });
+        }
+    }
+    Reactions { groups }
 }
 
 impl System {
+    /// The full evaluation (forces, energies) of positions and velocities
+    /// `d` under the drive `drive`, crease angles unwrapped near `theta_prev`.
+    pub(super) fn evaluate(
+        &self,
+        d: &Dynamics,
+        drive: &DriveValues,
+        theta_prev: &[f64],
+    ) -> Result<Evaluation, String> {
+        let mut ev = Evaluation::default();
+        let st = State {
+            q: &d.q,
+            v: &d.v,
+            theta0: &drive.theta0,
+            moment: &drive.moment,
+            theta_prev,
+        };
+        self.asm.evaluate(&st, &mut ev, None)?;
+        Ok(ev)
+    }
+
     /// A new sparse solver for the assembler's pattern as it is now (after
     /// the pattern grew or was restored); the iteration matrix is gone.
     pub(super) fn rebuild_solver(&mut self) -> Result<(), LinearError> {
@@ -74,7 +138,10 @@ impl System {
         let mut fixed = Vec::new();
         let mut is_fixed = vec![false; layout.n_slots()];
         let mut supported = Vec::new();
+        // The slots each support holds (slot, is a position).
+        let mut support_slots = Vec::with_capacity(sc.supports.len());
         for sup in &sc.supports {
+            let mut mine = Vec::new();
             for &v in &sup.vertices {
                 let slots = match sup.fix {
                     Fix::Position => vec![layout.position_slot[v.index()]],
@@ -84,12 +151,14 @@ impl System {
                     if !is_fixed[s] {
                         is_fixed[s] = true;
                         fixed.push(s);
+                        mine.push((s, layout.slot_kind[s] == SlotKind::Position));
                         for c in 0..3 {
                             supported.push((3 * s + c, q_ref[3 * s + c]));
                         }
                     }
                 }
             }
+            support_slots.push(mine);
         }
         let n_act = sc.actuators.len();
         let mut motion = Vec::new();
@@ -104,6 +173,14 @@ impl System {
                 motion.push((idx + c, 3 * s + c));
             }
             idx += 3;
+        }
+        let mut frames = Vec::with_capacity(sc.attachments.len());
+        for a in &sc.attachments {
+            let origin = attach::origin(sc, a);
+            let held = HeldSlots::new(&layout, &q_ref, &a.vertices, origin, &mut is_fixed);
+            fixed.extend(held.slots.iter().map(|h| h.slot));
+            frames.push(FrameInput { input: idx, held });
+            idx += attach::POSE_INPUTS;
         }
         let mut force = Vec::new();
         for (k, f) in sc.vertex_forces.iter().enumerate() {
@@ -145,10 +222,22 @@ impl System {
             .map_err(Error::Scene)?;
             asm.add_term(Box::new(term));
         }
-        // Damping leaves alone the rigid motion the supports allow.
-        let supported_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
+        // Damping leaves alone the rigid motion the supports allow; a sheet
+        // held by frames, the frames' motion.
+        let mut held_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
+        if !frames.is_empty() {
+            held_dofs.extend(
+                frames
+                    .iter()
+                    .flat_map(|f| f.held.slots.iter().flat_map(|h| 3 * h.slot..3 * h.slot + 3)),
+            );
+            let mut held: Vec<usize> = held_dofs.iter().map(|&i| i / 3).collect();
+            held.dedup();
+            asm.rigid.set_held(held);
+        }
         asm.rigid
-            .set_supports(&supported_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
+            .set_supports(&held_dofs, &q_ref, mesh.size().max(f64::MIN_POSITIVE));
+        let reactions = reactions(sc, &layout, &frames, support_slots);
         // Free scalars come in slots of 3 with one pattern.
         let block_coords = asm.free_block_coords(mesh);
         let solver = SparseSolver::new_blocked(
@@ -220,8 +309,10 @@ impl System {
                 supported,
                 motion,
                 force,
+                frames,
                 n_dofs: asm.n_dofs(),
             },
+            reactions,
             angle_ends,
             actuator_tau: super::actuator_time_constant(sc),
             asm,

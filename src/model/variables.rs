@@ -2,6 +2,7 @@
 //! outputs ([`VariableSpec`] tables in value-reference order), setting
 //! inputs and reading outputs. Parameters are in [`super::parameters`].
 
+use super::drive::DriveValues;
 use super::{Error, Model, Phase};
 use crate::assembly::Evaluation;
 use crate::ids::{FoldEdgeId, VertexId};
@@ -31,7 +32,8 @@ fn spec(name: String, unit: &str, description: String, start: f64) -> VariableSp
 }
 
 /// The inputs of `scene`: one per actuator, then the x, y, z of each
-/// vertex force and each prescribed vertex motion.
+/// vertex force and each prescribed vertex motion, then each attachment's
+/// pose (x, y, z, rx, ry, rz).
 pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
     let mut v = Vec::new();
     for a in &scene.actuators {
@@ -64,6 +66,28 @@ pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
                 "m",
                 format!("prescribed position of vertex {}, {c}", m.vertex),
                 start,
+            ));
+        }
+    }
+    for a in &scene.attachments {
+        let o = super::attach::origin(scene, a);
+        for (c, start) in ["x", "y", "z"].iter().zip(o.iter()) {
+            v.push(spec(
+                format!("{}.{c}", a.name),
+                "m",
+                format!("origin of attachment {}'s frame, {c}", a.name),
+                *start,
+            ));
+        }
+        for c in ["x", "y", "z"] {
+            v.push(spec(
+                format!("{}.r{c}", a.name),
+                "rad",
+                format!(
+                    "rotation vector of attachment {}'s frame (axis times angle), {c}",
+                    a.name
+                ),
+                0.0,
             ));
         }
     }
@@ -121,6 +145,44 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
     if scene.contact.is_some() {
         for (name, unit, what) in CONTACT_OUTPUTS {
             v.push(spec(name.into(), unit, what.into(), 0.0));
+        }
+    }
+    let mut wrench = |prefix: &str, what: &str, about: &str, moment: bool| {
+        for c in ["x", "y", "z"] {
+            v.push(spec(
+                format!("{prefix}.force.{c}"),
+                "N",
+                format!("force the sheet exerts on {what} (world axes), {c}"),
+                0.0,
+            ));
+        }
+        for c in ["x", "y", "z"].iter().filter(|_| moment) {
+            v.push(spec(
+                format!("{prefix}.moment.{c}"),
+                "N.m",
+                format!("moment the sheet exerts on {what} about {about} (world axes), {c}"),
+                0.0,
+            ));
+        }
+    };
+    for a in &scene.attachments {
+        let what = format!("attachment {}", a.name);
+        wrench(&a.name, &what, "its frame's origin", true);
+    }
+    if o.reactions {
+        for (k, s) in scene.supports.iter().enumerate() {
+            let moment = super::attach::support_has_moment(s);
+            let what = format!("ancf:supports[{k}]");
+            wrench(
+                &format!("support[{k}]"),
+                &what,
+                "its vertices' centroid",
+                moment,
+            );
+        }
+        for m in &scene.vertex_motions {
+            let what = format!("the motion {} at vertex {}", m.name, m.vertex);
+            wrench(&m.name, &what, "", false);
         }
     }
     v
@@ -228,7 +290,8 @@ impl Model {
     pub fn parameters(&self) -> &[VariableSpec] {
         &self.parameters
     }
-    /// Inputs, one per actuator, then vertex forces and motions (x, y, z).
+    /// Inputs, one per actuator, then vertex forces and motions (x, y, z),
+    /// then attachment poses (x, y, z, rx, ry, rz).
     pub fn inputs(&self) -> &[VariableSpec] {
         &self.inputs
     }
@@ -297,13 +360,18 @@ impl Model {
             self.state.inputs_now[i] = value;
         }
         self.state.input_slopes[i] = 0.0;
+        if let Some(s2) = self.state.input_second_derivatives.get_mut(i) {
+            *s2 = 0.0;
+        }
         Ok(())
     }
 
-    /// Set the `order`-th time derivative of input `i` (only order 1: the
-    /// input then grows linearly from its value over the advance, as
-    /// `fmi2SetRealInputDerivatives` asks). It applies until the input or
-    /// its derivative is set again. Not with ramped inputs.
+    /// Set the `order`-th time derivative of input `id` (order 1 or 2: the
+    /// input then follows its Taylor polynomial from its value over the
+    /// advance, as `fmi2SetRealInputDerivatives` asks). It applies until the
+    /// input or the derivative is set again (an input with a second
+    /// derivative goes on along its parabola: its first derivative grows
+    /// by the second times each advance). Not with ramped inputs.
     pub fn set_input_derivative(
         &mut self,
         id: InputId,
@@ -317,8 +385,8 @@ impl Model {
             value,
             reason: reason.into(),
         };
-        if order != 1 {
-            return Err(bad("only first derivatives are taken (order 1)"));
+        if !(1..=2).contains(&order) {
+            return Err(bad("first and second derivatives are taken (order 1 or 2)"));
         }
         if self.scene.solver.input_timing == InputTiming::Ramp {
             return Err(bad(
@@ -329,7 +397,14 @@ impl Model {
             return Err(bad(&reason));
         }
         if !self.is_ramped(i) {
-            self.state.input_slopes[i] = value;
+            if order == 1 {
+                self.state.input_slopes[i] = value;
+            } else {
+                self.state
+                    .input_second_derivatives
+                    .resize(self.inputs.len(), 0.0);
+                self.state.input_second_derivatives[i] = value;
+            }
         }
         Ok(())
     }
@@ -430,25 +505,20 @@ impl Model {
     fn evaluate_outputs(&self) -> Vec<f64> {
         let sys = self.sys.as_ref().expect("running");
         let d = sys.inputs.drive(&self.drive_inputs());
-        let dynm = &self.state.dynamics;
-        let mut ev = Evaluation::default();
-        let st = crate::assembly::State {
-            q: &dynm.q,
-            v: &dynm.v,
-            theta0: &d.theta0,
-            moment: &d.moment,
-            theta_prev: &self.state.crease_theta,
-        };
-        if sys.asm.evaluate(&st, &mut ev, None).is_err() {
-            // Not reached in practice: the step checked these crease angles
-            // and evaluated forces within Newton's tolerance of this state.
-            // Outputs stay finite: angles as tracked, energies zero.
-            ev = Evaluation {
-                theta: self.state.crease_theta.clone(),
-                ..Default::default()
-            };
-        }
-        self.compute_outputs(&ev)
+        let ev = sys
+            .evaluate(&self.state.dynamics, &d, &self.state.crease_theta)
+            .unwrap_or_else(|_| {
+                // Not reached in practice: the step checked these crease
+                // angles and evaluated forces within Newton's tolerance of
+                // this state. Outputs stay finite: angles as tracked,
+                // energies zero.
+                Evaluation {
+                    theta: self.state.crease_theta.clone(),
+                    force: vec![0.0; self.state.dynamics.q.len()],
+                    ..Default::default()
+                }
+            });
+        self.compute_outputs(&ev, &d)
     }
 
     /// Kinetic, strain and crease energy now (J).
@@ -462,6 +532,20 @@ impl Model {
         } else {
             [f64::NAN; 3]
         }
+    }
+
+    /// The sheet's mass (kg) and centre of mass now (m; in the reference
+    /// before initialization).
+    pub fn mass_properties(&self) -> (f64, [f64; 3]) {
+        let Some(sys) = &self.sys else {
+            return (0.0, [0.0; 3]);
+        };
+        let q = match self.state.phase {
+            Phase::Running => self.state.dynamics.q.clone(),
+            Phase::Setup => sys.asm.layout.reference_state(&self.scene.mesh),
+        };
+        let (m, c) = sys.asm.rigid.mass_center(&q);
+        (m, c.into())
     }
 
     /// Current position of mesh vertex `v`.
@@ -492,7 +576,9 @@ impl Model {
         }
     }
 
-    pub(super) fn compute_outputs(&self, ev: &Evaluation) -> Vec<f64> {
+    /// All outputs from the evaluation `ev` of the current state under the
+    /// drive `d` (the reactions need its external forces and frames).
+    pub(super) fn compute_outputs(&self, ev: &Evaluation, d: &DriveValues) -> Vec<f64> {
         let sys = self.sys.as_ref().expect("built");
         let mut out = Vec::with_capacity(self.outputs.len());
         let o = self.scene.outputs;
@@ -517,6 +603,14 @@ impl Model {
             // (`contact_output`); zero here keeps the stored list finite.
             out.extend([0.0, 0.0, 0.0, ev.term_energy, self.state.work.friction]);
         }
+        let dynm = &self.state.dynamics;
+        sys.reactions.values(
+            &sys.asm,
+            (&dynm.q, &dynm.qdd),
+            (&d.f_ext, &ev.force),
+            &d.frames,
+            &mut out,
+        );
         out
     }
 

@@ -11,9 +11,10 @@
 //! | `ancf:supports` | `[{vertices, fix}]` |
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
+//! | `ancf:attachments` | `[{name, vertices}]` |
 //! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
 //! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, quadrature}` |
-//! | `ancf:outputs` | `["positions", "fold_angles", "energies"]` |
+//! | `ancf:outputs` | `["positions", "fold_angles", "energies", "reactions"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
 //! | `ancf:import` | `{size, unit, f_edges}`: how the FOLD geometry is read |
 //!
@@ -46,6 +47,7 @@ pub const KEYS: &[&str] = &[
     "ancf:supports",
     "ancf:loads",
     "ancf:motions",
+    "ancf:attachments",
     "ancf:contact",
     "ancf:solver",
     "ancf:outputs",
@@ -57,6 +59,7 @@ pub const KEYS: &[&str] = &[
 /// may not use them.
 pub const RESERVED_NAMES: &[&str] = &[
     "vertex", "crease", "energy", "material", "damping", "gravity", "solver", "contact", "time",
+    "support",
 ];
 
 /// Most levels of `ancf:refine` (each multiplies the triangles by 4).
@@ -100,6 +103,17 @@ pub struct SupportSpec {
     pub key: String,
 }
 
+/// A rigid attachment as written in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AttachmentSpec {
+    /// Variable name prefix.
+    pub name: String,
+    /// FOLD vertex indices.
+    pub vertices: Vec<usize>,
+    /// `ancf:attachments[i]`, for messages.
+    pub key: String,
+}
+
 /// Everything the `ancf:` keys say, checked key by key; defaults filled in.
 /// (Not to be confused with [`crate::assembly::Physics`], the coefficients
 /// the assembly is given once the scene is built.)
@@ -127,6 +141,8 @@ pub struct PhysicsKeys {
     pub vertex_forces: Vec<(VertexInput, String)>,
     /// `ancf:motions` with their keys.
     pub vertex_motions: Vec<(VertexInput, String)>,
+    /// `ancf:attachments`.
+    pub attachments: Vec<AttachmentSpec>,
     /// `ancf:solver`.
     pub solver: SolverSettings,
     /// `ancf:outputs`.
@@ -374,6 +390,7 @@ pub fn parse(
         gravity: None,
         vertex_forces: vec![],
         vertex_motions: vec![],
+        attachments: vec![],
         solver: SolverSettings::default(),
         outputs: Outputs::default(),
         refine: 0,
@@ -576,6 +593,24 @@ pub fn parse(
         p.vertex_motions = vertex_inputs(v, "ancf:motions")?;
     }
 
+    if let Some(v) = ancf.get("ancf:attachments") {
+        for (i, item) in expect_array(v, "ancf:attachments")?.iter().enumerate() {
+            let key = format!("ancf:attachments[{i}]");
+            let o = Obj::new(&key, item, &["name", "vertices"])?;
+            let name = expect_string(o.required("name")?, &o.path("name"))?;
+            check_name(&o.path("name"), name)?;
+            let vertices = index_list(o.required("vertices")?, &o.path("vertices"))?;
+            if vertices.is_empty() {
+                return Err(SceneError::invalid(o.path("vertices"), "the list is empty"));
+            }
+            p.attachments.push(AttachmentSpec {
+                name: name.to_string(),
+                vertices,
+                key,
+            });
+        }
+    }
+
     if let Some(v) = ancf.get("ancf:contact") {
         let o = Obj::new(
             "ancf:contact",
@@ -708,8 +743,9 @@ pub fn parse(
             positions: false,
             fold_angles: false,
             energies: false,
+            reactions: false,
         };
-        const GROUPS: &[&str] = &["positions", "fold_angles", "energies"];
+        const GROUPS: &[&str] = &["positions", "fold_angles", "energies", "reactions"];
         for (i, item) in expect_array(v, "ancf:outputs")?.iter().enumerate() {
             let key = format!("ancf:outputs[{i}]");
             let s = expect_string(item, &key)?;
@@ -717,6 +753,7 @@ pub fn parse(
                 "positions" => &mut o.positions,
                 "fold_angles" => &mut o.fold_angles,
                 "energies" => &mut o.energies,
+                "reactions" => &mut o.reactions,
                 other => {
                     return Err(SceneError::invalid(
                         key,
@@ -733,7 +770,7 @@ pub fn parse(
             }
             *flag = true;
         }
-        if !(o.positions || o.fold_angles || o.energies) {
+        if !(o.positions || o.fold_angles || o.energies || o.reactions) {
             warnings.push("ancf:outputs: the list is empty; the model has no outputs".into());
         }
         p.outputs = o;
@@ -771,7 +808,8 @@ pub fn parse(
         }
     }
 
-    // Input names must be unique across actuators, forces and motions.
+    // Input names must be unique across actuators, forces, motions and
+    // attachments.
     let mut seen: Vec<(&str, String)> = Vec::new();
     let names = p
         .actuators
@@ -783,6 +821,11 @@ pub fn parse(
                 .iter()
                 .chain(&p.vertex_motions)
                 .map(|(vi, k)| (vi.name.as_str(), format!("{k}.name"))),
+        )
+        .chain(
+            p.attachments
+                .iter()
+                .map(|a| (a.name.as_str(), format!("{}.name", a.key))),
         );
     for (name, key) in names {
         if let Some((_, first)) = seen.iter().find(|(n, _)| *n == name) {

@@ -311,6 +311,20 @@ pub struct VertexInput {
     pub vertex: VertexId,
 }
 
+/// A rigid attachment: vertices clamped to a frame (position and every
+/// surface gradient follow it) whose pose is an input, `NAME.x/y/z` (the
+/// origin, m; at the reference it is the centroid of the listed FOLD
+/// vertices) and `NAME.rx/ry/rz` (a rotation vector, rad); the wrench the
+/// sheet exerts on the frame is an output (`NAME.force.x/y/z`,
+/// `NAME.moment.x/y/z`, about the origin, world axes).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Attachment {
+    /// Variable name prefix.
+    pub name: String,
+    /// Mesh vertices held (a listed FOLD vertex with all its split copies).
+    pub vertices: Vec<VertexId>,
+}
+
 /// Time integrator choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Integrator {
@@ -441,6 +455,11 @@ pub struct Outputs {
     pub fold_angles: bool,
     /// `energy.kinetic`, `energy.strain`, `energy.crease`.
     pub energies: bool,
+    /// The reaction of each support (`support[k].force.x/y/z`, and its
+    /// moment) and each prescribed motion (`NAME.force.x/y/z`); off unless
+    /// asked for (attachments always report their wrench).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reactions: bool,
 }
 
 impl Default for Outputs {
@@ -449,6 +468,7 @@ impl Default for Outputs {
             positions: true,
             fold_angles: true,
             energies: true,
+            reactions: false,
         }
     }
 }
@@ -496,6 +516,12 @@ pub struct Scene {
     pub vertex_forces: Vec<VertexInput>,
     /// Prescribed vertex position inputs.
     pub vertex_motions: Vec<VertexInput>,
+    /// Rigid attachments: parts of the sheet clamped to frames whose poses
+    /// are inputs. (Left out of the scene file when empty, so a scene
+    /// without attachments writes the same file, and has the same GUID, as
+    /// before.)
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub attachments: Vec<Attachment>,
     /// Solver settings.
     pub solver: SolverSettings,
     /// Output groups.
@@ -611,6 +637,7 @@ impl Scene {
             contact: None,
             vertex_forces: vec![],
             vertex_motions: vec![],
+            attachments: vec![],
             solver: SolverSettings::default(),
             outputs: Outputs::default(),
             ramp: InputRamp::default(),

@@ -7,7 +7,7 @@ use crate::ids::{EdgeId, FoldEdgeId, VertexId};
 use crate::mesh::EdgeKind;
 use crate::scene::error::SceneError;
 use crate::scene::keys::{self, EdgeSelection};
-use crate::scene::{ActuatorMode, Damping, Scene, Support};
+use crate::scene::{ActuatorMode, Attachment, Damping, Scene, Support};
 use std::collections::HashMap;
 
 /// Material, damping, actuators, supports, loads, solver and outputs,
@@ -171,23 +171,8 @@ pub(super) fn apply_physics(
             supported.insert(v, s.key.clone());
         }
         // A support on a split vertex holds all its copies.
-        let mut vertices: Vec<VertexId> = s
-            .vertices
-            .iter()
-            .map(|&v| VertexId::of_fold_vertex(v))
-            .collect();
-        if !copies.is_empty() {
-            let held: std::collections::HashSet<usize> = s.vertices.iter().copied().collect();
-            vertices.extend(
-                copies
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| held.contains(v))
-                    .map(|(j, _)| VertexId(nv + j)),
-            );
-        }
         scene.supports.push(Support {
-            vertices,
+            vertices: with_copies(&s.vertices, nv, copies),
             fix: s.fix,
         });
     }
@@ -222,9 +207,68 @@ pub(super) fn apply_physics(
             ));
         }
     }
+    let mut attached: HashMap<usize, String> = HashMap::new();
+    for a in &p.attachments {
+        for (i, &v) in a.vertices.iter().enumerate() {
+            let k = format!("{}.vertices[{i}]", a.key);
+            vertex_exists(v, nv, || k.clone())?;
+            let taken = supported
+                .get(&v)
+                .map(|s| format!("supported by {s}"))
+                .or_else(|| {
+                    driven
+                        .get(&VertexId::of_fold_vertex(v))
+                        .map(|m| format!("driven by {m}"))
+                })
+                .or_else(|| attached.get(&v).map(|o| format!("attached by {o}")));
+            if let Some(by) = taken {
+                return Err(invalid(
+                    k,
+                    format!("vertex {v} is already {by}; a vertex can be held by one only"),
+                ));
+            }
+            attached.insert(v, a.key.clone());
+        }
+    }
+    for (vi, key) in &p.vertex_forces {
+        if let Some(a) = attached.get(&vi.vertex.index()) {
+            warnings.push(format!(
+                "{key}.vertex: vertex {} is held by {a}; the force '{}' acts on the attachment",
+                vi.vertex, vi.name
+            ));
+        }
+    }
+    scene.attachments = p
+        .attachments
+        .into_iter()
+        .map(|a| Attachment {
+            name: a.name,
+            vertices: with_copies(&a.vertices, nv, copies),
+        })
+        .collect();
     scene.vertex_forces = p.vertex_forces.into_iter().map(|x| x.0).collect();
     scene.vertex_motions = p.vertex_motions.into_iter().map(|x| x.0).collect();
     Ok(())
+}
+
+/// The mesh vertices of the FOLD vertices `listed` and of all their split
+/// copies (copy `j` is mesh vertex `nv + j`, a copy of FOLD vertex `copies[j]`).
+fn with_copies(listed: &[usize], nv: usize, copies: &[usize]) -> Vec<VertexId> {
+    let mut vertices: Vec<VertexId> = listed
+        .iter()
+        .map(|&v| VertexId::of_fold_vertex(v))
+        .collect();
+    if !copies.is_empty() {
+        let held: std::collections::HashSet<usize> = listed.iter().copied().collect();
+        vertices.extend(
+            copies
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| held.contains(v))
+                .map(|(j, _)| VertexId(nv + j)),
+        );
+    }
+    vertices
 }
 
 #[cfg(test)]
@@ -330,6 +374,134 @@ mod tests {
             json!({"vertex_forces": [{"name": "p", "vertex": 60}]}),
         );
         err(&v, "ancf:loads.vertex_forces[0].vertex");
+    }
+
+    /// `ancf:attachments`: names join the input names, vertices must
+    /// exist and be held by nothing else (support, motion, another
+    /// attachment); a force on an attached vertex is a warning; the model
+    /// gets the pose inputs (the origin starting at the centroid) and the
+    /// wrench outputs.
+    #[test]
+    fn attachments_against_the_mesh() {
+        let a = |list: serde_json::Value| with(base(), "ancf:attachments", list);
+        let e = err(
+            &a(json!([{"name": "m", "vertices": [0, 9]}])),
+            "ancf:attachments[0].vertices[1]",
+        );
+        assert!(e.contains("vertex 9 does not exist"), "{e}");
+        err(
+            &a(json!([{"name": "m", "vertices": []}])),
+            "ancf:attachments[0].vertices",
+        );
+        err(
+            &a(json!([{"name": "vertex", "vertices": [0]}])),
+            "ancf:attachments[0].name",
+        );
+        let e = err(
+            &a(json!([{"name": "m", "vertices": [0, 5]}, {"name": "n", "vertices": [5]}])),
+            "ancf:attachments[1].vertices[0]",
+        );
+        assert!(e.contains("already attached by ancf:attachments[0]"), "{e}");
+        let v = with(
+            a(json!([{"name": "m", "vertices": [0]}])),
+            "ancf:supports",
+            json!([{"vertices": [0]}]),
+        );
+        let e = err(&v, "ancf:attachments[0].vertices[0]");
+        assert!(e.contains("supported by ancf:supports[0]"), "{e}");
+        let v = with(
+            a(json!([{"name": "m", "vertices": [2]}])),
+            "ancf:motions",
+            json!([{"name": "m2", "vertex": 2}]),
+        );
+        let e = err(&v, "ancf:attachments[0].vertices[0]");
+        assert!(e.contains("driven by ancf:motions[0]"), "{e}");
+        let v = with(
+            a(json!([{"name": "grip", "vertices": [2]}])),
+            "ancf:motions",
+            json!([{"name": "grip", "vertex": 3}]),
+        );
+        let e = err(&v, "ancf:attachments[0].name");
+        assert!(e.contains("already used"), "{e}");
+        let v = with(
+            a(json!([{"name": "m", "vertices": [0, 5]}])),
+            "ancf:loads",
+            json!({"vertex_forces": [{"name": "push", "vertex": 5}]}),
+        );
+        let (s, w) = load(&v).unwrap();
+        assert!(
+            w.iter().any(|w| w.contains("acts on the attachment")),
+            "{w:?}"
+        );
+        assert_eq!(s.attachments[0].vertices, vec![VertexId(0), VertexId(5)]);
+        let m = crate::model::Model::new(s).unwrap();
+        let inputs: Vec<(&str, f64)> = m
+            .inputs()
+            .iter()
+            .map(|x| (x.name.as_str(), x.start))
+            .collect();
+        assert_eq!(
+            &inputs[4..],
+            [
+                ("m.x", 0.0),
+                ("m.y", 0.5),
+                ("m.z", 0.0),
+                ("m.rx", 0.0),
+                ("m.ry", 0.0),
+                ("m.rz", 0.0)
+            ]
+        );
+        let outputs: Vec<&str> = m.outputs().iter().map(|x| x.name.as_str()).collect();
+        let n = outputs.len();
+        assert_eq!(
+            &outputs[n - 6..],
+            [
+                "m.force.x",
+                "m.force.y",
+                "m.force.z",
+                "m.moment.x",
+                "m.moment.y",
+                "m.moment.z"
+            ]
+        );
+    }
+
+    /// The `reactions` output group: each support's force (and moment where
+    /// it holds one) and each motion's force, after everything else.
+    #[test]
+    fn reaction_outputs_are_asked_for() {
+        let v = with(
+            base(),
+            "ancf:supports",
+            json!([{"vertices": [0, 5], "fix": "clamped"}, {"vertices": [3]}]),
+        );
+        let v = with(v, "ancf:motions", json!([{"name": "grip", "vertex": 2}]));
+        let (s, _) = load(&v).unwrap();
+        let plain = crate::model::Model::new(s).unwrap().outputs().len();
+        let (s, _) = load(&with(v, "ancf:outputs", json!(["energies", "reactions"]))).unwrap();
+        let m = crate::model::Model::new(s).unwrap();
+        let names: Vec<&str> = m.outputs().iter().map(|x| x.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "energy.kinetic",
+                "energy.strain",
+                "energy.crease",
+                "support[0].force.x",
+                "support[0].force.y",
+                "support[0].force.z",
+                "support[0].moment.x",
+                "support[0].moment.y",
+                "support[0].moment.z",
+                "support[1].force.x",
+                "support[1].force.y",
+                "support[1].force.z",
+                "grip.force.x",
+                "grip.force.y",
+                "grip.force.z",
+            ]
+        );
+        assert!(plain > 3, "the default groups");
     }
 
     #[test]
