@@ -647,35 +647,10 @@ fn read_frame(
             "missing; a scene needs vertices_coords and faces_vertices",
         )
     })?;
-    for (i, c) in expect_array(&v, &key)?.iter().enumerate() {
-        let ki = format!("{key}[{i}]");
-        let arr = expect_array(c, &ki)?;
-        if arr.len() != 2 && arr.len() != 3 {
-            return Err(SceneError::invalid(
-                ki,
-                format!("expected 2 or 3 coordinates, found {}", arr.len()),
-            ));
-        }
-        let p = arr
-            .iter()
-            .enumerate()
-            .map(|(j, x)| expect_number(x, &format!("{ki}[{j}]")))
-            .collect::<Result<Vec<f64>, _>>()?;
-        out.vertices_coords.push(p);
-    }
+    out.vertices_coords = read_coords(&v, &key)?;
 
     match get("faces_vertices")? {
-        Some((v, key)) => {
-            for (f, face) in expect_array(&v, &key)?.iter().enumerate() {
-                let kf = format!("{key}[{f}]");
-                let idx = expect_array(face, &kf)?
-                    .iter()
-                    .enumerate()
-                    .map(|(j, x)| expect_index(x, &format!("{kf}[{j}]")))
-                    .collect::<Result<Vec<usize>, _>>()?;
-                out.faces_vertices.push(idx);
-            }
-        }
+        Some((v, key)) => out.faces_vertices = read_faces(&v, &key)?,
         None if !merged.contains_key("edges_vertices") => {
             return Err(SceneError::invalid(
                 "faces_vertices",
@@ -688,41 +663,10 @@ fn read_frame(
     }
 
     if let Some((v, key)) = get("edges_vertices")? {
-        let mut edges = Vec::new();
-        for (e, ev) in expect_array(&v, &key)?.iter().enumerate() {
-            let ke = format!("{key}[{e}]");
-            let arr = expect_array(ev, &ke)?;
-            if arr.len() != 2 {
-                return Err(SceneError::invalid(
-                    ke,
-                    format!("an edge has 2 vertices, found {}", arr.len()),
-                ));
-            }
-            edges.push([
-                expect_index(&arr[0], &format!("{ke}[0]"))?,
-                expect_index(&arr[1], &format!("{ke}[1]"))?,
-            ]);
-        }
-        out.edges_vertices = Some(edges);
+        out.edges_vertices = Some(read_edges(&v, &key)?);
     }
     if let Some((v, key)) = get("edges_assignment")? {
-        let mut asg = Vec::new();
-        for (e, a) in expect_array(&v, &key)?.iter().enumerate() {
-            let ke = format!("{key}[{e}]");
-            if a.is_null() {
-                // FOLD tools write null for "not known": unassigned.
-                asg.push(Assignment::Unassigned);
-                continue;
-            }
-            let s = expect_string(a, &ke)?;
-            asg.push(Assignment::from_letter(s).ok_or_else(|| {
-                SceneError::invalid(
-                    ke,
-                    format!("unknown assignment \"{s}\"; expected one of M, V, F, J, B, U, C"),
-                )
-            })?);
-        }
-        out.edges_assignment = Some(asg);
+        out.edges_assignment = Some(read_assignments(&v, &key)?);
     }
     let angles = match (get("edges_foldAngle")?, get("edges_foldAngles")?) {
         (Some(new), Some(_)) => {
@@ -735,15 +679,7 @@ fn read_frame(
         (a, b) => a.or(b),
     };
     if let Some((v, key)) = angles {
-        let mut out_angles = Vec::new();
-        for (e, a) in expect_array(&v, &key)?.iter().enumerate() {
-            if a.is_null() {
-                out_angles.push(None);
-            } else {
-                out_angles.push(Some(expect_number(a, &format!("{key}[{e}]"))?));
-            }
-        }
-        out.edges_fold_angle = Some(out_angles);
+        out.edges_fold_angle = Some(read_angles(&v, &key)?);
     }
 
     for (key, (v, _)) in merged {
@@ -758,6 +694,97 @@ fn read_frame(
     }
     warnings.sort();
     Ok((out, warnings))
+}
+
+/// `vertices_coords`: 2 or 3 numbers per vertex.
+fn read_coords(v: &Value, key: &str) -> Result<Vec<Vec<f64>>, SceneError> {
+    let mut out = Vec::new();
+    for (i, c) in expect_array(v, key)?.iter().enumerate() {
+        let ki = format!("{key}[{i}]");
+        let arr = expect_array(c, &ki)?;
+        if arr.len() != 2 && arr.len() != 3 {
+            return Err(SceneError::invalid(
+                ki,
+                format!("expected 2 or 3 coordinates, found {}", arr.len()),
+            ));
+        }
+        let p = arr
+            .iter()
+            .enumerate()
+            .map(|(j, x)| expect_number(x, &format!("{ki}[{j}]")))
+            .collect::<Result<Vec<f64>, _>>()?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// `faces_vertices`: a list of vertex indices per face.
+fn read_faces(v: &Value, key: &str) -> Result<Vec<Vec<usize>>, SceneError> {
+    let mut out = Vec::new();
+    for (f, face) in expect_array(v, key)?.iter().enumerate() {
+        let kf = format!("{key}[{f}]");
+        let idx = expect_array(face, &kf)?
+            .iter()
+            .enumerate()
+            .map(|(j, x)| expect_index(x, &format!("{kf}[{j}]")))
+            .collect::<Result<Vec<usize>, _>>()?;
+        out.push(idx);
+    }
+    Ok(out)
+}
+
+/// `edges_vertices`: two vertex indices per edge.
+fn read_edges(v: &Value, key: &str) -> Result<Vec<[usize; 2]>, SceneError> {
+    let mut edges = Vec::new();
+    for (e, ev) in expect_array(v, key)?.iter().enumerate() {
+        let ke = format!("{key}[{e}]");
+        let arr = expect_array(ev, &ke)?;
+        if arr.len() != 2 {
+            return Err(SceneError::invalid(
+                ke,
+                format!("an edge has 2 vertices, found {}", arr.len()),
+            ));
+        }
+        edges.push([
+            expect_index(&arr[0], &format!("{ke}[0]"))?,
+            expect_index(&arr[1], &format!("{ke}[1]"))?,
+        ]);
+    }
+    Ok(edges)
+}
+
+/// `edges_assignment`: a letter per edge (null: unassigned).
+fn read_assignments(v: &Value, key: &str) -> Result<Vec<Assignment>, SceneError> {
+    let mut asg = Vec::new();
+    for (e, a) in expect_array(v, key)?.iter().enumerate() {
+        let ke = format!("{key}[{e}]");
+        if a.is_null() {
+            // FOLD tools write null for "not known": unassigned.
+            asg.push(Assignment::Unassigned);
+            continue;
+        }
+        let s = expect_string(a, &ke)?;
+        asg.push(Assignment::from_letter(s).ok_or_else(|| {
+            SceneError::invalid(
+                ke,
+                format!("unknown assignment \"{s}\"; expected one of M, V, F, J, B, U, C"),
+            )
+        })?);
+    }
+    Ok(asg)
+}
+
+/// `edges_foldAngle`: degrees per edge (null: not given).
+fn read_angles(v: &Value, key: &str) -> Result<Vec<Option<f64>>, SceneError> {
+    let mut out = Vec::new();
+    for (e, a) in expect_array(v, key)?.iter().enumerate() {
+        if a.is_null() {
+            out.push(None);
+        } else {
+            out.push(Some(expect_number(a, &format!("{key}[{e}]"))?));
+        }
+    }
+    Ok(out)
 }
 
 impl FoldFile {

@@ -117,7 +117,7 @@ pub struct AttachmentSpec {
 /// Everything the `ancf:` keys say, checked key by key; defaults filled in.
 /// (Not to be confused with [`crate::assembly::Physics`], the coefficients
 /// the assembly is given once the scene is built.)
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct PhysicsKeys {
     /// `ancf:name`.
     pub name: Option<String>,
@@ -364,6 +364,41 @@ pub fn parse(
     ancf: &Map<String, Value>,
     warnings: &mut Vec<String>,
 ) -> Result<PhysicsKeys, SceneError> {
+    check_known_keys(ancf)?;
+    let mut p = PhysicsKeys::default();
+    for (key, parse_key) in PARSERS {
+        if let Some(v) = ancf.get(*key) {
+            parse_key(v, &mut p, warnings)?;
+        }
+    }
+    check_unique_names(&p)?;
+    Ok(p)
+}
+
+/// Reads one `ancf:` key's value into the physics keys.
+type KeyParser = fn(&Value, &mut PhysicsKeys, &mut Vec<String>) -> Result<(), SceneError>;
+
+/// Every key's reader, in the order their errors are reported.
+const PARSERS: &[(&str, KeyParser)] = &[
+    ("ancf:name", key_name),
+    ("ancf:material", key_material),
+    ("ancf:crease", key_crease),
+    ("ancf:damping", key_damping),
+    ("ancf:actuators", key_actuators),
+    ("ancf:actuation", key_actuation),
+    ("ancf:supports", key_supports),
+    ("ancf:loads", key_loads),
+    ("ancf:motions", key_motions),
+    ("ancf:attachments", key_attachments),
+    ("ancf:contact", key_contact),
+    ("ancf:solver", key_solver),
+    ("ancf:outputs", key_outputs),
+    ("ancf:refine", key_refine),
+    ("ancf:import", key_import),
+];
+
+/// Every key is one of [`KEYS`] (else the nearest is suggested).
+fn check_known_keys(ancf: &Map<String, Value>) -> Result<(), SceneError> {
     let mut keys: Vec<&String> = ancf.keys().collect();
     keys.sort();
     for k in keys {
@@ -378,436 +413,11 @@ pub fn parse(
             ));
         }
     }
-    let mut p = PhysicsKeys {
-        name: None,
-        material: Material::default(),
-        crease: CreaseStiffness::default(),
-        crease_damping: None,
-        damping: None,
-        actuators: None,
-        actuator_time_constant: None,
-        supports: vec![],
-        gravity: None,
-        vertex_forces: vec![],
-        vertex_motions: vec![],
-        attachments: vec![],
-        solver: SolverSettings::default(),
-        outputs: Outputs::default(),
-        refine: 0,
-        import: Import::default(),
-        contact: None,
-    };
-    // As scene::limits: positive means at least MIN_POSITIVE.
-    let positive = |x: f64| x >= super::limits::MIN_POSITIVE;
+    Ok(())
+}
 
-    if let Some(v) = ancf.get("ancf:name") {
-        let s = expect_string(v, "ancf:name")?;
-        if s.trim().is_empty() {
-            return Err(SceneError::invalid("ancf:name", "must not be empty"));
-        }
-        p.name = Some(s.to_string());
-    }
-
-    if let Some(v) = ancf.get("ancf:material") {
-        let o = Obj::new(
-            "ancf:material",
-            v,
-            &["youngs_modulus", "poisson_ratio", "thickness", "density"],
-        )?;
-        let m = &mut p.material;
-        if let Some(x) = o.num_limited("youngs_modulus", "material.youngs_modulus")? {
-            m.youngs_modulus = x;
-        }
-        if let Some(x) = o.num_limited("poisson_ratio", "material.poisson_ratio")? {
-            m.poisson_ratio = x;
-        }
-        if let Some(x) = o.num_limited("thickness", "material.thickness")? {
-            m.thickness = x;
-        }
-        if let Some(x) = o.num_limited("density", "material.density")? {
-            m.density = x;
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:crease") {
-        let o = Obj::new(
-            "ancf:crease",
-            v,
-            &["length_scale", "stiffness_per_length", "damping_per_length"],
-        )?;
-        let ls = o.num_limited("length_scale", "crease.length_scale")?;
-        let k = o.num_limited("stiffness_per_length", "crease.stiffness_per_length")?;
-        p.crease = match (ls, k) {
-            (Some(_), Some(_)) => {
-                return Err(SceneError::invalid(
-                    "ancf:crease",
-                    "give either length_scale or stiffness_per_length, not both",
-                ));
-            }
-            (Some(l), None) => CreaseStiffness::LengthScale(l),
-            (None, Some(k)) => CreaseStiffness::PerLength(k),
-            (None, None) => CreaseStiffness::default(),
-        };
-        if let Some(c) = o.num_limited("damping_per_length", "damping.crease")? {
-            p.crease_damping = Some(c);
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:damping") {
-        if v.as_str() == Some("auto") {
-            p.damping = None;
-        } else if v.is_string() {
-            return Err(SceneError::invalid(
-                "ancf:damping",
-                "expected \"auto\" or an object {alpha, beta}",
-            ));
-        } else {
-            let o = Obj::new("ancf:damping", v, &["alpha", "beta"])?;
-            let a = o.num_limited("alpha", "damping.alpha")?;
-            let b = o.num_limited("beta", "damping.beta")?;
-            p.damping = Some((a.unwrap_or(0.0), b.unwrap_or(0.0)));
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:actuators") {
-        let mut list = Vec::new();
-        for (i, item) in expect_array(v, "ancf:actuators")?.iter().enumerate() {
-            let key = format!("ancf:actuators[{i}]");
-            let o = Obj::new(&key, item, &["name", "edges", "mode", "start"])?;
-            let name = expect_string(o.required("name")?, &o.path("name"))?;
-            check_name(&o.path("name"), name)?;
-            let edges = match o.get("edges") {
-                None => EdgeSelection::All,
-                Some(Value::String(s)) => match s.as_str() {
-                    "all" => EdgeSelection::All,
-                    "M" => EdgeSelection::Assignment(Assignment::Mountain),
-                    "V" => EdgeSelection::Assignment(Assignment::Valley),
-                    "U" => EdgeSelection::Assignment(Assignment::Unassigned),
-                    "F" => EdgeSelection::Assignment(Assignment::Flat),
-                    other => {
-                        return Err(SceneError::invalid(
-                            o.path("edges"),
-                            format!(
-                                "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\", \
-                                 \"F\" or a list of FOLD edge indices"
-                            ),
-                        ));
-                    }
-                },
-                Some(list @ Value::Array(_)) => {
-                    let l = index_list(list, &o.path("edges"))?;
-                    if l.is_empty() {
-                        return Err(SceneError::invalid(
-                            o.path("edges"),
-                            "the list is empty; an actuator needs at least one crease",
-                        ));
-                    }
-                    EdgeSelection::List(l)
-                }
-                Some(other) => {
-                    return Err(SceneError::invalid(
-                        o.path("edges"),
-                        format!(
-                            "expected \"all\", \"M\", \"V\", \"U\", \"F\" or a list of FOLD edge indices, found {}",
-                            type_name(other)
-                        ),
-                    ));
-                }
-            };
-            let mode = match o.string("mode")? {
-                None => ActuatorMode::RestAngle,
-                Some(s) => enum_value(
-                    &o.path("mode"),
-                    s,
-                    &[
-                        ("rest_angle", ActuatorMode::RestAngle),
-                        ("torque", ActuatorMode::Torque),
-                    ],
-                )?,
-            };
-            let start = o.num("start")?.unwrap_or(0.0);
-            list.push(ActuatorSpec {
-                name: name.to_string(),
-                edges,
-                mode,
-                start,
-                key,
-            });
-        }
-        p.actuators = Some(list);
-    }
-
-    if let Some(v) = ancf.get("ancf:actuation") {
-        let o = Obj::new("ancf:actuation", v, &["time_constant"])?;
-        if o.get("time_constant").and_then(Value::as_str) != Some("auto") {
-            p.actuator_time_constant = o.num_limited("time_constant", "actuator.time_constant")?;
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:supports") {
-        for (i, item) in expect_array(v, "ancf:supports")?.iter().enumerate() {
-            let key = format!("ancf:supports[{i}]");
-            let o = Obj::new(&key, item, &["vertices", "fix"])?;
-            let vertices = index_list(o.required("vertices")?, &o.path("vertices"))?;
-            if vertices.is_empty() {
-                return Err(SceneError::invalid(o.path("vertices"), "the list is empty"));
-            }
-            let fix = match o.string("fix")? {
-                None => Fix::Position,
-                Some(s) => enum_value(
-                    &o.path("fix"),
-                    s,
-                    &[("position", Fix::Position), ("clamped", Fix::Clamped)],
-                )?,
-            };
-            p.supports.push(SupportSpec { vertices, fix, key });
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:loads") {
-        let o = Obj::new("ancf:loads", v, &["gravity", "vertex_forces"])?;
-        if let Some(g) = o.get("gravity") {
-            let key = o.path("gravity");
-            let arr = expect_array(g, &key)?;
-            if arr.len() != 3 {
-                return Err(SceneError::invalid(
-                    key,
-                    format!(
-                        "expected 3 components [x, y, z] in m/s^2, found {}",
-                        arr.len()
-                    ),
-                ));
-            }
-            let mut gv = [0.0; 3];
-            for (c, x) in arr.iter().enumerate() {
-                gv[c] = number(x, &format!("{key}[{c}]"))?;
-            }
-            p.gravity = Some(gv);
-        }
-        if let Some(f) = o.get("vertex_forces") {
-            p.vertex_forces = vertex_inputs(f, &o.path("vertex_forces"))?;
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:motions") {
-        p.vertex_motions = vertex_inputs(v, "ancf:motions")?;
-    }
-
-    if let Some(v) = ancf.get("ancf:attachments") {
-        for (i, item) in expect_array(v, "ancf:attachments")?.iter().enumerate() {
-            let key = format!("ancf:attachments[{i}]");
-            let o = Obj::new(&key, item, &["name", "vertices"])?;
-            let name = expect_string(o.required("name")?, &o.path("name"))?;
-            check_name(&o.path("name"), name)?;
-            let vertices = index_list(o.required("vertices")?, &o.path("vertices"))?;
-            if vertices.is_empty() {
-                return Err(SceneError::invalid(o.path("vertices"), "the list is empty"));
-            }
-            p.attachments.push(AttachmentSpec {
-                name: name.to_string(),
-                vertices,
-                key,
-            });
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:contact") {
-        let o = Obj::new(
-            "ancf:contact",
-            v,
-            &[
-                "enabled",
-                "friction",
-                "stiffness",
-                "thickness",
-                "barrier_width",
-                "stick_velocity",
-                "damping_ratio",
-                "subdivisions",
-            ],
-        )?;
-        let enabled = match o.get("enabled") {
-            None => false,
-            Some(Value::Bool(b)) => *b,
-            Some(other) => {
-                return Err(SceneError::invalid(
-                    o.path("enabled"),
-                    format!("expected true or false, found {}", type_name(other)),
-                ));
-            }
-        };
-        let d = ContactSettings::default();
-        // The rules of scene::limits, which the FMU's scene check runs too.
-        let friction = o.num_limited("friction", "contact.friction")?;
-        let stiffness = o.num_limited("stiffness", "contact.stiffness")?;
-        let thickness = o.num_limited("thickness", "contact.thickness")?;
-        let width = o.num_limited("barrier_width", "contact.barrier_width")?;
-        let stick = o.num_limited("stick_velocity", "contact.stick_velocity")?;
-        let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
-        let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
-        if enabled {
-            p.contact = Some(ContactSettings {
-                // 0 = the sheet thickness (filled in with the material).
-                thickness: thickness.unwrap_or(0.0),
-                width: width.unwrap_or(d.width),
-                stiffness,
-                friction: friction.unwrap_or(d.friction),
-                stick_velocity: stick.unwrap_or(d.stick_velocity),
-                damping_ratio: zeta.unwrap_or(d.damping_ratio),
-                subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
-            });
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:solver") {
-        let o = Obj::new(
-            "ancf:solver",
-            v,
-            &[
-                "integrator",
-                "rho_inf",
-                "max_step",
-                "min_step",
-                "tolerance",
-                "max_newton",
-                "newton",
-                "stop_time",
-                "max_internal_steps",
-                "input_timing",
-                "quadrature",
-            ],
-        )?;
-        let s = &mut p.solver;
-        if let Some(name) = o.string("integrator")? {
-            s.integrator = enum_value(
-                &o.path("integrator"),
-                name,
-                &[
-                    ("generalized-alpha", Integrator::GeneralizedAlpha),
-                    ("central-difference", Integrator::CentralDifference),
-                ],
-            )?;
-        }
-        if let Some(x) = o.num_limited("rho_inf", "solver.rho_inf")? {
-            s.rho_inf = x;
-        }
-        if let Some(x) = o.num_limited("max_step", "solver.max_step")? {
-            s.max_step = x;
-        }
-        if let Some(x) = o.num_limited("min_step", "solver.min_step")? {
-            s.min_step = x;
-        }
-        if let Err((_, why)) = super::limits::check_solver_relations(s) {
-            return Err(SceneError::invalid(o.path("min_step"), why));
-        }
-        if let Some(x) = o.num_limited("tolerance", "solver.tolerance")? {
-            s.tolerance = x;
-        }
-        if let Some(n) = o.num_limited("max_newton", "solver.max_newton")? {
-            s.max_newton = n as usize;
-        }
-        if let Some(n) = o.num_limited("max_internal_steps", "solver.max_internal_steps")? {
-            s.max_internal_steps = n as usize;
-        }
-        if let Some(name) = o.string("input_timing")? {
-            s.input_timing = enum_value(
-                &o.path("input_timing"),
-                name,
-                &[("hold", InputTiming::Hold), ("ramp", InputTiming::Ramp)],
-            )?;
-        }
-        if let Some(name) = o.string("newton")? {
-            s.newton = enum_value(
-                &o.path("newton"),
-                name,
-                &[
-                    ("full", NewtonMode::Full),
-                    ("modified", NewtonMode::Modified),
-                ],
-            )?;
-        }
-        if let Some(x) = o.num_limited("stop_time", "solver.stop_time")? {
-            s.stop_time = x;
-        }
-        if let Some(name) = o.string("quadrature")? {
-            s.quadrature = enum_value(
-                &o.path("quadrature"),
-                name,
-                &[("12-point", Rule::Dunavant12), ("7-point", Rule::Dunavant7)],
-            )?;
-        }
-    }
-
-    if let Some(v) = ancf.get("ancf:outputs") {
-        let mut o = Outputs {
-            positions: false,
-            fold_angles: false,
-            energies: false,
-            reactions: false,
-        };
-        const GROUPS: &[&str] = &["positions", "fold_angles", "energies", "reactions"];
-        for (i, item) in expect_array(v, "ancf:outputs")?.iter().enumerate() {
-            let key = format!("ancf:outputs[{i}]");
-            let s = expect_string(item, &key)?;
-            let flag = match s {
-                "positions" => &mut o.positions,
-                "fold_angles" => &mut o.fold_angles,
-                "energies" => &mut o.energies,
-                "reactions" => &mut o.reactions,
-                other => {
-                    return Err(SceneError::invalid(
-                        key,
-                        format!(
-                            "unknown output group \"{other}\"{}; expected one of {}",
-                            suggestion(other, GROUPS),
-                            GROUPS.join(", ")
-                        ),
-                    ));
-                }
-            };
-            if *flag {
-                warnings.push(format!("{key}: \"{s}\" is listed twice"));
-            }
-            *flag = true;
-        }
-        if !(o.positions || o.fold_angles || o.energies || o.reactions) {
-            warnings.push("ancf:outputs: the list is empty; the model has no outputs".into());
-        }
-        p.outputs = o;
-    }
-
-    if let Some(v) = ancf.get("ancf:refine") {
-        let n = expect_index(v, "ancf:refine")?;
-        if n > MAX_REFINE {
-            return Err(SceneError::invalid(
-                "ancf:refine",
-                format!("{n} levels is too many; at most {MAX_REFINE}"),
-            ));
-        }
-        p.refine = n;
-    }
-
-    if let Some(v) = ancf.get("ancf:import") {
-        let o = Obj::new("ancf:import", v, &["size", "unit", "f_edges"])?;
-        p.import.size = o.num_where("size", positive, "positive, at least 1e-30 (m)")?;
-        if let Some(u) = o.string("unit")? {
-            p.import.unit = Some(check_unit(&o.path("unit"), u)?);
-        }
-        if p.import.size.is_some() && p.import.unit.is_some() {
-            return Err(SceneError::invalid(
-                "ancf:import",
-                "give either size or unit, not both",
-            ));
-        }
-        if let Some(s) = o.string("f_edges")? {
-            p.import.f_edges = Some(enum_value(
-                &o.path("f_edges"),
-                s,
-                &[("crease", FlatEdges::Crease), ("smooth", FlatEdges::Smooth)],
-            )?);
-        }
-    }
-
+/// Input names are unique across actuators, forces, motions and attachments.
+fn check_unique_names(p: &PhysicsKeys) -> Result<(), SceneError> {
     // Input names must be unique across actuators, forces, motions and
     // attachments.
     let mut seen: Vec<(&str, String)> = Vec::new();
@@ -836,12 +446,515 @@ pub fn parse(
         }
         seen.push((name, key));
     }
-    Ok(p)
+    Ok(())
+}
+
+/// `ancf:name`: the scene's name.
+fn key_name(v: &Value, p: &mut PhysicsKeys, _warnings: &mut Vec<String>) -> Result<(), SceneError> {
+    let s = expect_string(v, "ancf:name")?;
+    if s.trim().is_empty() {
+        return Err(SceneError::invalid("ancf:name", "must not be empty"));
+    }
+    p.name = Some(s.to_string());
+    Ok(())
+}
+
+/// `ancf:material`: the sheet's material.
+fn key_material(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let o = Obj::new(
+        "ancf:material",
+        v,
+        &["youngs_modulus", "poisson_ratio", "thickness", "density"],
+    )?;
+    let m = &mut p.material;
+    if let Some(x) = o.num_limited("youngs_modulus", "material.youngs_modulus")? {
+        m.youngs_modulus = x;
+    }
+    if let Some(x) = o.num_limited("poisson_ratio", "material.poisson_ratio")? {
+        m.poisson_ratio = x;
+    }
+    if let Some(x) = o.num_limited("thickness", "material.thickness")? {
+        m.thickness = x;
+    }
+    if let Some(x) = o.num_limited("density", "material.density")? {
+        m.density = x;
+    }
+    Ok(())
+}
+
+/// `ancf:crease`: the crease stiffness rule and dashpots.
+fn key_crease(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let o = Obj::new(
+        "ancf:crease",
+        v,
+        &["length_scale", "stiffness_per_length", "damping_per_length"],
+    )?;
+    let ls = o.num_limited("length_scale", "crease.length_scale")?;
+    let k = o.num_limited("stiffness_per_length", "crease.stiffness_per_length")?;
+    p.crease = match (ls, k) {
+        (Some(_), Some(_)) => {
+            return Err(SceneError::invalid(
+                "ancf:crease",
+                "give either length_scale or stiffness_per_length, not both",
+            ));
+        }
+        (Some(l), None) => CreaseStiffness::LengthScale(l),
+        (None, Some(k)) => CreaseStiffness::PerLength(k),
+        (None, None) => CreaseStiffness::default(),
+    };
+    if let Some(c) = o.num_limited("damping_per_length", "damping.crease")? {
+        p.crease_damping = Some(c);
+    }
+    Ok(())
+}
+
+/// `ancf:damping`: `"auto"` or Rayleigh's alpha and beta.
+fn key_damping(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    if v.as_str() == Some("auto") {
+        p.damping = None;
+    } else if v.is_string() {
+        return Err(SceneError::invalid(
+            "ancf:damping",
+            "expected \"auto\" or an object {alpha, beta}",
+        ));
+    } else {
+        let o = Obj::new("ancf:damping", v, &["alpha", "beta"])?;
+        let a = o.num_limited("alpha", "damping.alpha")?;
+        let b = o.num_limited("beta", "damping.beta")?;
+        p.damping = Some((a.unwrap_or(0.0), b.unwrap_or(0.0)));
+    }
+    Ok(())
+}
+
+/// `ancf:actuators`: each actuator's name, creases, mode and start.
+fn key_actuators(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let mut list = Vec::new();
+    for (i, item) in expect_array(v, "ancf:actuators")?.iter().enumerate() {
+        let key = format!("ancf:actuators[{i}]");
+        let o = Obj::new(&key, item, &["name", "edges", "mode", "start"])?;
+        let name = expect_string(o.required("name")?, &o.path("name"))?;
+        check_name(&o.path("name"), name)?;
+        let edges = match o.get("edges") {
+            None => EdgeSelection::All,
+            Some(Value::String(s)) => match s.as_str() {
+                "all" => EdgeSelection::All,
+                "M" => EdgeSelection::Assignment(Assignment::Mountain),
+                "V" => EdgeSelection::Assignment(Assignment::Valley),
+                "U" => EdgeSelection::Assignment(Assignment::Unassigned),
+                "F" => EdgeSelection::Assignment(Assignment::Flat),
+                other => {
+                    return Err(SceneError::invalid(
+                        o.path("edges"),
+                        format!(
+                            "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\", \
+                             \"F\" or a list of FOLD edge indices"
+                        ),
+                    ));
+                }
+            },
+            Some(list @ Value::Array(_)) => {
+                let l = index_list(list, &o.path("edges"))?;
+                if l.is_empty() {
+                    return Err(SceneError::invalid(
+                        o.path("edges"),
+                        "the list is empty; an actuator needs at least one crease",
+                    ));
+                }
+                EdgeSelection::List(l)
+            }
+            Some(other) => {
+                return Err(SceneError::invalid(
+                    o.path("edges"),
+                    format!(
+                        "expected \"all\", \"M\", \"V\", \"U\", \"F\" or a list of FOLD edge indices, found {}",
+                        type_name(other)
+                    ),
+                ));
+            }
+        };
+        let mode = match o.string("mode")? {
+            None => ActuatorMode::RestAngle,
+            Some(s) => enum_value(
+                &o.path("mode"),
+                s,
+                &[
+                    ("rest_angle", ActuatorMode::RestAngle),
+                    ("torque", ActuatorMode::Torque),
+                ],
+            )?,
+        };
+        let start = o.num("start")?.unwrap_or(0.0);
+        list.push(ActuatorSpec {
+            name: name.to_string(),
+            edges,
+            mode,
+            start,
+            key,
+        });
+    }
+    p.actuators = Some(list);
+    Ok(())
+}
+
+/// `ancf:actuation`: the actuators' time constant.
+fn key_actuation(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let o = Obj::new("ancf:actuation", v, &["time_constant"])?;
+    if o.get("time_constant").and_then(Value::as_str) != Some("auto") {
+        p.actuator_time_constant = o.num_limited("time_constant", "actuator.time_constant")?;
+    }
+    Ok(())
+}
+
+/// `ancf:supports`: the supported vertices and how.
+fn key_supports(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    for (i, item) in expect_array(v, "ancf:supports")?.iter().enumerate() {
+        let key = format!("ancf:supports[{i}]");
+        let o = Obj::new(&key, item, &["vertices", "fix"])?;
+        let vertices = index_list(o.required("vertices")?, &o.path("vertices"))?;
+        if vertices.is_empty() {
+            return Err(SceneError::invalid(o.path("vertices"), "the list is empty"));
+        }
+        let fix = match o.string("fix")? {
+            None => Fix::Position,
+            Some(s) => enum_value(
+                &o.path("fix"),
+                s,
+                &[("position", Fix::Position), ("clamped", Fix::Clamped)],
+            )?,
+        };
+        p.supports.push(SupportSpec { vertices, fix, key });
+    }
+    Ok(())
+}
+
+/// `ancf:loads`: gravity and vertex force inputs.
+fn key_loads(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let o = Obj::new("ancf:loads", v, &["gravity", "vertex_forces"])?;
+    if let Some(g) = o.get("gravity") {
+        let key = o.path("gravity");
+        let arr = expect_array(g, &key)?;
+        if arr.len() != 3 {
+            return Err(SceneError::invalid(
+                key,
+                format!(
+                    "expected 3 components [x, y, z] in m/s^2, found {}",
+                    arr.len()
+                ),
+            ));
+        }
+        let mut gv = [0.0; 3];
+        for (c, x) in arr.iter().enumerate() {
+            gv[c] = number(x, &format!("{key}[{c}]"))?;
+        }
+        p.gravity = Some(gv);
+    }
+    if let Some(f) = o.get("vertex_forces") {
+        p.vertex_forces = vertex_inputs(f, &o.path("vertex_forces"))?;
+    }
+    Ok(())
+}
+
+/// `ancf:motions`: vertex motion inputs.
+fn key_motions(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    p.vertex_motions = vertex_inputs(v, "ancf:motions")?;
+    Ok(())
+}
+
+/// `ancf:attachments`: vertices held by a rigid frame.
+fn key_attachments(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    for (i, item) in expect_array(v, "ancf:attachments")?.iter().enumerate() {
+        let key = format!("ancf:attachments[{i}]");
+        let o = Obj::new(&key, item, &["name", "vertices"])?;
+        let name = expect_string(o.required("name")?, &o.path("name"))?;
+        check_name(&o.path("name"), name)?;
+        let vertices = index_list(o.required("vertices")?, &o.path("vertices"))?;
+        if vertices.is_empty() {
+            return Err(SceneError::invalid(o.path("vertices"), "the list is empty"));
+        }
+        p.attachments.push(AttachmentSpec {
+            name: name.to_string(),
+            vertices,
+            key,
+        });
+    }
+    Ok(())
+}
+
+/// `ancf:contact`: self-contact and friction.
+fn key_contact(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let o = Obj::new(
+        "ancf:contact",
+        v,
+        &[
+            "enabled",
+            "friction",
+            "stiffness",
+            "thickness",
+            "barrier_width",
+            "stick_velocity",
+            "damping_ratio",
+            "subdivisions",
+        ],
+    )?;
+    let enabled = match o.get("enabled") {
+        None => false,
+        Some(Value::Bool(b)) => *b,
+        Some(other) => {
+            return Err(SceneError::invalid(
+                o.path("enabled"),
+                format!("expected true or false, found {}", type_name(other)),
+            ));
+        }
+    };
+    let d = ContactSettings::default();
+    // The rules of scene::limits, which the FMU's scene check runs too.
+    let friction = o.num_limited("friction", "contact.friction")?;
+    let stiffness = o.num_limited("stiffness", "contact.stiffness")?;
+    let thickness = o.num_limited("thickness", "contact.thickness")?;
+    let width = o.num_limited("barrier_width", "contact.barrier_width")?;
+    let stick = o.num_limited("stick_velocity", "contact.stick_velocity")?;
+    let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
+    let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
+    if enabled {
+        p.contact = Some(ContactSettings {
+            // 0 = the sheet thickness (filled in with the material).
+            thickness: thickness.unwrap_or(0.0),
+            width: width.unwrap_or(d.width),
+            stiffness,
+            friction: friction.unwrap_or(d.friction),
+            stick_velocity: stick.unwrap_or(d.stick_velocity),
+            damping_ratio: zeta.unwrap_or(d.damping_ratio),
+            subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
+        });
+    }
+    Ok(())
+}
+
+/// `ancf:solver`: the integrator and its settings.
+fn key_solver(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let o = Obj::new(
+        "ancf:solver",
+        v,
+        &[
+            "integrator",
+            "rho_inf",
+            "max_step",
+            "min_step",
+            "tolerance",
+            "max_newton",
+            "newton",
+            "stop_time",
+            "max_internal_steps",
+            "input_timing",
+            "quadrature",
+        ],
+    )?;
+    let s = &mut p.solver;
+    if let Some(name) = o.string("integrator")? {
+        s.integrator = enum_value(
+            &o.path("integrator"),
+            name,
+            &[
+                ("generalized-alpha", Integrator::GeneralizedAlpha),
+                ("central-difference", Integrator::CentralDifference),
+            ],
+        )?;
+    }
+    if let Some(x) = o.num_limited("rho_inf", "solver.rho_inf")? {
+        s.rho_inf = x;
+    }
+    if let Some(x) = o.num_limited("max_step", "solver.max_step")? {
+        s.max_step = x;
+    }
+    if let Some(x) = o.num_limited("min_step", "solver.min_step")? {
+        s.min_step = x;
+    }
+    if let Err((_, why)) = super::limits::check_solver_relations(s) {
+        return Err(SceneError::invalid(o.path("min_step"), why));
+    }
+    if let Some(x) = o.num_limited("tolerance", "solver.tolerance")? {
+        s.tolerance = x;
+    }
+    if let Some(n) = o.num_limited("max_newton", "solver.max_newton")? {
+        s.max_newton = n as usize;
+    }
+    if let Some(n) = o.num_limited("max_internal_steps", "solver.max_internal_steps")? {
+        s.max_internal_steps = n as usize;
+    }
+    if let Some(name) = o.string("input_timing")? {
+        s.input_timing = enum_value(
+            &o.path("input_timing"),
+            name,
+            &[("hold", InputTiming::Hold), ("ramp", InputTiming::Ramp)],
+        )?;
+    }
+    if let Some(name) = o.string("newton")? {
+        s.newton = enum_value(
+            &o.path("newton"),
+            name,
+            &[
+                ("full", NewtonMode::Full),
+                ("modified", NewtonMode::Modified),
+            ],
+        )?;
+    }
+    if let Some(x) = o.num_limited("stop_time", "solver.stop_time")? {
+        s.stop_time = x;
+    }
+    if let Some(name) = o.string("quadrature")? {
+        s.quadrature = enum_value(
+            &o.path("quadrature"),
+            name,
+            &[("12-point", Rule::Dunavant12), ("7-point", Rule::Dunavant7)],
+        )?;
+    }
+    Ok(())
+}
+
+/// `ancf:outputs`: the output groups.
+fn key_outputs(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let mut o = Outputs {
+        positions: false,
+        fold_angles: false,
+        energies: false,
+        reactions: false,
+    };
+    const GROUPS: &[&str] = &["positions", "fold_angles", "energies", "reactions"];
+    for (i, item) in expect_array(v, "ancf:outputs")?.iter().enumerate() {
+        let key = format!("ancf:outputs[{i}]");
+        let s = expect_string(item, &key)?;
+        let flag = match s {
+            "positions" => &mut o.positions,
+            "fold_angles" => &mut o.fold_angles,
+            "energies" => &mut o.energies,
+            "reactions" => &mut o.reactions,
+            other => {
+                return Err(SceneError::invalid(
+                    key,
+                    format!(
+                        "unknown output group \"{other}\"{}; expected one of {}",
+                        suggestion(other, GROUPS),
+                        GROUPS.join(", ")
+                    ),
+                ));
+            }
+        };
+        if *flag {
+            warnings.push(format!("{key}: \"{s}\" is listed twice"));
+        }
+        *flag = true;
+    }
+    if !(o.positions || o.fold_angles || o.energies || o.reactions) {
+        warnings.push("ancf:outputs: the list is empty; the model has no outputs".into());
+    }
+    p.outputs = o;
+    Ok(())
+}
+
+/// `ancf:refine`: levels of refinement.
+fn key_refine(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let n = expect_index(v, "ancf:refine")?;
+    if n > MAX_REFINE {
+        return Err(SceneError::invalid(
+            "ancf:refine",
+            format!("{n} levels is too many; at most {MAX_REFINE}"),
+        ));
+    }
+    p.refine = n;
+    Ok(())
+}
+
+/// `ancf:import`: the import's size, unit and flat edges.
+fn key_import(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    // As scene::limits: positive means at least MIN_POSITIVE.
+    let positive = |x: f64| x >= super::limits::MIN_POSITIVE;
+    let o = Obj::new("ancf:import", v, &["size", "unit", "f_edges"])?;
+    p.import.size = o.num_where("size", positive, "positive, at least 1e-30 (m)")?;
+    if let Some(u) = o.string("unit")? {
+        p.import.unit = Some(check_unit(&o.path("unit"), u)?);
+    }
+    if p.import.size.is_some() && p.import.unit.is_some() {
+        return Err(SceneError::invalid(
+            "ancf:import",
+            "give either size or unit, not both",
+        ));
+    }
+    if let Some(s) = o.string("f_edges")? {
+        p.import.f_edges = Some(enum_value(
+            &o.path("f_edges"),
+            s,
+            &[("crease", FlatEdges::Crease), ("smooth", FlatEdges::Smooth)],
+        )?);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every known key has its reader, in the order of [`KEYS`].
+    #[test]
+    fn every_key_has_its_reader() {
+        let read: Vec<&str> = PARSERS.iter().map(|(k, _)| *k).collect();
+        assert_eq!(read, KEYS);
+    }
 
     fn keys(json: &str) -> Result<PhysicsKeys, SceneError> {
         let map: Map<String, Value> = serde_json::from_str(json).unwrap();

@@ -192,43 +192,7 @@ pub(super) fn fold_edges(
         angles,
     } = match listed {
         Some(l) => l,
-        None => {
-            let v: Vec<[usize; 2]> = sides
-                .order
-                .iter()
-                // In the direction of the first appearance.
-                .map(|k| {
-                    if sides.map[k][0].2 {
-                        [k.0, k.1]
-                    } else {
-                        [k.1, k.0]
-                    }
-                })
-                .collect();
-            let asg = sides
-                .order
-                .iter()
-                .map(|k| {
-                    if sides.map[k].len() == 1 {
-                        Assignment::Boundary
-                    } else {
-                        Assignment::Unassigned
-                    }
-                })
-                .collect();
-            warnings.push(format!(
-                "edges_vertices is missing: {} edges were derived from faces_vertices (interior \
-                 edges as U creases with target 0, boundary edges as B), numbered in order of \
-                 first appearance in faces_vertices",
-                v.len()
-            ));
-            let n = v.len();
-            Listed {
-                v,
-                assignment: asg,
-                angles: vec![None; n],
-            }
-        }
+        None => derived_edges(sides, warnings),
     };
 
     let ne = v.len();
@@ -281,36 +245,7 @@ pub(super) fn fold_edges(
                 format!("{d} degrees is outside [-180, 180]"),
             ));
         }
-        let deg = if k == EdgeKind::Crease {
-            match (assignment[e], angles[e]) {
-                (Assignment::Mountain, None) => -180.0,
-                (Assignment::Valley, None) => 180.0,
-                (_, None) => 0.0,
-                (Assignment::Mountain, Some(d)) if d > 0.0 => {
-                    warnings.push(format!(
-                        "{angle_key}: mountain crease {a}-{b} has the valley (positive) angle {d}; \
-                         the angle's sign wins"
-                    ));
-                    d
-                }
-                (Assignment::Valley, Some(d)) if d < 0.0 => {
-                    warnings.push(format!(
-                        "{angle_key}: valley crease {a}-{b} has the mountain (negative) angle {d}; \
-                         the angle's sign wins"
-                    ));
-                    d
-                }
-                (_, Some(d)) => d,
-            }
-        } else {
-            if let Some(d) = angles[e].filter(|&d| d != 0.0) {
-                warnings.push(format!(
-                    "{angle_key}: the angle {d} of the {} edge {a}-{b} is ignored (not a crease)",
-                    assignment[e].letter()
-                ));
-            }
-            0.0
-        };
+        let deg = target_degrees(e, k, assignment[e], angles[e], [a, b], warnings);
         kind.push(k);
         target.push(deg.to_radians());
     }
@@ -326,7 +261,102 @@ pub(super) fn fold_edges(
         ));
     }
 
-    // Face sides that are not FOLD edges (only possible with edges_vertices).
+    warn_unlisted_sides(&v, sides, warnings);
+    Ok(FoldEdges {
+        v,
+        assignment,
+        kind,
+        target,
+    })
+}
+
+/// Without edges_vertices: the faces' sides, numbered in order of first
+/// appearance (interior ones as U creases, boundary ones as B).
+fn derived_edges(sides: &Sides, warnings: &mut Vec<String>) -> Listed {
+    let v: Vec<[usize; 2]> = sides
+        .order
+        .iter()
+        // In the direction of the first appearance.
+        .map(|k| {
+            if sides.map[k][0].2 {
+                [k.0, k.1]
+            } else {
+                [k.1, k.0]
+            }
+        })
+        .collect();
+    let asg = sides
+        .order
+        .iter()
+        .map(|k| {
+            if sides.map[k].len() == 1 {
+                Assignment::Boundary
+            } else {
+                Assignment::Unassigned
+            }
+        })
+        .collect();
+    warnings.push(format!(
+        "edges_vertices is missing: {} edges were derived from faces_vertices (interior \
+         edges as U creases with target 0, boundary edges as B), numbered in order of \
+         first appearance in faces_vertices",
+        v.len()
+    ));
+    let n = v.len();
+    Listed {
+        v,
+        assignment: asg,
+        angles: vec![None; n],
+    }
+}
+
+/// The target fold angle (degrees) of FOLD edge `e` (`ab` its vertices) of
+/// kind `k`: the file's angle, else full mountain or valley, else 0; an
+/// angle against the assignment, or on an edge that is not a crease, is
+/// noted.
+fn target_degrees(
+    e: usize,
+    k: EdgeKind,
+    assignment: Assignment,
+    angle: Option<f64>,
+    [a, b]: [usize; 2],
+    warnings: &mut Vec<String>,
+) -> f64 {
+    let angle_key = format!("edges_foldAngle[{e}]");
+    if k == EdgeKind::Crease {
+        match (assignment, angle) {
+            (Assignment::Mountain, None) => -180.0,
+            (Assignment::Valley, None) => 180.0,
+            (_, None) => 0.0,
+            (Assignment::Mountain, Some(d)) if d > 0.0 => {
+                warnings.push(format!(
+                    "{angle_key}: mountain crease {a}-{b} has the valley (positive) angle {d}; \
+                     the angle's sign wins"
+                ));
+                d
+            }
+            (Assignment::Valley, Some(d)) if d < 0.0 => {
+                warnings.push(format!(
+                    "{angle_key}: valley crease {a}-{b} has the mountain (negative) angle {d}; \
+                     the angle's sign wins"
+                ));
+                d
+            }
+            (_, Some(d)) => d,
+        }
+    } else {
+        if let Some(d) = angle.filter(|&d| d != 0.0) {
+            warnings.push(format!(
+                "{angle_key}: the angle {d} of the {} edge {a}-{b} is ignored (not a crease)",
+                assignment.letter()
+            ));
+        }
+        0.0
+    }
+}
+
+/// Face sides that are not FOLD edges (only possible with edges_vertices).
+fn warn_unlisted_sides(v: &[[usize; 2]], sides: &Sides, warnings: &mut Vec<String>) {
     let listed: std::collections::HashSet<(usize, usize)> =
         v.iter().map(|&[a, b]| key(a, b)).collect();
     let missing: Vec<&(usize, usize)> =
@@ -340,12 +370,6 @@ pub(super) fn fold_edges(
             first.1
         ));
     }
-    Ok(FoldEdges {
-        v,
-        assignment,
-        kind,
-        target,
-    })
 }
 
 #[cfg(test)]

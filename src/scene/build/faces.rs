@@ -122,29 +122,7 @@ pub(super) fn reference_coords(
             }
             n.normalize()
         }
-        None => {
-            // No faces yet: the normal of the best-fit plane (the smallest
-            // principal axis), seen from +z (else +y, else +x).
-            let mut m = nalgebra::Matrix3::zeros();
-            for p in &pts {
-                let d = p - centroid;
-                m += d * d.transpose();
-            }
-            let eig = m.symmetric_eigen();
-            let k = eig.eigenvalues.imin();
-            let mut n: Vector3<f64> = eig.eigenvectors.column(k).into_owned();
-            let flip = if n.z.abs() > 1e-9 {
-                n.z < 0.0
-            } else if n.y.abs() > 1e-9 {
-                n.y < 0.0
-            } else {
-                n.x < 0.0
-            };
-            if flip {
-                n = -n;
-            }
-            n
-        }
+        None => best_fit_normal(&pts, centroid),
     };
     if n.z.abs() > 1.0 - 1e-9 {
         // (Nearly) the xy plane: keep +z up; clockwise faces are then
@@ -182,6 +160,30 @@ pub(super) fn reference_coords(
         .iter()
         .map(|p| Vector2::new(p.dot(&u), p.dot(&v)))
         .collect())
+}
+
+/// The normal of the points' best-fit plane (the smallest principal axis
+/// about `centroid`), seen from +z (else +y, else +x).
+fn best_fit_normal(pts: &[Vector3<f64>], centroid: Vector3<f64>) -> Vector3<f64> {
+    let mut m = nalgebra::Matrix3::zeros();
+    for p in pts {
+        let d = p - centroid;
+        m += d * d.transpose();
+    }
+    let eig = m.symmetric_eigen();
+    let k = eig.eigenvalues.imin();
+    let mut n: Vector3<f64> = eig.eigenvectors.column(k).into_owned();
+    let flip = if n.z.abs() > 1e-9 {
+        n.z < 0.0
+    } else if n.y.abs() > 1e-9 {
+        n.y < 0.0
+    } else {
+        n.x < 0.0
+    };
+    if flip {
+        n = -n;
+    }
+    n
 }
 
 /// No zero-length side, no zero-area face (the threshold of [`crate::mesh::Mesh::new`],

@@ -20,7 +20,6 @@ pub(super) fn apply_physics(
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let nv = scene.fold_vertex_count;
-    let ne = edges.v.len();
     scene.material = p.material;
     scene.crease = p.crease;
     let (alpha, beta) = p.damping.unwrap_or((0.0, 0.0));
@@ -41,11 +40,75 @@ pub(super) fn apply_physics(
     scene.solver = p.solver;
     scene.outputs = p.outputs;
 
+    apply_actuators(scene, p.actuators, edges, warnings)?;
+    let supported = apply_supports(scene, p.supports, nv, copies)?;
+    for (vi, key) in &p.vertex_forces {
+        let k = format!("{key}.vertex");
+        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
+        if let Some(s) = supported.get(&vi.vertex.index()) {
+            warnings.push(format!(
+                "{k}: vertex {} is fixed by {s}; the force '{}' acts on a support",
+                vi.vertex, vi.name
+            ));
+        }
+    }
+    let mut driven: HashMap<VertexId, String> = HashMap::new();
+    for (vi, key) in &p.vertex_motions {
+        let k = format!("{key}.vertex");
+        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
+        if let Some(s) = supported.get(&vi.vertex.index()) {
+            return Err(invalid(
+                k,
+                format!(
+                    "vertex {} is also fixed by {s}; a vertex cannot be both supported and driven",
+                    vi.vertex
+                ),
+            ));
+        }
+        if let Some(first) = driven.insert(vi.vertex, key.clone()) {
+            return Err(invalid(
+                k,
+                format!("vertex {} is already driven by {first}", vi.vertex),
+            ));
+        }
+    }
+    let attached = check_attachments(&p.attachments, nv, &supported, &driven)?;
+    for (vi, key) in &p.vertex_forces {
+        if let Some(a) = attached.get(&vi.vertex.index()) {
+            warnings.push(format!(
+                "{key}.vertex: vertex {} is held by {a}; the force '{}' acts on the attachment",
+                vi.vertex, vi.name
+            ));
+        }
+    }
+    scene.attachments = p
+        .attachments
+        .into_iter()
+        .map(|a| Attachment {
+            name: a.name,
+            vertices: with_copies(&a.vertices, nv, copies),
+        })
+        .collect();
+    scene.vertex_forces = p.vertex_forces.into_iter().map(|x| x.0).collect();
+    scene.vertex_motions = p.vertex_motions.into_iter().map(|x| x.0).collect();
+    Ok(())
+}
+
+/// The scene's actuators from the `ancf:actuators` specs (None: the
+/// default `fold` over every crease), with warnings for actuators that
+/// drive nothing.
+fn apply_actuators(
+    scene: &mut Scene,
+    actuators: Option<Vec<keys::ActuatorSpec>>,
+    edges: &FoldEdges,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let ne = edges.v.len();
     let creases: Vec<usize> = (0..ne)
         .filter(|&e| edges.kind[e] == EdgeKind::Crease)
         .collect();
     let zero = |list: &[usize]| list.iter().all(|&e| edges.target[e] == 0.0);
-    match p.actuators {
+    match actuators {
         None => {
             // with_defaults made `fold` over every mesh crease (= FOLD creases).
             if creases.is_empty() {
@@ -67,61 +130,7 @@ pub(super) fn apply_physics(
             scene.actuators.clear();
             for a in list {
                 let sel_key = format!("{}.edges", a.key);
-                let selected: Vec<usize> = match &a.edges {
-                    EdgeSelection::All => {
-                        if creases.is_empty() {
-                            warnings.push(format!(
-                                "{sel_key}: \"all\" selects nothing; the pattern has no creases"
-                            ));
-                        }
-                        creases.clone()
-                    }
-                    EdgeSelection::Assignment(x) => {
-                        let s: Vec<usize> = creases
-                            .iter()
-                            .copied()
-                            .filter(|&e| edges.assignment[e] == *x)
-                            .collect();
-                        if s.is_empty() {
-                            warnings.push(format!(
-                                "{sel_key}: no crease has assignment {}; the actuator drives nothing",
-                                x.letter()
-                            ));
-                        }
-                        s
-                    }
-                    EdgeSelection::List(l) => {
-                        let mut s = Vec::with_capacity(l.len());
-                        for (i, &e) in l.iter().enumerate() {
-                            let k = format!("{sel_key}[{i}]");
-                            if e >= ne {
-                                return Err(invalid(
-                                    k,
-                                    format!("FOLD edge {e} does not exist (there are {ne} edges)"),
-                                ));
-                            }
-                            if edges.kind[e] != EdgeKind::Crease {
-                                return Err(invalid(
-                                    k,
-                                    format!(
-                                        "FOLD edge {e} is not a crease (assignment {}{})",
-                                        edges.assignment[e].letter(),
-                                        if edges.kind[e] == EdgeKind::Boundary {
-                                            ", on the boundary"
-                                        } else {
-                                            ""
-                                        }
-                                    ),
-                                ));
-                            }
-                            if s.contains(&e) {
-                                return Err(invalid(k, format!("FOLD edge {e} is listed twice")));
-                            }
-                            s.push(e);
-                        }
-                        s
-                    }
-                };
+                let selected = select_edges(&a.edges, &sel_key, &creases, edges, warnings)?;
                 if a.mode == ActuatorMode::RestAngle && !selected.is_empty() && zero(&selected) {
                     warnings.push(format!(
                         "{sel_key}: every crease the rest_angle actuator '{}' drives has the \
@@ -156,9 +165,86 @@ pub(super) fn apply_physics(
             }
         }
     }
+    Ok(())
+}
 
+/// The FOLD creases an actuator's edge selection picks (checked: they
+/// exist, are creases and are listed once).
+fn select_edges(
+    selection: &EdgeSelection,
+    sel_key: &str,
+    creases: &[usize],
+    edges: &FoldEdges,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<usize>, SceneError> {
+    let ne = edges.v.len();
+    Ok(match selection {
+        EdgeSelection::All => {
+            if creases.is_empty() {
+                warnings.push(format!(
+                    "{sel_key}: \"all\" selects nothing; the pattern has no creases"
+                ));
+            }
+            creases.to_vec()
+        }
+        EdgeSelection::Assignment(x) => {
+            let s: Vec<usize> = creases
+                .iter()
+                .copied()
+                .filter(|&e| edges.assignment[e] == *x)
+                .collect();
+            if s.is_empty() {
+                warnings.push(format!(
+                    "{sel_key}: no crease has assignment {}; the actuator drives nothing",
+                    x.letter()
+                ));
+            }
+            s
+        }
+        EdgeSelection::List(l) => {
+            let mut s = Vec::with_capacity(l.len());
+            for (i, &e) in l.iter().enumerate() {
+                let k = format!("{sel_key}[{i}]");
+                if e >= ne {
+                    return Err(invalid(
+                        k,
+                        format!("FOLD edge {e} does not exist (there are {ne} edges)"),
+                    ));
+                }
+                if edges.kind[e] != EdgeKind::Crease {
+                    return Err(invalid(
+                        k,
+                        format!(
+                            "FOLD edge {e} is not a crease (assignment {}{})",
+                            edges.assignment[e].letter(),
+                            if edges.kind[e] == EdgeKind::Boundary {
+                                ", on the boundary"
+                            } else {
+                                ""
+                            }
+                        ),
+                    ));
+                }
+                if s.contains(&e) {
+                    return Err(invalid(k, format!("FOLD edge {e} is listed twice")));
+                }
+                s.push(e);
+            }
+            s
+        }
+    })
+}
+
+/// The supports, each vertex supported once; returns who supports each
+/// FOLD vertex.
+fn apply_supports(
+    scene: &mut Scene,
+    supports: Vec<keys::SupportSpec>,
+    nv: usize,
+    copies: &[usize],
+) -> Result<HashMap<usize, String>, SceneError> {
     let mut supported: HashMap<usize, String> = HashMap::new();
-    for s in p.supports {
+    for s in supports {
         for (i, &v) in s.vertices.iter().enumerate() {
             let k = format!("{}.vertices[{i}]", s.key);
             vertex_exists(v, nv, || k.clone())?;
@@ -176,39 +262,19 @@ pub(super) fn apply_physics(
             fix: s.fix,
         });
     }
+    Ok(supported)
+}
 
-    for (vi, key) in &p.vertex_forces {
-        let k = format!("{key}.vertex");
-        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
-        if let Some(s) = supported.get(&vi.vertex.index()) {
-            warnings.push(format!(
-                "{k}: vertex {} is fixed by {s}; the force '{}' acts on a support",
-                vi.vertex, vi.name
-            ));
-        }
-    }
-    let mut driven: HashMap<VertexId, String> = HashMap::new();
-    for (vi, key) in &p.vertex_motions {
-        let k = format!("{key}.vertex");
-        vertex_exists(vi.vertex.index(), nv, || k.clone())?;
-        if let Some(s) = supported.get(&vi.vertex.index()) {
-            return Err(invalid(
-                k,
-                format!(
-                    "vertex {} is also fixed by {s}; a vertex cannot be both supported and driven",
-                    vi.vertex
-                ),
-            ));
-        }
-        if let Some(first) = driven.insert(vi.vertex, key.clone()) {
-            return Err(invalid(
-                k,
-                format!("vertex {} is already driven by {first}", vi.vertex),
-            ));
-        }
-    }
+/// Each attached vertex exists and is held by nothing else; returns who
+/// holds each FOLD vertex.
+fn check_attachments(
+    attachments: &[keys::AttachmentSpec],
+    nv: usize,
+    supported: &HashMap<usize, String>,
+    driven: &HashMap<VertexId, String>,
+) -> Result<HashMap<usize, String>, SceneError> {
     let mut attached: HashMap<usize, String> = HashMap::new();
-    for a in &p.attachments {
+    for a in attachments {
         for (i, &v) in a.vertices.iter().enumerate() {
             let k = format!("{}.vertices[{i}]", a.key);
             vertex_exists(v, nv, || k.clone())?;
@@ -230,25 +296,7 @@ pub(super) fn apply_physics(
             attached.insert(v, a.key.clone());
         }
     }
-    for (vi, key) in &p.vertex_forces {
-        if let Some(a) = attached.get(&vi.vertex.index()) {
-            warnings.push(format!(
-                "{key}.vertex: vertex {} is held by {a}; the force '{}' acts on the attachment",
-                vi.vertex, vi.name
-            ));
-        }
-    }
-    scene.attachments = p
-        .attachments
-        .into_iter()
-        .map(|a| Attachment {
-            name: a.name,
-            vertices: with_copies(&a.vertices, nv, copies),
-        })
-        .collect();
-    scene.vertex_forces = p.vertex_forces.into_iter().map(|x| x.0).collect();
-    scene.vertex_motions = p.vertex_motions.into_iter().map(|x| x.0).collect();
-    Ok(())
+    Ok(attached)
 }
 
 /// The mesh vertices of the FOLD vertices `listed` and of all their split
