@@ -366,8 +366,7 @@ impl Advance {
                 }
                 (None, None) => unreachable!("a policy gives a controller or substeps"),
             };
-            let may_shorten = ctl.as_ref().is_some_and(|c| c.may_shorten(h));
-            let out = match self.attempt(sys, state, h, s_end, may_shorten) {
+            let out = match self.attempt(sys, state, h, s_end) {
                 Ok(out) => out,
                 Err(Failure { reason, outcome }) => {
                     // The failed attempt's work counts too.
@@ -418,7 +417,6 @@ impl Advance {
         state: &ModelState,
         h: f64,
         s_end: f64,
-        may_shorten: bool,
     ) -> Result<Outcome, Failure> {
         let mut u = std::mem::take(&mut self.u);
         self.inputs_at(s_end, &mut u);
@@ -437,7 +435,6 @@ impl Advance {
             h,
             drive: &drive,
             memory: state.memory.newton,
-            may_shorten,
         };
         let mech = Mechanics {
             asm: &sys.asm,

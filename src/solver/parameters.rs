@@ -70,10 +70,6 @@ pub struct IntegrationParameters {
     /// ... for up to this many iterations in a row (0: the rule is off):
     /// the rate of two tiny corrections says little.
     pub near_chances: u32,
-    /// Newton gives up early (where the step may be retried shorter) when a
-    /// matrix formed at the iterate corrects by more than this times each of
-    /// the last two corrections: even its own tangent sends the iterate away.
-    pub diverged_fresh_rate: f64,
     /// Modified Newton's matrix takes the membrane's geometric stiffness
     /// from the step start (it changes fast as facets turn, and an exact
     /// one would need forming at every iterate).
@@ -121,7 +117,6 @@ impl Default for IntegrationParameters {
             max_rate: 0.25,
             near_factor: 10.0,
             near_chances: 3,
-            diverged_fresh_rate: 3.0,
             lag_membrane_stiffness: true,
             secant_updates: true,
             two_guess_predictor: true,
@@ -170,14 +165,6 @@ impl IntegrationParameters {
                 what: "slow contractions near the tolerance keep the matrix",
                 off: |p| IntegrationParameters {
                     near_chances: 0,
-                    ..p
-                },
-            },
-            Rule {
-                name: "early-give-up",
-                what: "Newton gives up when a fresh matrix diverges",
-                off: |p| IntegrationParameters {
-                    diverged_fresh_rate: f64::INFINITY,
                     ..p
                 },
             },

@@ -69,11 +69,6 @@ impl StepController {
         self.h
     }
 
-    /// Whether a failure of a step `h` will be retried shorter.
-    pub fn may_shorten(&self, h: f64) -> bool {
-        h * self.params.factor_failed >= self.min_step
-    }
-
     /// The step factor the error estimate `error` (1 = the tolerance) proposes.
     fn proposed_factor(&self, error: f64) -> f64 {
         self.params.safety * error.powf(-1.0 / ERROR_ORDER)

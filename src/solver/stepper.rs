@@ -114,15 +114,6 @@ pub enum StepError {
         /// Iterations done.
         iterations: usize,
     },
-    /// A matrix formed at the iterate sent it away (the step may be retried shorter).
-    DivergedFresh {
-        /// The correction (scaled).
-        correction: f64,
-        /// The iteration whose matrix it was.
-        iteration: usize,
-        /// The growth factor that counts as divergence.
-        rate: f64,
-    },
     /// Newton's correction is not finite.
     NonFinite,
     /// Contact admits no part of a Newton correction.
@@ -147,15 +138,6 @@ impl fmt::Display for StepError {
             } => write!(
                 f,
                 "Newton diverged (correction {correction:.3e} after {iterations} iterations)"
-            ),
-            StepError::DivergedFresh {
-                correction,
-                iteration,
-                rate,
-            } => write!(
-                f,
-                "Newton diverged (the matrix formed at iteration {iteration} corrects by \
-                 {correction:.3e}, more than {rate} times each of the two corrections before)"
             ),
             StepError::NonFinite => write!(f, "Newton produced non-finite values"),
             StepError::NoCollisionFreeStep => {
@@ -209,8 +191,6 @@ pub struct Attempt<'a> {
     pub drive: &'a Drive<'a>,
     /// The memory of the steps accepted so far.
     pub memory: NewtonMemory,
-    /// Whether a failure will be retried with a shorter step.
-    pub may_shorten: bool,
 }
 
 /// A time integration scheme: one step of a given size from a state.

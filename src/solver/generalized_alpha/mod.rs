@@ -276,7 +276,6 @@ impl GeneralizedAlpha {
             scales: &self.scales,
             params: &self.params,
             settings: &self.settings,
-            may_shorten: attempt.may_shorten,
         };
         let have_rhs = predictor::predict(&ctx, next, ws, out);
         newton::iterate(&ctx, solver, have_rhs, next, ws, out)?;
@@ -303,8 +302,6 @@ struct StepContext<'a> {
     scales: &'a Scales,
     params: &'a IntegrationParameters,
     settings: &'a Settings,
-    /// Whether a failure will be retried shorter.
-    may_shorten: bool,
 }
 
 impl StepContext<'_> {

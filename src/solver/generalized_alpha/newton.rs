@@ -251,8 +251,8 @@ impl Newton {
         (rate, norm)
     }
 
-    /// Refuse a non-finite or (fresh matrix) diverging correction; drop a
-    /// growing correction of a kept matrix and form one here.
+    /// Refuse a non-finite correction; drop a growing correction of a kept
+    /// matrix and form one here.
     fn screen(
         &mut self,
         ctx: &StepContext,
@@ -264,20 +264,6 @@ impl Newton {
     ) -> Result<Screen, StepError> {
         if !norm.is_finite() {
             return Err(StepError::NonFinite);
-        }
-        // Only where a failure is retried shorter: a large growth can
-        // still converge, and a fixed step must keep the whole budget.
-        let p = ctx.params;
-        if ctx.may_shorten
-            && !stale
-            && it >= 2
-            && norm > p.diverged_fresh_rate * self.last_norm.max(self.norm_before_last)
-        {
-            return Err(StepError::DivergedFresh {
-                correction: norm,
-                iteration: it + 1,
-                rate: p.diverged_fresh_rate,
-            });
         }
         if self.modified && stale && rate > 1.0 && it + 1 < ctx.settings.max_newton {
             // A matrix formed elsewhere sends the iterate away: drop this
