@@ -773,6 +773,18 @@ impl Assembler {
             .fold(1.0, f64::min)
     }
 
+    /// The largest fraction in (0, 1] of a Newton correction `q -> q + dq`
+    /// (velocities moving by `dv_dq dq` from `v`) every force term admits
+    /// by [`ForceTerm::max_correction_fraction`]: where a term's stiffness
+    /// changes along the correction (the iteration matrix is then formed
+    /// anew where it stops).
+    pub fn max_correction_fraction(&self, q: &[f64], v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
+        self.terms
+            .iter()
+            .map(|t| t.max_correction_fraction(self, q, v, dq, dv_dq))
+            .fold(1.0, f64::min)
+    }
+
     /// Whether a force term limits this step (contact in touch): the
     /// stepper then backtracks corrections that raise the residual.
     pub fn limits_steps(&self) -> bool {

@@ -50,6 +50,24 @@ pub trait ForceTerm: Send + Sync {
         1.0
     }
 
+    /// Largest fraction in (0, 1] of a Newton correction `q -> q + dq`,
+    /// with the velocities moving by `dv_dq dq` alongside from `v`, up to
+    /// which the term's stiffness stays as the iteration matrix has it
+    /// (contact: where a sliding pair's correction would carry it through
+    /// sticking to sliding the other way, the fraction at which it comes to
+    /// rest); the stepper stops the correction there and forms the matrix
+    /// anew.
+    fn max_correction_fraction(
+        &self,
+        _asm: &Assembler,
+        _q: &[f64],
+        _v: &[f64],
+        _dq: &[f64],
+        _dv_dq: f64,
+    ) -> f64 {
+        1.0
+    }
+
     /// Whether the term limits this step's Newton corrections (contact:
     /// pairs within the barrier at the step start); Newton then backtracks.
     fn limits_steps(&self) -> bool {
