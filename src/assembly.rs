@@ -798,6 +798,28 @@ impl Assembler {
             .find_map(|t| t.as_any().and_then(|a| a.downcast_ref::<T>()))
     }
 
+    /// What each force term carries from step to step ([`ForceTerm::memory`]),
+    /// in evaluation order.
+    pub fn term_memory(&self) -> Vec<Vec<f64>> {
+        self.terms.iter().map(|t| t.memory()).collect()
+    }
+
+    /// Hand each force term back its memory (`memory` as from
+    /// [`Assembler::term_memory`]; empty: every term as built).
+    pub fn restore_term_memory(&mut self, memory: &[Vec<f64>]) -> Result<(), String> {
+        if !memory.is_empty() && memory.len() != self.terms.len() {
+            return Err(format!(
+                "{} force terms' memory for {} terms",
+                memory.len(),
+                self.terms.len()
+            ));
+        }
+        for (k, t) in self.terms.iter_mut().enumerate() {
+            t.restore_memory(memory.get(k).map_or(&[][..], |m| &m[..]))?;
+        }
+        Ok(())
+    }
+
     /// Append a force term built after the assembler (it may need the
     /// layout and elements, as contact does); its declared pattern joins.
     pub fn add_term(&mut self, term: Box<dyn ForceTerm>) {

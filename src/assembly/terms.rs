@@ -43,6 +43,18 @@ pub trait ForceTerm: Send + Sync {
     /// the step start `(q, v)`; [`ForceTerm::before_step`] does this too.
     fn lag(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) {}
 
+    /// What the term carries from step to step beyond the state `(q, v)`
+    /// (contact: each pair's barrier stiffness), for saved model states; a
+    /// restore hands it back through [`ForceTerm::restore_memory`].
+    fn memory(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// Take back what [`ForceTerm::memory`] gave (empty: as built).
+    fn restore_memory(&mut self, _memory: &[f64]) -> Result<(), String> {
+        Ok(())
+    }
+
     /// Largest fraction in (0, 1] of the move `q -> q + dq` (all DOFs) the
     /// term admits (contact: free of collisions); the stepper limits its
     /// Newton steps and predictors to it.

@@ -182,6 +182,7 @@ impl Model {
             work: Default::default(),
             dissipative_force: Default::default(),
             extra_pairs: Vec::new(),
+            term_memory: Vec::new(),
         };
         // Build once now so that a bad scene fails at instantiation.
         let auto_damping = scene.auto_damping;

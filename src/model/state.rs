@@ -84,6 +84,10 @@ pub struct ModelState {
     #[serde(default)]
     #[doc(hidden)]
     pub extra_pairs: Vec<(usize, usize)>,
+    /// What the force terms carry from step to step (contact: each pair's
+    /// barrier stiffness), in the assembler's term order; empty: as built.
+    #[serde(default)]
+    pub term_memory: Vec<Vec<f64>>,
 }
 
 /// Work done so far (J): dissipated by contact, and put in by the inputs.
@@ -152,6 +156,11 @@ impl Model {
             self.sys = Some(sys);
             self.scene = scene;
             self.built_with = Some(parameters);
+        }
+        if let Some(sys) = self.sys.as_mut() {
+            sys.asm
+                .restore_term_memory(&s.term_memory)
+                .map_err(Error::State)?;
         }
         self.state = s;
         self.read_cache = Default::default();

@@ -94,6 +94,11 @@ impl Model {
             Ok(r) => Ok(r),
             Err(e) => {
                 self.state = saved;
+                if let Some(sys) = self.sys.as_mut() {
+                    // Back to what the terms carried before the failed
+                    // steps (their own memory: it fits).
+                    let _ = sys.asm.restore_term_memory(&self.state.term_memory);
+                }
                 self.read_cache = Default::default();
                 Err(self.with_suspects(e))
             }
@@ -122,6 +127,7 @@ impl Model {
         adv.report.solve_time = (solve_time - adv.linear_times.1).as_secs_f64();
         sys.stepper.end_advance(&mut state.memory);
         state.extra_pairs = sys.asm.extra_pairs().to_vec();
+        state.term_memory = sys.asm.term_memory();
         // The outputs now, where the last step evaluated its state in full
         // or the scene reports reactions (they need the forces at the step
         // end); else they are evaluated from the state when read.
