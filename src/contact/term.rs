@@ -15,7 +15,15 @@
 //! the iteration matrix takes the Hessian projected to positive
 //! semi-definite per pair. Every Newton step is limited by continuous
 //! collision detection ([`ContactTerm::safe_fraction`]), so no iterate and no
-//! output ever has two surfaces closer than the thickness.
+//! output ever has two surfaces closer than the thickness, and stopped
+//! where it would carry a sliding pair through sticking to the opposite
+//! slip ([`ContactTerm::friction_fraction`]).
+//!
+//! `kappa` is per pair: the default, or more for a pair that approaches too
+//! fast for the default barrier to stop it well inside the width, set while
+//! the pair is outside the barrier and kept while it is inside (so it
+//! changes no energy); the pairs' stiffnesses are the term's memory in a
+//! saved state.
 
 use super::broad::{Aabb, overlapping};
 use super::ccd;
@@ -27,6 +35,7 @@ use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
 use std::any::Any;
+use std::collections::HashMap;
 
 /// Contact settings (scene keys under `ancf:contact`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -142,6 +151,8 @@ struct Lagged {
     basis: [Vector3<f64>; 2],
     /// Normal force (N).
     lambda: f64,
+    /// Tangential relative velocity at the step start (in `basis`).
+    slide: Vector2<f64>,
 }
 
 /// What contact looks like at one state (for outputs and tests).
@@ -181,7 +192,22 @@ pub struct ContactTerm {
     touching: bool,
     /// The step start's candidate pairs.
     cache: CandidateCache,
+    /// Barrier stiffness of each candidate pair (N/m), set while the pair
+    /// is outside the barrier and kept while it is inside (see
+    /// [`ContactTerm::pair_stiffness`]).
+    pair_kappa: HashMap<PairKey, f64>,
+    /// Contact-vertex positions and velocities at the last step start.
+    x_start: Vec<Vector3<f64>>,
+    v_start: Vec<Vector3<f64>>,
 }
+
+/// The kinetic energy `m v_n^2 / 2` of a pair's approach is stopped at
+/// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2`: at about 4 % of the barrier
+/// width (see [`ContactTerm::pair_stiffness`]).
+const PAIR_SPEED_DIVISOR: f64 = 6.0;
+
+/// A pair's identity: edge-edge or not, and its four contact vertices.
+type PairKey = (bool, [usize; 4]);
 
 impl ContactTerm {
     /// Contact of `mesh` (facets `elements`) with `settings`; `areal_mass`
@@ -232,6 +258,9 @@ impl ContactTerm {
             project: true,
             touching: false,
             cache: CandidateCache::default(),
+            pair_kappa: HashMap::new(),
+            x_start: Vec::new(),
+            v_start: Vec::new(),
         })
     }
 
@@ -470,6 +499,55 @@ impl ContactTerm {
         t
     }
 
+    /// The fraction of a Newton correction at which the first sliding
+    /// friction pair it would carry through sticking (to sliding the other
+    /// way, beyond the stick velocity) comes closest to rest; 1 if none.
+    /// In slip the friction force is constant along the slide and Newton's
+    /// linear model does not see it stop, so a correction that should stop
+    /// a pair overshoots to the opposite slip, and the next one back: the
+    /// iteration cycles (a line search only creeps towards the stick). At
+    /// rest the pair's stick stiffness is in the next matrix.
+    pub fn friction_fraction(&self, v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
+        if self.mu <= 0.0 || self.lagged.is_empty() {
+            return 1.0;
+        }
+        let mut t: f64 = 1.0;
+        let at = |x: &[f64], i: usize| -> Vector3<f64> {
+            super::surface::eval_map(&self.surf.maps[i], x)
+        };
+        for lg in self.lagged.iter().filter(|lg| lg.lambda > 0.0) {
+            let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * at(v, lg.ids[k])).sum();
+            let dr: Vector3<f64> = (0..4)
+                .map(|k| lg.w[k] * at(dq, lg.ids[k]))
+                .sum::<Vector3<f64>>()
+                * dv_dq;
+            let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
+            let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
+            let end = u + du;
+            // A pair that slid at the step start only where it slides that
+            // way and is carried past rest to slide back (an iterate
+            // sliding the other way, such as the held predictor's, is on
+            // its way back); one that stuck, wherever it is carried past.
+            let start = if lg.slide.norm() > self.eps_v {
+                lg.slide
+            } else {
+                u
+            };
+            if u.norm() <= self.eps_v
+                || end.norm() <= self.eps_v
+                || u.dot(&start) <= 0.0
+                || end.dot(&start) >= 0.0
+            {
+                continue;
+            }
+            let stop = -u.dot(&du) / du.norm_squared();
+            if stop > 0.0 && stop < t {
+                t = stop;
+            }
+        }
+        t
+    }
+
     /// Gap, pair count and normal force at slot vector `q`; the smallest
     /// gap is searched up to `search` (m) apart (`search` if none is closer).
     pub fn report(&self, q: &[f64], search: f64) -> ContactReport {
@@ -496,12 +574,29 @@ impl ContactTerm {
 
     /// Normal force of a pair at gap `s` (N): `-kappa m(x) b'(s)`.
     fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64) -> f64 {
-        self.kappa * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat)
+        self.kappa_of(p) * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat)
     }
 
     /// Dashpot coefficients, friction's normal forces and bases from
     /// contact-vertex positions `x`.
-    fn lag_at(&mut self, x: &[Vector3<f64>]) {
+    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>]) {
+        // Pair stiffnesses: kept for pairs inside the barrier (their energy
+        // is not zero), set anew for the others.
+        let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
+        for p in &self.cache.pairs {
+            let xs = self.points(x, p);
+            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - self.xi;
+            let k = match self.pair_kappa.get(&key(p)) {
+                Some(&k) if s < self.s_hat => k,
+                _ => self.pair_stiffness(p, x, v),
+            };
+            kappa.insert(key(p), k);
+        }
+        self.pair_kappa = kappa;
+        self.x_start.clear();
+        self.x_start.extend_from_slice(x);
+        self.v_start.clear();
+        self.v_start.extend_from_slice(v);
         self.lagged.clear();
         let act = self.active(x).unwrap_or_default();
         self.touching = !act.is_empty();
@@ -509,15 +604,81 @@ impl ContactTerm {
             let xs = self.points(x, &p);
             let (w, n) = self.closest(&p, &xs);
             // Critical for zeta = 1 at the pair's barrier stiffness.
-            let k = self.kappa * ddb(s, self.s_hat).max(0.0);
+            let k = self.kappa_of(&p) * ddb(s, self.s_hat).max(0.0);
+            let basis = tangent_basis(&n);
+            let ids = p.ids();
+            let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
             self.lagged.push(Lagged {
-                ids: p.ids(),
+                ids,
                 c: 2.0 * self.zeta * (k * p.mass).sqrt(),
                 w,
                 normal: n,
-                basis: tangent_basis(&n),
+                basis,
                 lambda: self.normal_force(&p, &xs, s),
+                slide: Vector2::new(basis[0].dot(&vr), basis[1].dot(&vr)),
             });
+        }
+    }
+
+    /// The barrier stiffness a pair outside the barrier takes at a step
+    /// start with contact-vertex positions `x` and velocities `v`: the
+    /// default, or more where the pair approaches so fast that the default
+    /// barrier's energy scale `kappa s_hat^2` would let it come much
+    /// closer than a few hundredths of the barrier width:
+    /// `m v_n^2 / (PAIR_SPEED_DIVISOR s_hat^2)` for its sample mass `m` and
+    /// normal approach `v_n` (IPC raises one global stiffness where the
+    /// smallest gap falls, which changes the energy of every pair in the
+    /// barrier). Set while the pair's barrier energy is zero and kept while
+    /// it is inside, the stiffness changes no energy. A panel's corner
+    /// whipping onto the layer below (a flat stack released in one held
+    /// step) reaches the default barrier's energy scale many times over and
+    /// would be stopped at a gap of 1e-13 m, where Newton cannot move it.
+    fn pair_stiffness(&self, p: &Pair, x: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
+        if v.len() != x.len() || x.is_empty() {
+            return self.kappa;
+        }
+        let xs = self.points(x, p);
+        let (w, n) = self.closest(p, &xs);
+        let ids = p.ids();
+        let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
+        // Along the normal of the second primitive's surface (the
+        // triangle's; for two edges, a facet of the second), not the
+        // closest points' direction: a sample sliding onto the next
+        // sub-triangle, or an edge sliding sideways onto a parallel one,
+        // comes closer to it at the sliding speed, but it does not
+        // approach the surface.
+        let surface = match p.kind {
+            Kind::PointTriangle { .. } => (xs[2] - xs[1]).cross(&(xs[3] - xs[1])),
+            Kind::EdgeEdge { b, .. } => {
+                let fb = &self.surf.vertex_facets;
+                match fb[b[0]].iter().find(|f| fb[b[1]].contains(f)) {
+                    Some(&f) => {
+                        let c = self.surf.coarse_tri(&self.mesh, f).map(|i| x[i]);
+                        (c[1] - c[0]).cross(&(c[2] - c[0]))
+                    }
+                    None => n,
+                }
+            }
+        };
+        let normal = match surface.try_normalize(0.0) {
+            Some(u) if u.dot(&n) < 0.0 => -u,
+            Some(u) => u,
+            None => n,
+        };
+        let approach = (-normal.dot(&vr)).max(0.0);
+        self.kappa
+            .max(p.mass * approach * approach / (PAIR_SPEED_DIVISOR * self.s_hat * self.s_hat))
+    }
+
+    /// A pair's barrier stiffness: the one set at the last step start, or
+    /// (a pair found since) the one it would have been given there (a
+    /// pair the next step start finds inside the barrier and not in the
+    /// map, having come closer than the candidate search's margin in one
+    /// step, takes the stiffness of that step start).
+    fn kappa_of(&self, p: &Pair) -> f64 {
+        match self.pair_kappa.get(&key(p)) {
+            Some(&k) => k,
+            None => self.pair_stiffness(p, &self.x_start, &self.v_start),
         }
     }
 
@@ -655,6 +816,10 @@ impl MatrixBatch {
     }
 }
 
+fn key(p: &Pair) -> PairKey {
+    (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
+}
+
 /// Barrier `b(s)` and its first two derivatives in `s`.
 fn barrier<T: Real>(s: T, s_hat: f64) -> T {
     let u = s - s_hat;
@@ -734,7 +899,7 @@ impl ContactTerm {
         let (b1, b2) = (db(s, self.s_hat), ddb(s, self.s_hat));
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
-        let k = self.kappa;
+        let k = self.kappa_of(p);
         let f = d2.map(
             k * barrier(s, self.s_hat),
             k * b1 * sd,
@@ -778,23 +943,74 @@ impl ForceTerm for ContactTerm {
         Some(self)
     }
 
-    fn before_step(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
         let mut x = Vec::new();
+        let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
         self.cache_at(&x);
-        self.lag_at(&x);
+        self.lag_at(&x, &vx);
         self.pattern_pairs(asm)
     }
 
-    fn lag(&mut self, _asm: &Assembler, q: &[f64], _v: &[f64]) {
+    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
         let mut x = Vec::new();
+        let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
         self.cache_at(&x);
-        self.lag_at(&x);
+        self.lag_at(&x, &vx);
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
         self.safe_fraction(q, dq)
+    }
+
+    /// The pairs' barrier stiffnesses: six numbers a pair (edge-edge or
+    /// not, its four contact vertices, the stiffness), in key order.
+    fn memory(&self) -> Vec<f64> {
+        let mut pairs: Vec<(&PairKey, &f64)> = self.pair_kappa.iter().collect();
+        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
+        let mut out = Vec::with_capacity(6 * pairs.len());
+        for ((edge, ids), &k) in pairs {
+            out.push(if *edge { 1.0 } else { 0.0 });
+            out.extend(ids.iter().map(|&i| i as f64));
+            out.push(k);
+        }
+        out
+    }
+
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+        if memory.len() % 6 != 0 {
+            return Err("contact: pair stiffnesses come in sixes".into());
+        }
+        let n = self.surf.n_vertices();
+        let mut map = HashMap::with_capacity(memory.len() / 6);
+        for m in memory.chunks_exact(6) {
+            let id = |x: f64| {
+                (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
+                    .then_some(x as usize)
+                    .ok_or_else(|| format!("contact: no contact vertex {x}"))
+            };
+            let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
+            if !(m[5].is_finite() && m[5] > 0.0) || (m[0] != 0.0 && m[0] != 1.0) {
+                return Err("contact: a pair stiffness is not a positive number".into());
+            }
+            map.insert((m[0] == 1.0, ids), m[5]);
+        }
+        self.pair_kappa = map;
+        Ok(())
+    }
+
+    fn max_correction_fraction(
+        &self,
+        _asm: &Assembler,
+        _q: &[f64],
+        v: &[f64],
+        dq: &[f64],
+        dv_dq: f64,
+    ) -> f64 {
+        self.friction_fraction(v, dq, dv_dq)
     }
 
     fn limits_steps(&self) -> bool {
