@@ -292,6 +292,31 @@ fn friction_stops_a_correction_where_a_sliding_pair_comes_to_rest() {
     assert_eq!(term.friction_fraction(&v0, &dq(-0.04), c), 1.0);
 }
 
+/// The contact report after a step comes from the step's candidate pairs
+/// (no search of its own) and equals a fresh search of the same reach:
+/// the tilted panel at its step start, moved towards the other by a
+/// tenth of its reach (within the candidates' slack) and by three reaches
+/// (beyond it: searched again).
+#[test]
+fn the_step_report_equals_a_fresh_search() {
+    let (mut asm, q) = tilted_pair(&fd_settings(0.3, 1.0));
+    let v = vec![0.0; q.len()];
+    asm.before_step(&q, &v);
+    let term = asm.term::<ContactTerm>().unwrap();
+    let reach = term.report_reach();
+    for dz in [0.0, -0.1 * reach, 3.0 * reach] {
+        let mut qm = q.clone();
+        for vtx in 4..8 {
+            let s = asm.layout.position_slot[vtx];
+            qm[3 * s + 2] += dz;
+        }
+        let near = term.report_near(&qm);
+        let fresh = term.report(&qm, reach);
+        assert_eq!(near, fresh, "moved {dz:.3e} m");
+        assert!(near.min_gap <= reach);
+    }
+}
+
 /// A square folded on its creased diagonal to 180 deg (the FOLD spec's
 /// diagonal example) closes flat with contact: the free corners end one
 /// thickness apart (within 10 %), and no output has the facets intersect.

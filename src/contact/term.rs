@@ -276,10 +276,39 @@ impl ContactTerm {
         &self.surf
     }
 
-    /// Mean facet side (m), how far [`crate::model::Model::contact`]
-    /// searches the smallest gap.
+    /// Mean facet side (m).
     pub fn mean_side(&self) -> f64 {
         self.mean_side
+    }
+
+    /// How far beyond the thickness [`ContactTerm::report_near`] looks for
+    /// the smallest gap (m): the candidate search's margin, a tenth of a
+    /// facet side or the barrier's reach if more.
+    pub fn report_reach(&self) -> f64 {
+        self.cache_margin
+    }
+
+    /// [`ContactTerm::report`] with the search up to
+    /// [`ContactTerm::report_reach`], from the step's candidate pairs where
+    /// they hold every pair that close (the contact vertices have moved
+    /// less than the slack their search left): what the contact outputs
+    /// read after each step, with no search of their own.
+    pub fn report_near(&self, q: &[f64]) -> ContactReport {
+        let mut x = Vec::new();
+        self.surf.positions(q, &mut x);
+        let reach = self.report_reach();
+        // The cache holds every pair within `pad + 2 margin` of its search
+        // positions; a pair within `xi + reach` now was within that of
+        // them while no vertex moved more than `slack`.
+        let slack = 0.5 * (self.cache.pad + 2.0 * self.cache_margin - self.xi - reach);
+        let searched;
+        let pairs: &[Pair] = if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
+            &self.cache.pairs
+        } else {
+            searched = self.candidates(&x, None, self.xi + reach);
+            &searched
+        };
+        self.report_over(&x, pairs, reach)
     }
 
     /// Barrier stiffness kappa in force (N/m).
@@ -553,19 +582,25 @@ impl ContactTerm {
     pub fn report(&self, q: &[f64], search: f64) -> ContactReport {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
+        self.report_over(&x, &self.candidates(&x, None, search + self.xi), search)
+    }
+
+    /// The report over `pairs` at contact-vertex positions `x`, the
+    /// smallest gap capped at `search`.
+    fn report_over(&self, x: &[Vector3<f64>], pairs: &[Pair], search: f64) -> ContactReport {
         let mut r = ContactReport {
             min_gap: search,
             ..Default::default()
         };
-        for p in self.candidates(&x, None, search + self.xi) {
-            let xs = self.points(&x, &p);
+        for p in pairs {
+            let xs = self.points(x, p);
             let d = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt();
             let s = d - self.xi;
             r.min_gap = r.min_gap.min(s);
             if s < self.s_hat {
                 r.pairs += 1;
                 if s > 0.0 {
-                    r.normal_force += self.normal_force(&p, &xs, s);
+                    r.normal_force += self.normal_force(p, &xs, s);
                 }
             }
         }

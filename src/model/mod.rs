@@ -268,7 +268,9 @@ impl Model {
     #[doc(hidden)]
     /// Contact at the current state (None without contact, and before
     /// [`Model::initialize`], when there are no positions to search):
-    /// smallest gap, active pairs, normal force.
+    /// smallest gap (up to [`crate::contact::ContactTerm::report_reach`]),
+    /// active pairs, normal force. Each step reports its end state from its
+    /// candidate pairs; reads return that report.
     pub fn contact(&self) -> Option<crate::contact::ContactReport> {
         if self.state.phase != Phase::Running {
             return None;
@@ -279,7 +281,7 @@ impl Model {
             *self
                 .read_cache
                 .contact
-                .get_or_init(|| c.report(&self.state.dynamics.q, c.mean_side())),
+                .get_or_init(|| c.report_near(&self.state.dynamics.q)),
         )
     }
 

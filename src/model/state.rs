@@ -444,8 +444,8 @@ impl Model {
         self.state.dynamics.abar = qdd.clone();
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
-        self.state.outputs = Some(self.compute_outputs(&ev, &d));
         self.read_cache = Default::default();
+        self.state.outputs = Some(self.compute_outputs(&ev, &d));
         Ok(())
     }
 }

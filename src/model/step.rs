@@ -158,8 +158,8 @@ impl Model {
         self.state.time = t0 + big_h;
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
-        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         self.read_cache = Default::default();
+        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         let d = &self.state.dynamics;
         let finite = match &self.state.outputs {
             Some(o) => o.iter().all(|x| x.is_finite()),

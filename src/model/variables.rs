@@ -193,7 +193,7 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
     (
         "contact.min_gap",
         "m",
-        "smallest surface distance minus the contact thickness (searched up to a facet size)",
+        "smallest surface distance minus the contact thickness (looked for up to a tenth of a facet side)",
     ),
     (
         "contact.pairs",
@@ -599,9 +599,15 @@ impl Model {
             out.extend([self.kinetic_energy(), ev.strain_energy, ev.crease_energy]);
         }
         if self.contact_outputs().is_some() {
-            // The search's three are read from the state when read
-            // (`contact_output`); zero here keeps the stored list finite.
-            out.extend([0.0, 0.0, 0.0, ev.term_energy, self.state.work.friction]);
+            // The report of this state (kept for its reads).
+            let r = self.contact().unwrap_or_default();
+            out.extend([
+                r.min_gap,
+                r.pairs as f64,
+                r.normal_force,
+                ev.term_energy,
+                self.state.work.friction,
+            ]);
         }
         let dynm = &self.state.dynamics;
         sys.reactions.values(
