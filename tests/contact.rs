@@ -130,11 +130,12 @@ fn eval_at(
     m: Option<(&mut [f64], MatrixCoeffs)>,
 ) -> Evaluation {
     let pi = vec![PI; asm.creases.len()];
+    let no_moment = vec![0.0; asm.creases.len()];
     let st = State {
         q,
         v,
         theta0: &pi,
-        moment: &[],
+        moment: &no_moment,
         theta_prev: &pi,
     };
     let mut ev = Evaluation::default();
@@ -194,23 +195,26 @@ fn barrier_force_and_tangent_match_finite_differences() {
     let (mut asm, q) = tilted_pair(&fd_settings(0.0, 0.0));
     let zeros = vec![0.0; q.len()];
     asm.before_step(&q, &zeros);
-    let e0 = eval_at(&asm, &q, &zeros, None);
-    assert!(
-        e0.term_energy > 0.0,
-        "the tilted corner is within the barrier"
-    );
-    // Force vs energy: on the moving panel's DOFs.
+    force_and_tangent_match_finite_differences(&asm, &q);
+}
+
+/// The force of `asm` at rest at `q` (contact in touch) is the gradient of
+/// its energy, and its matrix (exact Hessians) the derivative of its force.
+fn force_and_tangent_match_finite_differences(asm: &Assembler, q: &[f64]) {
+    let zeros = vec![0.0; q.len()];
+    let e0 = eval_at(asm, q, &zeros, None);
+    assert!(e0.term_energy > 0.0, "contact acts");
     let h = 1e-8;
     let mut worst: f64 = 0.0;
     let mut fmax: f64 = 0.0;
     let total = |ev: &Evaluation| ev.strain_energy + ev.crease_energy + ev.term_energy;
     for i in 0..q.len() {
-        let mut qp = q.clone();
-        let mut qm = q.clone();
+        let mut qp = q.to_vec();
+        let mut qm = q.to_vec();
         qp[i] += h;
         qm[i] -= h;
-        let fd = (total(&eval_at(&asm, &qp, &zeros, None))
-            - total(&eval_at(&asm, &qm, &zeros, None)))
+        let fd = (total(&eval_at(asm, &qp, &zeros, None))
+            - total(&eval_at(asm, &qm, &zeros, None)))
             / (2.0 * h);
         worst = worst.max((fd - e0.force[i]).abs());
         fmax = fmax.max(e0.force[i].abs());
@@ -227,9 +231,58 @@ fn barrier_force_and_tangent_match_finite_differences() {
         m: 0.0,
         c: 0.0,
     };
-    eval_at(&asm, &q, &zeros, Some((&mut k, co)));
-    let err = matrix_fd_error(&asm, &q, &zeros, &k, false, 1e-8);
+    eval_at(asm, q, &zeros, Some((&mut k, co)));
+    let err = matrix_fd_error(asm, q, &zeros, &k, false, 1e-8);
     assert!(err <= 1e-5, "tangent vs force: {err:.3e}");
+}
+
+/// The crease stops and the pairs between neighbouring facets: force and
+/// tangent against finite differences on the diagonal fold closed flat on
+/// its contact (its crease within the stop's width of flat, the facets
+/// facing each other).
+#[test]
+fn crease_stop_and_neighbour_force_and_tangent_match_finite_differences() {
+    let mut model = deployable_with(0.0, |s| {
+        s.auto_damping = true;
+        s.solver.rho_inf = 0.6;
+        s.solver.tolerance = 1e-4;
+    });
+    let fold = common::input(&model, "fold");
+    for k in 0..80 {
+        let t = k as f64 * 0.005;
+        model.set_input(fold, (t / 0.3).min(1.0)).unwrap();
+        model.advance(0.005).unwrap();
+    }
+    let angle = common::crease_angle(&model);
+    let scene = model.scene().clone();
+    let width = scene.material.thickness / 0.1;
+    assert!(
+        PI - angle < width,
+        "the crease is within its stop: {:.4} deg",
+        angle.to_degrees()
+    );
+    let q = model.save_state().dynamics.q;
+    let physics = origami_fmu::assembly::Physics {
+        alpha: 0.0,
+        beta: 0.0,
+        ..origami_fmu::model::physics(&scene)
+    };
+    let mut asm = Assembler::new(&scene.mesh, physics, ElementOptions::default(), &[]).unwrap();
+    let m = scene.material;
+    let term = ContactTerm::new(
+        &scene.mesh,
+        &asm.layout,
+        &asm.elements,
+        scene.contact.as_ref().unwrap(),
+        m.density * m.thickness,
+        m.youngs_modulus * m.thickness,
+    )
+    .unwrap()
+    .with_exact_hessian();
+    asm.add_term(Box::new(term));
+    let zeros = vec![0.0; q.len()];
+    asm.before_step(&q, &zeros);
+    force_and_tangent_match_finite_differences(&asm, &q);
 }
 
 /// The contact's damping matrix (normal dashpot and friction, both lagged

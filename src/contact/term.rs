@@ -67,7 +67,7 @@ impl Default for ContactSettings {
             friction: 0.3,
             stick_velocity: 1e-4,
             damping_ratio: 1.0,
-            subdivisions: 2,
+            subdivisions: 3,
         }
     }
 }
@@ -90,6 +90,9 @@ struct Pair {
     kind: Kind,
     /// Sample mass for the dashpot (kg).
     mass: f64,
+    /// Distance the pair keeps (m): the contact thickness, or less between
+    /// neighbouring facets (see [`ContactTerm::candidates`]).
+    xi: f64,
 }
 
 impl Pair {
@@ -199,12 +202,43 @@ pub struct ContactTerm {
     /// Contact-vertex positions and velocities at the last step start.
     x_start: Vec<Vector3<f64>>,
     v_start: Vec<Vector3<f64>>,
+    /// Width of the crease stops (rad): see [`ContactTerm::crease_stops`].
+    flat_width: f64,
+    /// The points along every crease where a stop acts.
+    stops: Vec<StopPoint>,
+    /// Whether a crease end was within its stop at the step start.
+    creases_near_flat: bool,
 }
 
 /// The kinetic energy `m v_n^2 / 2` of a pair's approach is stopped at
 /// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2`: at about 4 % of the barrier
 /// width (see [`ContactTerm::pair_stiffness`]).
 const PAIR_SPEED_DIVISOR: f64 = 6.0;
+
+/// A point of a crease where its stop acts: the crease's `[a, b, t]` there
+/// (into the facet on the right of `t`, into the left one, along the
+/// crease) as linear maps of the slots.
+#[derive(Clone, Debug)]
+struct StopPoint {
+    edge: crate::ids::EdgeId,
+    /// Share of the crease's length (m) the point stands for.
+    length: f64,
+    maps: [super::surface::VertexMap; 3],
+}
+
+/// Share of the wedge's opening that neighbouring facets keep (see
+/// [`ContactTerm::neighbour_pairs`]): room for the facets to bend.
+const NEIGHBOUR_SHARE: f64 = 0.5;
+
+/// Neighbour pairs keeping less than this share of the thickness are left
+/// out (near the shared vertex or crease, where the crease stops act).
+const NEIGHBOUR_MIN: f64 = 0.02;
+
+/// Points per crease edge where the crease stops act, ends included: a
+/// flat-folded crease's facets bend between its ends, and crossed each
+/// other along it (at a sixteenth of a facet from the crease) with only
+/// the ends stopped.
+const STOP_POINTS: usize = 9;
 
 /// A pair's identity: edge-edge or not, and its four contact vertices.
 type PairKey = (bool, [usize; 4]);
@@ -261,6 +295,9 @@ impl ContactTerm {
             pair_kappa: HashMap::new(),
             x_start: Vec::new(),
             v_start: Vec::new(),
+            flat_width: settings.thickness / edge,
+            stops: stop_points(mesh, layout, elements),
+            creases_near_flat: false,
         })
     }
 
@@ -327,7 +364,6 @@ impl ContactTerm {
             }
             Aabb::around(&pts, 0.5 * pad)
         };
-        let rest_min = self.xi + self.s_hat;
         let mut out = Vec::new();
         // Facets first: only facets near a facet they share no vertex with
         // take part in the fine search (most of a sheet, most of the time,
@@ -364,6 +400,7 @@ impl ContactTerm {
             out.push(Pair {
                 kind: Kind::PointTriangle { p, t },
                 mass: self.mass_fine,
+                xi: self.xi,
             });
         }
         let edges: Vec<usize> = (0..s.fine_edges.len())
@@ -414,17 +451,75 @@ impl ContactTerm {
                     t: s.coarse_tri(&self.mesh, g),
                 },
                 mass: self.mass_coarse,
+                xi: self.xi,
             });
         }
         for (i, j) in edge_pairs {
             out.push(self.edge_pair(s.coarse_edges[i].0, s.coarse_edges[j].0, self.mass_coarse));
         }
+        self.neighbour_pairs(x, &bx, &near_neighbours, &mut out);
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
-        out.retain(|p| self.rest_distance(p) >= rest_min);
+        out.retain(|p| self.rest_distance(p) >= p.xi + self.s_hat_of(p));
         // A canonical order: sums over pairs do not depend on the search.
         out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
         out
+    }
+
+    /// Fine pairs between neighbouring facets (sharing a vertex) that face
+    /// each other, folded past a right angle: each one's samples off the
+    /// other against the other's sub-triangles. A midsurface crease folded
+    /// flat closes to a wedge (its facets meet at the crease, their far
+    /// corners a thickness apart), so such a pair keeps a thickness that
+    /// grows with the two points' distance in the flat pattern `d`:
+    /// `NEIGHBOUR_SHARE xi min(1, d / (2 w))` (`w` the mean facet side: the
+    /// wedge's own opening at mirror points is `xi d / (2 w)`), and pairs
+    /// closer than [`NEIGHBOUR_MIN`] of the thickness are left to the crease
+    /// stops. Without them the facets beside a crease folded flat, bent
+    /// towards each other, crossed within a sixteenth of a facet of it.
+    fn neighbour_pairs(
+        &self,
+        x: &[Vector3<f64>],
+        bx: &dyn Fn(&[usize]) -> Aabb,
+        near: &[(usize, usize)],
+        out: &mut Vec<Pair>,
+    ) {
+        let s = &self.surf;
+        let normal = |f: usize| {
+            let c = s.coarse_tri(&self.mesh, f).map(|i| x[i]);
+            (c[1] - c[0]).cross(&(c[2] - c[0]))
+        };
+        for &(f, g) in near {
+            if normal(f).dot(&normal(g)) >= 0.0 {
+                continue;
+            }
+            for (a, b) in [(f, g), (g, f)] {
+                let pts: Vec<usize> = s.facet_vertices[a]
+                    .iter()
+                    .copied()
+                    .filter(|&p| s.vertex_facets[p].binary_search(&b).is_err())
+                    .collect();
+                let tris = &s.facet_fine_tris[b];
+                let pt_boxes: Vec<Aabb> = pts.iter().map(|&p| bx(&[p])).collect();
+                let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
+                for (i, j) in overlapping(&pt_boxes, &tri_boxes, false) {
+                    let pair = Pair {
+                        kind: Kind::PointTriangle {
+                            p: pts[i],
+                            t: s.fine_tris[tris[j]].0,
+                        },
+                        mass: self.mass_fine,
+                        xi: self.xi,
+                    };
+                    let xi = NEIGHBOUR_SHARE
+                        * self.xi
+                        * (self.rest_distance(&pair) / (2.0 * self.mean_side)).min(1.0);
+                    if xi >= NEIGHBOUR_MIN * self.xi {
+                        out.push(Pair { xi, ..pair });
+                    }
+                }
+            }
+        }
     }
 
     /// The candidate pairs at `x` (swept by `dx`) with pad `pad`, or a
@@ -466,6 +561,7 @@ impl ContactTerm {
         Pair {
             kind: Kind::EdgeEdge { a, b, eps_x },
             mass,
+            xi: self.xi,
         }
     }
 
@@ -518,8 +614,8 @@ impl ContactTerm {
         for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
             let (xs, ds) = (self.points(&x, p), self.points(&d, p));
             let toi = match p.kind {
-                Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, self.xi, t),
-                Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, self.xi, t),
+                Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, p.xi, t),
+                Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, p.xi, t),
             };
             if let Some(s) = toi {
                 t = t.min(s);
@@ -595,9 +691,9 @@ impl ContactTerm {
         for p in pairs {
             let xs = self.points(x, p);
             let d = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt();
-            let s = d - self.xi;
+            let s = d - p.xi;
             r.min_gap = r.min_gap.min(s);
-            if s < self.s_hat {
+            if s < self.s_hat_of(p) {
                 r.pairs += 1;
                 if s > 0.0 {
                     r.normal_force += self.normal_force(p, &xs, s);
@@ -609,7 +705,7 @@ impl ContactTerm {
 
     /// Normal force of a pair at gap `s` (N): `-kappa m(x) b'(s)`.
     fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64) -> f64 {
-        self.kappa_of(p) * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat)
+        self.kappa_of(p) * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat_of(p))
     }
 
     /// Dashpot coefficients, friction's normal forces and bases from
@@ -620,9 +716,9 @@ impl ContactTerm {
         let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
         for p in &self.cache.pairs {
             let xs = self.points(x, p);
-            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - self.xi;
+            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
             let k = match self.pair_kappa.get(&key(p)) {
-                Some(&k) if s < self.s_hat => k,
+                Some(&k) if s < self.s_hat_of(p) => k,
                 _ => self.pair_stiffness(p, x, v),
             };
             kappa.insert(key(p), k);
@@ -639,7 +735,7 @@ impl ContactTerm {
             let xs = self.points(x, &p);
             let (w, n) = self.closest(&p, &xs);
             // Critical for zeta = 1 at the pair's barrier stiffness.
-            let k = self.kappa_of(&p) * ddb(s, self.s_hat).max(0.0);
+            let k = self.kappa_of(&p) * ddb(s, self.s_hat_of(&p)).max(0.0);
             let basis = tangent_basis(&n);
             let ids = p.ids();
             let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
@@ -702,7 +798,12 @@ impl ContactTerm {
         };
         let approach = (-normal.dot(&vr)).max(0.0);
         self.kappa
-            .max(p.mass * approach * approach / (PAIR_SPEED_DIVISOR * self.s_hat * self.s_hat))
+            .max(p.mass * approach * approach / (PAIR_SPEED_DIVISOR * self.s_hat_of(p).powi(2)))
+    }
+
+    /// A pair's barrier width (m): the same share of its thickness for all.
+    fn s_hat_of(&self, p: &Pair) -> f64 {
+        self.s_hat * p.xi / self.xi
     }
 
     /// A pair's barrier stiffness: the one set at the last step start, or
@@ -728,8 +829,8 @@ impl ContactTerm {
         let mut out = Vec::new();
         for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
-            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - self.xi;
-            if s >= self.s_hat {
+            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
+            if s >= self.s_hat_of(&p) {
                 continue;
             }
             if s <= 0.0 {
@@ -737,7 +838,7 @@ impl ContactTerm {
                 return Err(format!(
                     "contact: surfaces at facets {:?} and {:?} are closer than the contact \
                      thickness {} m (gap {s:.3e} m)",
-                    self.surf.vertex_facets[ids[0]], self.surf.vertex_facets[ids[3]], self.xi
+                    self.surf.vertex_facets[ids[0]], self.surf.vertex_facets[ids[3]], p.xi
                 ));
             }
             out.push((p, s));
@@ -851,6 +952,87 @@ impl MatrixBatch {
     }
 }
 
+/// The crease stops' points: [`STOP_POINTS`] along every crease edge.
+fn stop_points(
+    mesh: &Mesh,
+    layout: &DofLayout,
+    elements: &[crate::element::ShellElement],
+) -> Vec<StopPoint> {
+    let mut out = Vec::new();
+    for (e, edge) in mesh.edge_ids().zip(mesh.edges()) {
+        if edge.kind != crate::mesh::EdgeKind::Crease || mesh.faces_of(e).len() != 2 {
+            continue;
+        }
+        let (v, w) = (edge.v[0], edge.v[1]);
+        let chord = mesh.coord(w) - mesh.coord(v);
+        let length = mesh.edge_length(e) / STOP_POINTS as f64;
+        for k in 0..STOP_POINTS {
+            let s = k as f64 / (STOP_POINTS - 1) as f64;
+            let mut right = None;
+            let mut left = None;
+            let mut tangent = None;
+            for &f in mesh.faces_of(e) {
+                let tri = mesh.triangle(f);
+                let at = |x| tri.iter().position(|&y| y == x).expect("on the facet");
+                let (iv, iw) = (at(v), at(w));
+                let ik = 3 - iv - iw;
+                let mut l = [0.0; 3];
+                l[iv] = 1.0 - s;
+                l[iw] = s;
+                // Into the facet: towards its third corner; along the crease.
+                let mut into = [0.0; 3];
+                into[ik] = 1.0;
+                for i in 0..3 {
+                    into[i] -= l[i];
+                }
+                let mut along = [0.0; 3];
+                along[iw] = 1.0;
+                along[iv] = -1.0;
+                let shape = elements[f.index()].shape();
+                let map = |dir: [f64; 3]| {
+                    let d = shape.d_along(l, dir);
+                    let mut terms: HashMap<usize, f64> = HashMap::new();
+                    for (node, combo) in layout.local[f.index()].iter().enumerate() {
+                        for (slot, c) in combo.terms() {
+                            *terms.entry(slot).or_insert(0.0) += d[node] * c;
+                        }
+                    }
+                    let mut m: super::surface::VertexMap =
+                        terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
+                    m.sort_unstable_by_key(|&(s, _)| s);
+                    m
+                };
+                let x = mesh.coord(tri[ik]) - mesh.coord(v);
+                if chord.x * x.y - chord.y * x.x < 0.0 {
+                    right = Some(map(into));
+                } else {
+                    left = Some(map(into));
+                }
+                tangent.get_or_insert_with(|| map(along));
+            }
+            if let (Some(a), Some(b), Some(t)) = (right, left, tangent) {
+                out.push(StopPoint {
+                    edge: e,
+                    length,
+                    maps: [a, b, t],
+                });
+            }
+        }
+    }
+    out
+}
+
+/// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
+/// theta` on the valley side (-1), `theta` on the mountain side (+1).
+fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
+    let theta = crate::crease::theta(a, b, t);
+    if theta > std::f64::consts::PI {
+        (std::f64::consts::TAU - theta, -1.0)
+    } else {
+        (theta, 1.0)
+    }
+}
+
 fn key(p: &Pair) -> PairKey {
     (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
 }
@@ -930,19 +1112,179 @@ impl ContactTerm {
         let d2 = distance_sq(&p.kind, &xs);
         let dv = d2.val();
         let r = dv.sqrt();
-        let s = r - self.xi;
-        let (b1, b2) = (db(s, self.s_hat), ddb(s, self.s_hat));
+        let s = r - p.xi;
+        let s_hat = self.s_hat_of(p);
+        let (b1, b2) = (db(s, s_hat), ddb(s, s_hat));
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
         let k = self.kappa_of(p);
         let f = d2.map(
-            k * barrier(s, self.s_hat),
+            k * barrier(s, s_hat),
             k * b1 * sd,
             k * (b2 * sd * sd + b1 * sdd),
         );
         match p.kind {
             Kind::PointTriangle { .. } => f,
             Kind::EdgeEdge { .. } => f * mollifier(&p.kind, &xs),
+        }
+    }
+
+    /// Crease stops: a crease cannot fold past flat, where the facets across
+    /// it would pass through each other. Its facets share a vertex, so no
+    /// contact pair between them acts near the crease (a midsurface crease
+    /// folded flat closes to a wedge, only its open end a thickness wide),
+    /// and a crease pressed past flat (by a moment, or by layers above it)
+    /// crossed its facets there. At [`STOP_POINTS`] points along every
+    /// crease, the angle between the facets' surfaces (as the crease
+    /// springs read it at the ends) that comes within `flat_width` (the
+    /// thickness over the mean facet side: the wedge's angle) of flat, on
+    /// either side, meets the barrier `k b(g)` in its gap to flat `g`
+    /// (rad), `k` the crease spring stiffness of the point's share of the
+    /// crease (a spring driven to exactly flat then rests about half-way
+    /// into the stop). The iteration matrix takes the Gauss-Newton part
+    /// `k b'' grad grad^T` (positive semi-definite) unless exact Hessians
+    /// are asked for. The stops keep every accepted angle within (0, 2 pi),
+    /// so the raw angle is the unwrapped one.
+    fn crease_stops(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<MatrixCoeffs>,
+        batch: &mut MatrixBatch,
+    ) -> Result<(), String> {
+        let w = self.flat_width;
+        for sp in &self.stops {
+            let [a, b, t] = sp
+                .maps
+                .each_ref()
+                .map(|m| super::surface::eval_map(m, st.q));
+            let (g, sign) = flat_gap(&a, &b, &t);
+            if g >= w {
+                continue;
+            }
+            if g <= 0.0 {
+                return Err(format!(
+                    "contact: the crease on edge {} is folded past flat",
+                    sp.edge
+                ));
+            }
+            let k = asm.physics.crease_k_per_length * sp.length;
+            let d = crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
+            out.term_energy += k * barrier(g, w);
+            out.barrier_pairs += 1;
+            let grad = d.grad9() * sign;
+            let f = grad * (k * db(g, w));
+            self.scatter_maps(&sp.maps, &f, &mut out.force);
+            if let Some(co) = matrix.filter(|co| co.k != 0.0) {
+                let mut h = grad * grad.transpose() * (k * ddb(g, w));
+                if let Some(hess) = d.hess9() {
+                    h += hess * (sign * k * db(g, w));
+                }
+                self.scatter_maps_matrix(&sp.maps, &(co.k * h), batch);
+            }
+        }
+        Ok(())
+    }
+
+    /// The largest fraction of the move `q -> q + dq` that keeps every
+    /// crease stop's point from passing flat: on the same side, its gap to
+    /// flat not below the collision checks' share of the gap it had
+    /// (halving the fraction until it holds).
+    fn crease_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        let mut fraction: f64 = 1.0;
+        for sp in &self.stops {
+            let vecs = |x: &[f64]| sp.maps.each_ref().map(|m| super::surface::eval_map(m, x));
+            let [a, b, t] = vecs(q);
+            let [da, db_, dt] = vecs(dq);
+            let raw0 = crate::crease::theta(&a, &b, &t);
+            let keep = (super::ccd::MIN_SEPARATION * flat_gap(&a, &b, &t).0).min(self.flat_width);
+            // Passing flat wraps the raw angle across 0 = 2 pi.
+            let clear = |alpha: f64| {
+                let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
+                (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
+                    && flat_gap(&a, &b, &t).0 >= keep
+            };
+            let mut halvings = 0;
+            while !clear(fraction) && halvings < 60 {
+                fraction *= 0.5;
+                halvings += 1;
+            }
+            if halvings == 60 {
+                return 0.0;
+            }
+        }
+        fraction
+    }
+
+    /// Whether a crease stop's point at `q` is within twice the stop's
+    /// width of flat.
+    fn near_flat(&self, q: &[f64]) -> bool {
+        self.stops.iter().any(|sp| {
+            let [a, b, t] = sp.maps.each_ref().map(|m| super::surface::eval_map(m, q));
+            flat_gap(&a, &b, &t).0 < 2.0 * self.flat_width
+        })
+    }
+
+    /// Add a 9-vector over the crease vectors `(a, b, t)` to the slots.
+    fn scatter_maps(
+        &self,
+        maps: &[super::surface::VertexMap; 3],
+        f: &SVector<f64, 9>,
+        force: &mut [f64],
+    ) {
+        for (j, m) in maps.iter().enumerate() {
+            for &(s, w) in m {
+                for x in 0..3 {
+                    force[3 * s + x] += w * f[3 * j + x];
+                }
+            }
+        }
+    }
+
+    /// Add a 9x9 matrix over the crease vectors `(a, b, t)` to `batch`.
+    fn scatter_maps_matrix(
+        &self,
+        maps: &[super::surface::VertexMap; 3],
+        h: &SMatrix<f64, 9, 9>,
+        batch: &mut MatrixBatch,
+    ) {
+        let mut slots: Vec<usize> = maps
+            .iter()
+            .flat_map(|m| m.iter().map(|&(s, _)| s))
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        let ns = slots.len();
+        let mut wt = vec![[0.0; 3]; ns];
+        for (j, m) in maps.iter().enumerate() {
+            for &(s, w) in m {
+                let a = slots.binary_search(&s).expect("slot listed");
+                wt[a][j] += w;
+            }
+        }
+        let dense = batch.group(slots);
+        let n3 = 3 * ns;
+        for bs in 0..ns {
+            for l in 0..3 {
+                if wt[bs][l] == 0.0 {
+                    continue;
+                }
+                for a in 0..ns {
+                    for k in 0..3 {
+                        let c = wt[a][k] * wt[bs][l];
+                        if c == 0.0 {
+                            continue;
+                        }
+                        for y in 0..3 {
+                            let col = &mut dense[(3 * bs + y) * n3 + 3 * a..][..3];
+                            for x in 0..3 {
+                                col[x] += c * h[(3 * k + x, 3 * l + y)];
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -985,6 +1327,7 @@ impl ForceTerm for ContactTerm {
         self.surf.positions(v, &mut vx);
         self.cache_at(&x);
         self.lag_at(&x, &vx);
+        self.creases_near_flat = self.near_flat(q);
         self.pattern_pairs(asm)
     }
 
@@ -995,10 +1338,11 @@ impl ForceTerm for ContactTerm {
         self.surf.positions(v, &mut vx);
         self.cache_at(&x);
         self.lag_at(&x, &vx);
+        self.creases_near_flat = self.near_flat(q);
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
-        self.safe_fraction(q, dq)
+        self.safe_fraction(q, dq).min(self.crease_fraction(q, dq))
     }
 
     /// The pairs' barrier stiffnesses: six numbers a pair (edge-edge or
@@ -1049,7 +1393,7 @@ impl ForceTerm for ContactTerm {
     }
 
     fn limits_steps(&self) -> bool {
-        self.touching || !self.cache.pairs.is_empty()
+        self.touching || self.creases_near_flat || !self.cache.pairs.is_empty()
     }
 
     fn reports_power(&self) -> bool {
@@ -1092,6 +1436,7 @@ impl ForceTerm for ContactTerm {
                 self.scatter_matrix(&ids, &(co.k * h), &mut batch);
             }
         }
+        self.crease_stops(asm, st, out, matrix.as_ref().map(|(_, co)| *co), &mut batch)?;
         // Dashpots on the gap rates along the lagged normals, with the
         // lagged coefficients and closest-point weights (the pair's own
         // distance gradient would turn tangential once a sample slides off
