@@ -294,19 +294,31 @@ impl Model {
 
     #[doc(hidden)]
     /// Run the intersection checker on the current state: facets sampled
-    /// with `m` subdivisions, distances searched up to `search` (m).
+    /// with `m` subdivisions, distances searched up to `search` (m), and
+    /// the creases whose fold angle is past +-180 degrees.
     pub fn check_intersections(
         &self,
         m: usize,
         search: f64,
     ) -> Option<crate::contact::check::IntersectionReport> {
         let sys = self.sys.as_ref()?;
-        Some(crate::contact::check::check(
+        let mut rep = crate::contact::check::check(
             &sys.asm,
             &self.scene.mesh,
             &self.state.dynamics.q,
             m,
             search,
-        ))
+        );
+        let tau = std::f64::consts::TAU;
+        rep.past_flat = sys
+            .asm
+            .creases
+            .iter()
+            .zip(&self.state.crease_theta)
+            .filter(|&(_, &theta)| !(0.0..=tau).contains(&theta))
+            .map(|(c, _)| c.edge)
+            .collect();
+        rep.past_flat.dedup();
+        Some(rep)
     }
 }
