@@ -798,6 +798,16 @@ impl Assembler {
             .find_map(|t| t.as_any().and_then(|a| a.downcast_ref::<T>()))
     }
 
+    /// The viscous force at `(q, v)` (all DOFs; [`ForceTerm::viscous_force`]
+    /// of every term): mass and stiffness damping, crease dashpots.
+    pub fn viscous_force(&self, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(self.n_dofs(), 0.0);
+        for t in &self.terms {
+            t.viscous_force(self, q, v, out);
+        }
+    }
+
     /// What each force term carries from step to step ([`ForceTerm::memory`]),
     /// in evaluation order.
     pub fn term_memory(&self) -> Vec<Vec<f64>> {

@@ -183,6 +183,7 @@ impl Model {
             dissipative_force: Default::default(),
             extra_pairs: Vec::new(),
             term_memory: Vec::new(),
+            viscous_force: Vec::new(),
         };
         // Build once now so that a bad scene fails at instantiation.
         let auto_damping = scene.auto_damping;

@@ -88,6 +88,10 @@ pub struct ModelState {
     /// barrier stiffness), in the assembler's term order; empty: as built.
     #[serde(default)]
     pub term_memory: Vec<Vec<f64>>,
+    /// The viscous force at the last accepted state (its work over the
+    /// next step starts from it; empty: zero).
+    #[serde(default)]
+    pub viscous_force: Vec<f64>,
 }
 
 /// Work done so far (J): dissipated by contact, and put in by the inputs.
@@ -97,13 +101,25 @@ pub struct Work {
     pub friction: f64,
     /// Work of the normal dashpots.
     pub contact_damping: f64,
+    /// Work of the viscous forces: mass and stiffness damping, crease
+    /// dashpots.
+    #[serde(default)]
+    pub viscous: f64,
     /// Work done on the sheet by the crease actuators (rest angles moved
     /// against the springs' moments, applied crease moments) and by external
     /// forces (gravity, force inputs); prescribed motions not counted.
-    /// Kinetic + strain + crease + contact energy + dissipated work - this
-    /// is constant.
+    /// Kinetic + strain + crease + contact energy + dissipated work
+    /// ([`Work::dissipated`]) - this is constant (up to the integrator's
+    /// error; generalized-alpha below rho_inf = 1 dissipates some more).
     #[serde(default)]
     pub input: f64,
+}
+
+impl Work {
+    /// All work dissipated: friction, contact dashpots and viscous forces.
+    pub fn dissipated(&self) -> f64 {
+        self.friction + self.contact_damping + self.viscous
+    }
 }
 
 impl Model {

@@ -11,6 +11,24 @@ use crate::solver::stepper::{Attempt, Dynamics, Failure, Mechanics, Outcome, Ste
 use crate::text::num;
 use serde::{Deserialize, Serialize};
 
+/// Work of the viscous forces over a step from `q0` to `end` by the
+/// trapezoidal rule (the integrator's own energy identity), `force` the
+/// force at the step start (empty: zero), set to the one at its end.
+fn viscous_work(
+    asm: &crate::assembly::Assembler,
+    force: &mut Vec<f64>,
+    q0: &[f64],
+    end: &Dynamics,
+) -> f64 {
+    let mut f1 = Vec::new();
+    asm.viscous_force(&end.q, &end.v, &mut f1);
+    let w = (0..q0.len())
+        .map(|i| 0.5 * (force.get(i).copied().unwrap_or(0.0) + f1[i]) * (end.q[i] - q0[i]))
+        .sum();
+    *force = f1;
+    w
+}
+
 /// What one [`Model::advance`] did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StepReport {
@@ -474,6 +492,12 @@ impl Advance {
             state.work.contact_damping += wd;
             state.dissipative_force.clone_from(&ev.dissipative_force);
         }
+        state.work.viscous += viscous_work(
+            &sys.asm,
+            &mut state.viscous_force,
+            &state.dynamics.q,
+            &self.next,
+        );
         std::mem::swap(&mut state.dynamics, &mut self.next);
         state.crease_theta.clone_from_slice(angles);
         state.memory.newton = out.memory;
