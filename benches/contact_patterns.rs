@@ -85,7 +85,6 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool) -> Row {
         });
     }
     let map = flat.then(|| flat_folded_positions(&scene.mesh));
-    let xi = scene.material.thickness;
     let mut model = Model::new(scene).unwrap();
     model.initialize().unwrap();
     let fold = model.input_id("fold").unwrap();
@@ -128,7 +127,7 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool) -> Row {
         if let Some(c) = model.contact() {
             row.min_gap = Some(row.min_gap.map_or(c.min_gap, |g| g.min(c.min_gap)));
         }
-        if check && !model.check_intersections(16, 20.0 * xi).unwrap().is_clear() {
+        if check && !model.check_intersections(16, 0.0).unwrap().is_clear() {
             row.crossings += 1;
         }
     }

@@ -60,17 +60,39 @@ pub fn sample_facets(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize) -> Sampl
     Sampled { points, tris }
 }
 
-/// Check the sheet at slot vector `q` (facets sampled with `m` subdivisions).
+/// Check the sheet at slot vector `q` (facets sampled with `m`
+/// subdivisions); distances between facets that share no vertex are looked
+/// for up to `search` (none with 0: only crossings, which is much cheaper).
 pub fn check(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize, search: f64) -> IntersectionReport {
     let s = sample_facets(asm, mesh, q, m);
     let p = &s.points;
     let corners = |t: &[usize; 3]| [p[t[0]], p[t[1]], p[t[2]]];
-    let boxes: Vec<Aabb> = s
+    // Each facet's sub-triangles' boxes, tight (crossings) and padded
+    // (distances), and the facet's box around them.
+    let tight: Vec<Vec<Aabb>> = s
         .tris
         .iter()
-        .map(|ts| {
-            let pts: Vec<Vector3<f64>> = ts.iter().flat_map(&corners).collect();
-            Aabb::around(&pts, 0.5 * search)
+        .map(|ts| ts.iter().map(|t| Aabb::around(&corners(t), 0.0)).collect())
+        .collect();
+    let padded: Vec<Vec<Aabb>> = if search > 0.0 {
+        s.tris
+            .iter()
+            .map(|ts| {
+                ts.iter()
+                    .map(|t| Aabb::around(&corners(t), 0.5 * search))
+                    .collect()
+            })
+            .collect()
+    } else {
+        tight.clone()
+    };
+    let boxes: Vec<Aabb> = padded
+        .iter()
+        .map(|bs| {
+            bs.iter().skip(1).fold(bs[0], |a, b| Aabb {
+                lo: a.lo.inf(&b.lo),
+                hi: a.hi.sup(&b.hi),
+            })
         })
         .collect();
     let mut rep = IntersectionReport {
@@ -80,20 +102,19 @@ pub fn check(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize, search: f64) -> 
     for (f, g) in overlapping(&boxes, &boxes, true) {
         let (tf, tg) = (mesh.triangles()[f], mesh.triangles()[g]);
         let neighbours = tf.iter().any(|v| tg.contains(v));
-        // Sub-triangles near each other (within `search` where distances
-        // are wanted, touching boxes otherwise).
-        let pad = if neighbours { 0.0 } else { 0.5 * search };
-        let sub = |ts: &[[usize; 3]]| -> Vec<Aabb> {
-            ts.iter().map(|t| Aabb::around(&corners(t), pad)).collect()
+        let distances = !neighbours && search > 0.0;
+        let (bf, bg) = if distances {
+            (&padded[f], &padded[g])
+        } else {
+            (&tight[f], &tight[g])
         };
-        let (bf, bg) = (sub(&s.tris[f]), sub(&s.tris[g]));
         let mut hit = false;
-        for (i, j) in overlapping(&bf, &bg, false) {
+        for (i, j) in overlapping(bf, bg, false) {
             let (a, b) = (&s.tris[f][i], &s.tris[g][j]);
             if !hit && cross(p, a, b) {
                 hit = true;
             }
-            if !neighbours {
+            if distances {
                 rep.min_distance = rep
                     .min_distance
                     .min(triangle_distance(&corners(a), &corners(b)));
