@@ -814,9 +814,10 @@ impl Assembler {
         self.terms.iter().map(|t| t.memory()).collect()
     }
 
-    /// Hand each force term back its memory (`memory` as from
-    /// [`Assembler::term_memory`]; empty: every term as built).
-    pub fn restore_term_memory(&mut self, memory: &[Vec<f64>]) -> Result<(), String> {
+    /// Whether `memory` (untrusted) fits the force terms: one list per
+    /// term, each one the term could have given ([`ForceTerm::check_memory`]);
+    /// empty: every term as built.
+    pub fn check_term_memory(&self, memory: &[Vec<f64>]) -> Result<(), String> {
         if !memory.is_empty() && memory.len() != self.terms.len() {
             return Err(format!(
                 "{} force terms' memory for {} terms",
@@ -824,6 +825,18 @@ impl Assembler {
                 self.terms.len()
             ));
         }
+        for (k, (t, m)) in self.terms.iter().zip(memory).enumerate() {
+            t.check_memory(m)
+                .map_err(|e| format!("term {k} ({}): {e}", t.name()))?;
+        }
+        Ok(())
+    }
+
+    /// Hand each force term back its memory (`memory` as from
+    /// [`Assembler::term_memory`]; empty: every term as built); checked
+    /// first, so that a refused memory changes nothing.
+    pub fn restore_term_memory(&mut self, memory: &[Vec<f64>]) -> Result<(), String> {
+        self.check_term_memory(memory)?;
         for (k, t) in self.terms.iter_mut().enumerate() {
             t.restore_memory(memory.get(k).map_or(&[][..], |m| &m[..]))?;
         }

@@ -57,9 +57,24 @@ pub trait ForceTerm: Send + Sync {
         Vec::new()
     }
 
-    /// Take back what [`ForceTerm::memory`] gave (empty: as built).
-    fn restore_memory(&mut self, _memory: &[f64]) -> Result<(), String> {
-        Ok(())
+    /// Whether `memory` (untrusted: a restored state's) is what
+    /// [`ForceTerm::memory`] could have given; a term that carries nothing
+    /// takes only the empty list.
+    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+        if memory.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "{} values for a term that carries nothing from step to step",
+                memory.len()
+            ))
+        }
+    }
+
+    /// Take back what [`ForceTerm::memory`] gave (empty: as built), checked
+    /// by [`ForceTerm::check_memory`].
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+        self.check_memory(memory)
     }
 
     /// Largest fraction in (0, 1] of the move `q -> q + dq` (all DOFs) the

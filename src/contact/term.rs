@@ -806,6 +806,44 @@ impl ContactTerm {
         self.s_hat * p.xi / self.xi
     }
 
+    /// The pair stiffnesses of [`ForceTerm::memory`]'s list (untrusted: a
+    /// restored state's): sixes of edge flag (0 or 1), four contact-vertex
+    /// ids and a positive stiffness up to MAX_MAGNITUDE.
+    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<PairKey, f64>, String> {
+        if !memory.len().is_multiple_of(6) {
+            return Err(format!(
+                "{} values; the pair stiffnesses come in sixes (kind, four vertices, \
+                 stiffness)",
+                memory.len()
+            ));
+        }
+        let n = self.surf.n_vertices();
+        let max = crate::scene::limits::MAX_MAGNITUDE;
+        let mut map = HashMap::with_capacity(memory.len() / 6);
+        for (k, m) in memory.chunks_exact(6).enumerate() {
+            let id = |x: f64| {
+                (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
+                    .then_some(x as usize)
+                    .ok_or_else(|| format!("pair {k}: {x} is not a contact vertex (0..{n})"))
+            };
+            if m[0] != 0.0 && m[0] != 1.0 {
+                return Err(format!(
+                    "pair {k}: kind {} is neither 0 (point-triangle) nor 1 (edge-edge)",
+                    m[0]
+                ));
+            }
+            let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
+            if !(m[5] > 0.0 && m[5] <= max) {
+                return Err(format!(
+                    "pair {k}: stiffness {} is not a positive number up to {max:e}",
+                    m[5]
+                ));
+            }
+            map.insert((m[0] == 1.0, ids), m[5]);
+        }
+        Ok(map)
+    }
+
     /// A pair's barrier stiffness: the one set at the last step start, or
     /// (a pair found since) the one it would have been given there (a
     /// pair the next step start finds inside the barrier and not in the
@@ -1359,25 +1397,12 @@ impl ForceTerm for ContactTerm {
         out
     }
 
+    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+        self.parse_memory(memory).map(|_| ())
+    }
+
     fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
-        if memory.len() % 6 != 0 {
-            return Err("contact: pair stiffnesses come in sixes".into());
-        }
-        let n = self.surf.n_vertices();
-        let mut map = HashMap::with_capacity(memory.len() / 6);
-        for m in memory.chunks_exact(6) {
-            let id = |x: f64| {
-                (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
-                    .then_some(x as usize)
-                    .ok_or_else(|| format!("contact: no contact vertex {x}"))
-            };
-            let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
-            if !(m[5].is_finite() && m[5] > 0.0) || (m[0] != 0.0 && m[0] != 1.0) {
-                return Err("contact: a pair stiffness is not a positive number".into());
-            }
-            map.insert((m[0] == 1.0, ids), m[5]);
-        }
-        self.pair_kappa = map;
+        self.pair_kappa = self.parse_memory(memory)?;
         Ok(())
     }
 

@@ -243,9 +243,13 @@ impl Model {
         number("work.friction", w.friction)?;
         number("work.contact_damping", w.contact_damping)?;
         number("work.input", w.input)?;
+        number("work.viscous", w.viscous)?;
         let f = &s.dissipative_force;
         values("dissipative_force.friction", &f.friction, &[0, n])?;
         values("dissipative_force.damping", &f.damping, &[0, n])?;
+        values("viscous_force", &s.viscous_force, &[0, n])?;
+        asm.check_term_memory(&s.term_memory)
+            .map_err(|e| format!("term_memory: {e}"))?;
         let slots = asm.layout.n_slots();
         for (k, &(a, b)) in s.extra_pairs.iter().enumerate() {
             let sorted = k == 0 || s.extra_pairs[k - 1] < (a, b);
