@@ -773,6 +773,18 @@ impl Assembler {
             .fold(1.0, f64::min)
     }
 
+    /// The largest fraction in (0, 1] of a Newton correction `q -> q + dq`
+    /// (velocities moving by `dv_dq dq` from `v`) every force term admits
+    /// by [`ForceTerm::max_correction_fraction`]: where a term's stiffness
+    /// changes along the correction (the iteration matrix is then formed
+    /// anew where it stops).
+    pub fn max_correction_fraction(&self, q: &[f64], v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
+        self.terms
+            .iter()
+            .map(|t| t.max_correction_fraction(self, q, v, dq, dv_dq))
+            .fold(1.0, f64::min)
+    }
+
     /// Whether a force term limits this step (contact in touch): the
     /// stepper then backtracks corrections that raise the residual.
     pub fn limits_steps(&self) -> bool {
@@ -784,6 +796,51 @@ impl Assembler {
         self.terms
             .iter()
             .find_map(|t| t.as_any().and_then(|a| a.downcast_ref::<T>()))
+    }
+
+    /// The viscous force at `(q, v)` (all DOFs; [`ForceTerm::viscous_force`]
+    /// of every term): mass and stiffness damping, crease dashpots.
+    pub fn viscous_force(&self, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(self.n_dofs(), 0.0);
+        for t in &self.terms {
+            t.viscous_force(self, q, v, out);
+        }
+    }
+
+    /// What each force term carries from step to step ([`ForceTerm::memory`]),
+    /// in evaluation order.
+    pub fn term_memory(&self) -> Vec<Vec<f64>> {
+        self.terms.iter().map(|t| t.memory()).collect()
+    }
+
+    /// Whether `memory` (untrusted) fits the force terms: one list per
+    /// term, each one the term could have given ([`ForceTerm::check_memory`]);
+    /// empty: every term as built.
+    pub fn check_term_memory(&self, memory: &[Vec<f64>]) -> Result<(), String> {
+        if !memory.is_empty() && memory.len() != self.terms.len() {
+            return Err(format!(
+                "{} force terms' memory for {} terms",
+                memory.len(),
+                self.terms.len()
+            ));
+        }
+        for (k, (t, m)) in self.terms.iter().zip(memory).enumerate() {
+            t.check_memory(m)
+                .map_err(|e| format!("term {k} ({}): {e}", t.name()))?;
+        }
+        Ok(())
+    }
+
+    /// Hand each force term back its memory (`memory` as from
+    /// [`Assembler::term_memory`]; empty: every term as built); checked
+    /// first, so that a refused memory changes nothing.
+    pub fn restore_term_memory(&mut self, memory: &[Vec<f64>]) -> Result<(), String> {
+        self.check_term_memory(memory)?;
+        for (k, t) in self.terms.iter_mut().enumerate() {
+            t.restore_memory(memory.get(k).map_or(&[][..], |m| &m[..]))?;
+        }
+        Ok(())
     }
 
     /// Append a force term built after the assembler (it may need the

@@ -744,6 +744,109 @@ pub fn aligned_max_distance(p: &[nalgebra::Vector3<f64>], q: &[nalgebra::Vector3
         .fold(0.0, f64::max)
 }
 
+/// The standard flat-folding map of a crease pattern whose creases fold
+/// to +-180 degrees or stay flat: facet 0 in place, every other facet
+/// reflected across the fully folded creases on a path to it (breadth
+/// first over the facets; a crease with another target, or a smooth
+/// edge, carries the facet over unchanged). Each vertex takes the position
+/// the first facet that reaches it gives (all agree where the pattern is
+/// flat-foldable).
+pub fn flat_folded_positions(mesh: &crate::mesh::Mesh) -> Vec<nalgebra::Vector2<f64>> {
+    use crate::mesh::EdgeKind;
+    use nalgebra::{Matrix2, Vector2};
+    let nf = mesh.triangles().len();
+    // Each facet's map x -> a x + b.
+    let mut maps: Vec<Option<(Matrix2<f64>, Vector2<f64>)>> = vec![None; nf];
+    let mut out: Vec<Option<Vector2<f64>>> = vec![None; mesh.n_vertices()];
+    let mut queue = std::collections::VecDeque::new();
+    for root in 0..nf {
+        if maps[root].is_some() {
+            continue;
+        }
+        maps[root] = Some((Matrix2::identity(), Vector2::zeros()));
+        queue.push_back(root);
+        while let Some(f) = queue.pop_front() {
+            let (a, b) = maps[f].expect("mapped");
+            for v in mesh.triangles()[f] {
+                out[v.index()].get_or_insert(a * mesh.coord(v) + b);
+            }
+            for &e in &mesh.face_edges()[f] {
+                let edge = mesh.edge(e);
+                let flat = edge.kind == EdgeKind::Crease
+                    && (edge.fold_target.abs() - std::f64::consts::PI).abs() < 1e-9;
+                for &g in mesh.faces_of(e) {
+                    let g = g.index();
+                    if maps[g].is_some() {
+                        continue;
+                    }
+                    let m = if flat {
+                        // Reflection across the line through the edge.
+                        let (p, q) = (mesh.coord(edge.v[0]), mesh.coord(edge.v[1]));
+                        let d = (q - p).normalize();
+                        let r = Matrix2::new(
+                            2.0 * d.x * d.x - 1.0,
+                            2.0 * d.x * d.y,
+                            2.0 * d.x * d.y,
+                            2.0 * d.y * d.y - 1.0,
+                        );
+                        (a * r, a * (p - r * p) + b)
+                    } else {
+                        (a, b)
+                    };
+                    maps[g] = Some(m);
+                    queue.push_back(g);
+                }
+            }
+        }
+    }
+    out.into_iter().map(|p| p.unwrap_or_default()).collect()
+}
+
+/// How far a folded state `x` (every mesh vertex) is from the flat-folding
+/// map `map` ([`flat_folded_positions`]), as a share of the folded size
+/// (the longest side of the map's bounding box): seen in the best-fit
+/// plane of `x` (out of it the layers keep their thickness apart), the
+/// largest in-plane distance after the best-fit rigid motion in the plane
+/// (reflections included: the plane has no preferred side).
+pub fn flat_fold_error(map: &[nalgebra::Vector2<f64>], x: &[nalgebra::Vector3<f64>]) -> f64 {
+    use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+    let n = x.len() as f64;
+    let c = x.iter().sum::<Vector3<f64>>() / n;
+    let mut cov = Matrix3::zeros();
+    for p in x {
+        cov += (p - c) * (p - c).transpose();
+    }
+    let eig = cov.symmetric_eigen();
+    let mut order = [0, 1, 2];
+    order.sort_by(|&i, &j| eig.eigenvalues[j].total_cmp(&eig.eigenvalues[i]));
+    let (e1, e2) = (
+        eig.eigenvectors.column(order[0]).into_owned(),
+        eig.eigenvectors.column(order[1]).into_owned(),
+    );
+    let inplane: Vec<Vector2<f64>> = x
+        .iter()
+        .map(|p| Vector2::new((p - c).dot(&e1), (p - c).dot(&e2)))
+        .collect();
+    let mc = map.iter().sum::<Vector2<f64>>() / n;
+    let mut h = Matrix2::zeros();
+    for (a, b) in map.iter().zip(&inplane) {
+        h += (a - mc) * b.transpose();
+    }
+    let svd = h.svd(true, true);
+    let r = svd.v_t.expect("v_t").transpose() * svd.u.expect("u").transpose();
+    let worst = map
+        .iter()
+        .zip(&inplane)
+        .map(|(a, b)| (r * (a - mc) - b).norm())
+        .fold(0.0, f64::max);
+    let (mut lo, mut hi) = (map[0], map[0]);
+    for p in map {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    worst / (hi - lo).max()
+}
+
 #[cfg(test)]
 mod tests {
     use nalgebra::{Rotation3, Vector3};
@@ -766,5 +869,34 @@ mod tests {
         let d = super::aligned_max_distance(&p, &q);
         // At most 1e-3 (the fit minimises the sum of squares, 1e-6 unaligned).
         assert!((0.7e-3..=1e-3).contains(&d), "{d}");
+    }
+
+    /// The diagonal folded onto itself: its far corner lands on the
+    /// other; a state in another plane, turned and shifted, with its layers
+    /// apart out of the plane, has no in-plane error.
+    #[test]
+    fn the_flat_folding_map_reflects_across_folded_creases() {
+        let mesh = crate::mesh::builders::square_with_diagonal(1.0, true, std::f64::consts::PI);
+        let map = super::flat_folded_positions(&mesh);
+        // Two of the four corners coincide, the other two are fixed.
+        let mut close = 0;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                if (map[i] - map[j]).norm() < 1e-12 {
+                    close += 1;
+                }
+            }
+        }
+        assert_eq!(close, 1, "{map:?}");
+        let r = Rotation3::from_euler_angles(0.4, 0.2, -1.0);
+        let x: Vec<Vector3<f64>> = map
+            .iter()
+            .enumerate()
+            .map(|(i, p)| r * Vector3::new(p.x, p.y, 1e-3 * i as f64) + Vector3::new(1.0, 2.0, 3.0))
+            .collect();
+        assert!(super::flat_fold_error(&map, &x) < 1e-3);
+        let mut bad = x.clone();
+        bad[0] += r * Vector3::new(0.1, 0.0, 0.0);
+        assert!(super::flat_fold_error(&map, &bad) > 0.03);
     }
 }

@@ -190,6 +190,73 @@ fn every_scene_command_takes_frame_size_unit_and_f_edges() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--contact` turns self-contact on in check, build and simulate, and
+/// `--friction` sets its coefficient; check lists contact and its outputs.
+#[test]
+fn every_scene_command_takes_contact_and_friction() {
+    let dir = scratch("contact");
+    let file = root().join("scenes/single_crease.fold");
+    let check = |extra: &[&str]| {
+        let r = bin().arg("check").args(extra).arg(&file).output().unwrap();
+        (
+            r.status.success(),
+            String::from_utf8_lossy(&r.stdout).into_owned(),
+            String::from_utf8_lossy(&r.stderr).into_owned(),
+        )
+    };
+    let (ok, text, _) = check(&[]);
+    assert!(
+        ok && text.contains("contact:   off (--contact turns it on)"),
+        "{text}"
+    );
+    let (ok, text, err) = check(&["--contact", "--friction", "0.45"]);
+    assert!(ok, "{err}");
+    assert!(
+        text.contains("contact:   on") && text.contains("friction 0.45"),
+        "{text}"
+    );
+    assert!(
+        text.contains("contact: contact.min_gap, contact.pairs, contact.normal_force"),
+        "{text}"
+    );
+    // Friction without contact, or a bad coefficient: refused with the reason.
+    let (ok, _, err) = check(&["--friction", "0.45"]);
+    assert!(!ok && err.contains("add --contact"), "{err}");
+    let (ok, _, err) = check(&["--contact", "--friction=-1"]);
+    assert!(!ok && err.contains("--friction -1"), "{err}");
+    // build: the scene in the FMU has contact with that friction.
+    let fmu = dir.join("c.fmu");
+    let r = bin()
+        .args(["build", "--contact", "--friction", "0.45"])
+        .arg(&file)
+        .arg("-o")
+        .arg(&fmu)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+    let mut json = String::new();
+    zip.by_name("resources/scene.json")
+        .unwrap()
+        .read_to_string(&mut json)
+        .unwrap();
+    let scene: origami_fmu::scene::Scene = serde_json::from_str(&json).unwrap();
+    assert_eq!(scene.contact.map(|c| c.friction), Some(0.45));
+    // simulate: the CSV has the contact outputs.
+    let csv = dir.join("c.csv");
+    let r = bin()
+        .args(["simulate", "--contact", "--stop-time", "0.02"])
+        .arg(&file)
+        .arg("-o")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let head = std::fs::read_to_string(&csv).unwrap();
+    assert!(head.lines().next().unwrap().contains("contact.min_gap"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn help_says_what_is_true() {
     let r = bin().args(["build", "--help"]).output().unwrap();

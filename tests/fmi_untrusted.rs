@@ -256,6 +256,26 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
             "extra_pairs",
         ),
         (
+            "a contact pair stiffness of -1",
+            Box::new(|v| forge_term_memory(v, true, json!([0.0, 0.0, 1.0, 2.0, 3.0, -1.0]))),
+            "term_memory",
+        ),
+        (
+            "a contact pair on vertex 1e9",
+            Box::new(|v| forge_term_memory(v, true, json!([1.0, 0.0, 1.0, 2.0, 1e9, 1.0]))),
+            "term_memory",
+        ),
+        (
+            "a contact pair list of five values",
+            Box::new(|v| forge_term_memory(v, true, json!([0.0, 0.0, 1.0, 2.0, 3.0]))),
+            "term_memory",
+        ),
+        (
+            "memory for a term that carries none",
+            Box::new(|v| forge_term_memory(v, false, json!([1.0]))),
+            "term_memory",
+        ),
+        (
             "Jacobian arrays of the wrong length",
             Box::new(|v| {
                 let j = v.pointer_mut("/model/memory/jacobian").unwrap();
@@ -406,6 +426,19 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
     f.free_state(s);
 }
 
+/// Replace the saved memory of the contact term (`contact`, the last
+/// term) or of the first term by `x`.
+fn forge_term_memory(v: &mut Value, contact: bool, x: Value) {
+    let t = v
+        .pointer_mut("/model/term_memory")
+        .unwrap()
+        .as_array_mut()
+        .unwrap();
+    assert!(t.len() > 1, "one memory per force term");
+    let k = if contact { t.len() - 1 } else { 0 };
+    t[k] = x;
+}
+
 /// The Rust API validates what it restores too: a state with forged
 /// values is refused and the model is left as it was.
 #[test]
@@ -434,6 +467,18 @@ fn model_restore_refuses_forged_states_and_changes_nothing() {
     let mut s = good.clone();
     s.time = f64::NAN;
     cases.push(("time", s));
+    let mut s = good.clone();
+    s.term_memory
+        .last_mut()
+        .unwrap()
+        .extend([0.0, 0.0, 1.0, 2.0, 3.0, f64::NAN]);
+    cases.push(("term_memory", s));
+    let mut s = good.clone();
+    s.term_memory.pop();
+    cases.push(("term_memory", s));
+    let mut s = good.clone();
+    s.viscous_force = vec![0.0; n + 1];
+    cases.push(("viscous_force", s));
     let before = m.output_values();
     for (expect, s) in cases {
         let e = m.restore_state(&s).unwrap_err().to_string();

@@ -154,7 +154,7 @@ fn documented_example_loads() {
     let inputs: Vec<&str> = m.inputs().iter().map(|v| v.name.as_str()).collect();
     assert_eq!(inputs, ["fold", "tip.x", "tip.y", "tip.z"]);
     let outputs: Vec<&str> = m.outputs().iter().map(|v| v.name.as_str()).collect();
-    assert_eq!(outputs.len(), 6 * 3 + 1 + 3);
+    assert_eq!(outputs.len(), 6 * 3 + 1 + 5);
     assert!(outputs.contains(&"crease[6].angle"));
 }
 

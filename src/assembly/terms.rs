@@ -43,10 +43,62 @@ pub trait ForceTerm: Send + Sync {
     /// the step start `(q, v)`; [`ForceTerm::before_step`] does this too.
     fn lag(&mut self, _asm: &Assembler, _q: &[f64], _v: &[f64]) {}
 
+    /// Add the term's viscous force at `(q, v)` to `out` (all DOFs): the
+    /// part of its force that dissipates (mass and stiffness damping,
+    /// crease dashpots), whose work the model integrates over each step as
+    /// `energy.dissipated` (contact's friction and dashpots it reports in
+    /// [`Evaluation::dissipative_force`]).
+    fn viscous_force(&self, _asm: &Assembler, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}
+
+    /// What the term carries from step to step beyond the state `(q, v)`
+    /// (contact: each pair's barrier stiffness), for saved model states; a
+    /// restore hands it back through [`ForceTerm::restore_memory`].
+    fn memory(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// Whether `memory` (untrusted: a restored state's) is what
+    /// [`ForceTerm::memory`] could have given; a term that carries nothing
+    /// takes only the empty list.
+    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+        if memory.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "{} values for a term that carries nothing from step to step",
+                memory.len()
+            ))
+        }
+    }
+
+    /// Take back what [`ForceTerm::memory`] gave (empty: as built), checked
+    /// by [`ForceTerm::check_memory`].
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+        self.check_memory(memory)
+    }
+
     /// Largest fraction in (0, 1] of the move `q -> q + dq` (all DOFs) the
     /// term admits (contact: free of collisions); the stepper limits its
     /// Newton steps and predictors to it.
     fn max_step_fraction(&self, _asm: &Assembler, _q: &[f64], _dq: &[f64]) -> f64 {
+        1.0
+    }
+
+    /// Largest fraction in (0, 1] of a Newton correction `q -> q + dq`,
+    /// with the velocities moving by `dv_dq dq` alongside from `v`, up to
+    /// which the term's stiffness stays as the iteration matrix has it
+    /// (contact: where a sliding pair's correction would carry it through
+    /// sticking to sliding the other way, the fraction at which it comes to
+    /// rest); the stepper stops the correction there and forms the matrix
+    /// anew.
+    fn max_correction_fraction(
+        &self,
+        _asm: &Assembler,
+        _q: &[f64],
+        _v: &[f64],
+        _dq: &[f64],
+        _dv_dq: f64,
+    ) -> f64 {
         1.0
     }
 
@@ -137,6 +189,27 @@ impl ForceTerm for Shell {
         self.take_lag(asm, q);
     }
 
+    /// Stiffness damping `beta K v` (none unless beta is set).
+    fn viscous_force(&self, asm: &Assembler, q: &[f64], v: &[f64], out: &mut [f64]) {
+        let p = asm.physics;
+        if p.beta == 0.0 {
+            return;
+        }
+        let mut fe = SVector::<f64, 27>::zeros();
+        let mut ke = SMatrix::<f64, 27, 27>::zeros();
+        for (f, el) in asm.elements.iter().enumerate() {
+            let e = local_vector(&asm.layout.local[f], q);
+            el.eval_lagged(&p.material, &e, &mut fe, Some(&mut ke), None);
+            let ve = local_vector(&asm.layout.local[f], v);
+            let mut vv = SVector::<f64, 27>::zeros();
+            for (k, vk) in ve.iter().enumerate() {
+                vv.fixed_rows_mut::<3>(3 * k).copy_from(vk);
+            }
+            let fd = p.beta * (ke * vv);
+            scatter_force(&asm.face_maps[f], fd.as_slice(), out);
+        }
+    }
+
     fn add(
         &self,
         asm: &Assembler,
@@ -188,6 +261,10 @@ struct CreaseSprings;
 impl ForceTerm for CreaseSprings {
     fn name(&self) -> &str {
         "crease springs"
+    }
+
+    fn viscous_force(&self, asm: &Assembler, q: &[f64], v: &[f64], out: &mut [f64]) {
+        Self::dashpots(asm, q, v, out);
     }
 
     fn add(
@@ -260,10 +337,68 @@ impl ForceTerm for CreaseSprings {
     }
 }
 
+impl CreaseSprings {
+    /// The dashpots' force `c theta_dot grad theta` of every crease end,
+    /// added to `out`.
+    fn dashpots(asm: &Assembler, q: &[f64], v: &[f64], out: &mut [f64]) {
+        let cl = asm.physics.crease_c_per_length;
+        if !asm.has_damping() || cl == 0.0 {
+            return;
+        }
+        for (i, ce) in asm.creases.iter().enumerate() {
+            let [a, b, t] = ce.vectors(q);
+            let d = crease::theta_derivatives(&a, &b, &t, false);
+            let vl = [
+                ce.combos[0].eval(v),
+                ce.combos[1].eval(v),
+                ce.combos[2].eval(v),
+            ];
+            let rate: f64 = (0..3).map(|j| d.grad[j].dot(&vl[j])).sum();
+            let f9 = d.grad9() * (cl * ce.length * rate);
+            scatter_force(&asm.crease_maps[i], f9.as_slice(), out);
+        }
+    }
+}
+
 /// Mass damping `alpha M (v - P v)`, `P v` the M-orthogonal rigid part of
 /// `v` that the supports allow (rigid motion is not damped); on a sheet
 /// held by frames, `alpha M (v - v_F)`, `v_F` the frames' rigid motion.
 struct MassDamping;
+
+impl MassDamping {
+    /// `alpha M (v - P v)` at `(q, v)` (held by frames: `alpha M (v - v_F)`),
+    /// added to `out`.
+    fn force(asm: &Assembler, q: &[f64], v: &[f64], out: &mut [f64]) {
+        let alpha = asm.physics.alpha;
+        let n = asm.n_dofs();
+        let mut mv = vec![0.0; n];
+        let mut pv = vec![0.0; n];
+        if !asm.rigid.held().is_empty() {
+            // Held by frames: the velocity relative to their rigid motion.
+            // (Its dependence on q, alpha M [w x] on the positions, is left
+            // out of the matrix: alpha |w| against its c alpha M.)
+            let mut rel = v.to_vec();
+            if let Some([t, w, c]) = asm.rigid.frame_velocity(q, v) {
+                let mut vr = vec![0.0; n];
+                asm.rigid.rigid_velocity(q, t, w, c, &mut vr);
+                rel.iter_mut().zip(&vr).for_each(|(x, r)| *x -= r);
+            }
+            asm.mass_mul(&rel, &mut mv);
+        } else if asm.rigid.n_allowed() > 0 {
+            let mut mq = vec![0.0; n];
+            asm.mass_mul_n([v, q], [&mut mv, &mut mq]);
+            if asm.rigid.rigid_momentum(q, &mv, &mq, &mut pv).is_none() {
+                pv.fill(0.0);
+            }
+        } else {
+            // A clamped sheet has no rigid motion: nothing to project.
+            asm.mass_mul(v, &mut mv);
+        }
+        for ((f, x), r) in out.iter_mut().zip(mv).zip(pv) {
+            *f += alpha * (x - r);
+        }
+    }
+}
 
 impl ForceTerm for MassDamping {
     fn name(&self) -> &str {
@@ -289,34 +424,14 @@ impl ForceTerm for MassDamping {
                 *v += w * m;
             }
         }
-        let n = asm.n_dofs();
-        let mut mv = vec![0.0; n];
-        let mut pv = vec![0.0; n];
-        if !asm.rigid.held().is_empty() {
-            // Held by frames: the velocity relative to their rigid motion.
-            // (Its dependence on q, alpha M [w x] on the positions, is left
-            // out of the matrix: alpha |w| against its c alpha M.)
-            let mut rel = st.v.to_vec();
-            if let Some([t, w, c]) = asm.rigid.frame_velocity(st.q, st.v) {
-                let mut vr = vec![0.0; n];
-                asm.rigid.rigid_velocity(st.q, t, w, c, &mut vr);
-                rel.iter_mut().zip(&vr).for_each(|(x, r)| *x -= r);
-            }
-            asm.mass_mul(&rel, &mut mv);
-        } else if asm.rigid.n_allowed() > 0 {
-            let mut mq = vec![0.0; n];
-            asm.mass_mul_n([st.v, st.q], [&mut mv, &mut mq]);
-            if asm.rigid.rigid_momentum(st.q, &mv, &mq, &mut pv).is_none() {
-                pv.fill(0.0);
-            }
-        } else {
-            // A clamped sheet has no rigid motion: nothing to project.
-            asm.mass_mul(st.v, &mut mv);
-        }
-        for ((f, x), r) in out.force.iter_mut().zip(mv).zip(pv) {
-            *f += alpha * (x - r);
-        }
+        Self::force(asm, st.q, st.v, &mut out.force);
         Ok(())
+    }
+
+    fn viscous_force(&self, asm: &Assembler, q: &[f64], v: &[f64], out: &mut [f64]) {
+        if asm.physics.alpha != 0.0 {
+            Self::force(asm, q, v, out);
+        }
     }
 
     /// `-c alpha M P = -U (G / (c alpha))^-1 U^T` (the dependence of the

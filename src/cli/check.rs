@@ -23,10 +23,13 @@ pub fn run(args: CheckArgs) -> Result<(), String> {
         super::load_scene(&args.scene, &args.read)?
     } else {
         // The warnings go into the summary, not to stderr.
-        scene::load_report(&args.scene, &args.read.load_options()).map_err(|e| match e {
-            scene::SceneError::Io { .. } => e.to_string(),
-            _ => format!("{path}: {e}"),
-        })?
+        let mut loaded =
+            scene::load_report(&args.scene, &args.read.load_options()).map_err(|e| match e {
+                scene::SceneError::Io { .. } => e.to_string(),
+                _ => format!("{path}: {e}"),
+            })?;
+        args.read.apply(&mut loaded.scene)?;
+        loaded
     };
     super::out(&report(&path, &loaded)?);
     Ok(())
@@ -175,17 +178,39 @@ fn summary_with(
         num(s.tolerance),
         num(s.stop_time)
     );
+    let _ = match &scene.contact {
+        Some(c) => writeln!(
+            o,
+            "  contact:   on, thickness {} m, barrier width {} of it, friction {}, {} subdivisions \
+             per facet side",
+            num(c.thickness),
+            num(c.width),
+            num(c.friction),
+            c.subdivisions
+        ),
+        None => writeln!(o, "  contact:   off (--contact turns it on)"),
+    };
     let inputs: Vec<String> = model.inputs().iter().map(|v| v.name.clone()).collect();
     let _ = writeln!(o, "  inputs ({}): {}", inputs.len(), list(&inputs));
     let outs = model.outputs();
     let group = |p: &str| outs.iter().filter(|v| v.name.starts_with(p)).count();
     let _ = writeln!(
         o,
-        "  outputs ({}): {} positions, {} fold angles, {} energies",
+        "  outputs ({}): {} positions, {} fold angles, {} energies{}",
         outs.len(),
         group("vertex["),
         group("crease["),
-        group("energy.")
+        group("energy."),
+        if scene.contact.is_some() {
+            let names: Vec<String> = outs
+                .iter()
+                .filter(|v| v.name.starts_with("contact.") || v.name == "energy.contact")
+                .map(|v| v.name.clone())
+                .collect();
+            format!("; contact: {}", names.join(", "))
+        } else {
+            String::new()
+        }
     );
     let _ = writeln!(o, "  parameters ({})", model.parameters().len());
     let _ = writeln!(o, "  warnings ({})", warnings.len());

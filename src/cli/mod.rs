@@ -84,11 +84,46 @@ pub struct SceneOptions {
     /// What FOLD F edges are [default: crease; smooth for Origami Simulator exports].
     #[arg(long, value_name = "KIND")]
     pub f_edges: Option<FEdges>,
+    /// Turn self-contact on (the layers keep the sheet's thickness apart), with the scene's
+    /// `ancf:contact` settings where it has them, else the defaults (docs/scenes.md).
+    #[arg(long)]
+    pub contact: bool,
+    /// Coulomb friction coefficient of the self-contact (>= 0; also the FMU parameter
+    /// `contact.friction`) [default: the scene's, else 0.3]. Needs contact on.
+    #[arg(long, value_name = "MU")]
+    pub friction: Option<f64>,
 }
 
 impl SceneOptions {
+    /// Whether an option that only applies to FOLD files is given.
     fn any(&self) -> bool {
         self.frame.is_some() || self.size.is_some() || self.unit.is_some() || self.f_edges.is_some()
+    }
+
+    /// Apply `--contact` and `--friction` to a loaded scene.
+    pub fn apply(&self, scene: &mut scene::Scene) -> Result<(), String> {
+        if self.contact && scene.contact.is_none() {
+            scene.contact = Some(crate::contact::ContactSettings {
+                thickness: scene.material.thickness,
+                ..Default::default()
+            });
+        }
+        if let Some(mu) = self.friction {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return Err(format!("--friction {mu}: must be a finite number >= 0"));
+            }
+            match scene.contact.as_mut() {
+                Some(c) => c.friction = mu,
+                None => {
+                    return Err(
+                        "--friction sets the self-contact's friction, and contact is off: add \
+                         --contact (or \"ancf:contact\": {\"enabled\": true} in the scene)"
+                            .into(),
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The library's load options.
@@ -123,17 +158,19 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, String>
                 path.display()
             ));
         }
-        let scene = crate::fmi::resources::load_scene_file(path)?;
+        let mut scene = crate::fmi::resources::load_scene_file(path)?;
+        options.apply(&mut scene)?;
         return Ok(Loaded {
             scene,
             warnings: vec![],
             notes: vec![],
         });
     }
-    let loaded = scene::load_report(path, &options.load_options()).map_err(|e| match e {
+    let mut loaded = scene::load_report(path, &options.load_options()).map_err(|e| match e {
         scene::SceneError::Io { .. } => e.to_string(),
         _ => format!("{}: {e}", path.display()),
     })?;
+    options.apply(&mut loaded.scene)?;
     for w in &loaded.warnings {
         err(&format!("warning: {w}\n"));
     }

@@ -46,6 +46,8 @@ pub struct ContactSurface {
     pub neighbours: Vec<Vec<usize>>,
     /// Contact vertices of each facet (its samples).
     pub facet_vertices: Vec<Vec<usize>>,
+    /// Fine triangles of each facet (indices into `fine_tris`).
+    pub facet_fine_tris: Vec<Vec<usize>>,
 }
 
 /// Where a lattice sample sits: a mesh corner, a point of a mesh edge
@@ -180,8 +182,13 @@ impl ContactSurface {
                 nb
             })
             .collect();
+        let mut facet_fine_tris = vec![Vec::new(); mesh.triangles().len()];
+        for (k, &(_, f)) in fine_tris.iter().enumerate() {
+            facet_fine_tris[f].push(k);
+        }
         ContactSurface {
             n,
+            facet_fine_tris,
             maps,
             rest,
             vertex_facets,

@@ -15,7 +15,15 @@
 //! the iteration matrix takes the Hessian projected to positive
 //! semi-definite per pair. Every Newton step is limited by continuous
 //! collision detection ([`ContactTerm::safe_fraction`]), so no iterate and no
-//! output ever has two surfaces closer than the thickness.
+//! output ever has two surfaces closer than the thickness, and stopped
+//! where it would carry a sliding pair through sticking to the opposite
+//! slip ([`ContactTerm::friction_fraction`]).
+//!
+//! `kappa` is per pair: the default, or more for a pair that approaches too
+//! fast for the default barrier to stop it well inside the width, set while
+//! the pair is outside the barrier and kept while it is inside (so it
+//! changes no energy); the pairs' stiffnesses are the term's memory in a
+//! saved state.
 
 use super::broad::{Aabb, overlapping};
 use super::ccd;
@@ -27,6 +35,7 @@ use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
 use std::any::Any;
+use std::collections::HashMap;
 
 /// Contact settings (scene keys under `ancf:contact`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -58,7 +67,7 @@ impl Default for ContactSettings {
             friction: 0.3,
             stick_velocity: 1e-4,
             damping_ratio: 1.0,
-            subdivisions: 2,
+            subdivisions: 3,
         }
     }
 }
@@ -81,6 +90,9 @@ struct Pair {
     kind: Kind,
     /// Sample mass for the dashpot (kg).
     mass: f64,
+    /// Distance the pair keeps (m): the contact thickness, or less between
+    /// neighbouring facets (see [`ContactTerm::candidates`]).
+    xi: f64,
 }
 
 impl Pair {
@@ -142,6 +154,8 @@ struct Lagged {
     basis: [Vector3<f64>; 2],
     /// Normal force (N).
     lambda: f64,
+    /// Tangential relative velocity at the step start (in `basis`).
+    slide: Vector2<f64>,
 }
 
 /// What contact looks like at one state (for outputs and tests).
@@ -181,7 +195,53 @@ pub struct ContactTerm {
     touching: bool,
     /// The step start's candidate pairs.
     cache: CandidateCache,
+    /// Barrier stiffness of each candidate pair (N/m), set while the pair
+    /// is outside the barrier and kept while it is inside (see
+    /// [`ContactTerm::pair_stiffness`]).
+    pair_kappa: HashMap<PairKey, f64>,
+    /// Contact-vertex positions and velocities at the last step start.
+    x_start: Vec<Vector3<f64>>,
+    v_start: Vec<Vector3<f64>>,
+    /// Width of the crease stops (rad): see [`ContactTerm::crease_stops`].
+    flat_width: f64,
+    /// The points along every crease where a stop acts.
+    stops: Vec<StopPoint>,
+    /// Whether a crease end was within its stop at the step start.
+    creases_near_flat: bool,
 }
+
+/// The kinetic energy `m v_n^2 / 2` of a pair's approach is stopped at
+/// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2`: at about 4 % of the barrier
+/// width (see [`ContactTerm::pair_stiffness`]).
+const PAIR_SPEED_DIVISOR: f64 = 6.0;
+
+/// A point of a crease where its stop acts: the crease's `[a, b, t]` there
+/// (into the facet on the right of `t`, into the left one, along the
+/// crease) as linear maps of the slots.
+#[derive(Clone, Debug)]
+struct StopPoint {
+    edge: crate::ids::EdgeId,
+    /// Share of the crease's length (m) the point stands for.
+    length: f64,
+    maps: [super::surface::VertexMap; 3],
+}
+
+/// Share of the wedge's opening that neighbouring facets keep (see
+/// [`ContactTerm::neighbour_pairs`]): room for the facets to bend.
+const NEIGHBOUR_SHARE: f64 = 0.5;
+
+/// Neighbour pairs keeping less than this share of the thickness are left
+/// out (near the shared vertex or crease, where the crease stops act).
+const NEIGHBOUR_MIN: f64 = 0.02;
+
+/// Points per crease edge where the crease stops act, ends included: a
+/// flat-folded crease's facets bend between its ends, and crossed each
+/// other along it (at a sixteenth of a facet from the crease) with only
+/// the ends stopped.
+const STOP_POINTS: usize = 9;
+
+/// A pair's identity: edge-edge or not, and its four contact vertices.
+type PairKey = (bool, [usize; 4]);
 
 impl ContactTerm {
     /// Contact of `mesh` (facets `elements`) with `settings`; `areal_mass`
@@ -232,6 +292,12 @@ impl ContactTerm {
             project: true,
             touching: false,
             cache: CandidateCache::default(),
+            pair_kappa: HashMap::new(),
+            x_start: Vec::new(),
+            v_start: Vec::new(),
+            flat_width: settings.thickness / edge,
+            stops: stop_points(mesh, layout, elements),
+            creases_near_flat: false,
         })
     }
 
@@ -247,10 +313,39 @@ impl ContactTerm {
         &self.surf
     }
 
-    /// Mean facet side (m), how far [`crate::model::Model::contact`]
-    /// searches the smallest gap.
+    /// Mean facet side (m).
     pub fn mean_side(&self) -> f64 {
         self.mean_side
+    }
+
+    /// How far beyond the thickness [`ContactTerm::report_near`] looks for
+    /// the smallest gap (m): the candidate search's margin, a tenth of a
+    /// facet side or the barrier's reach if more.
+    pub fn report_reach(&self) -> f64 {
+        self.cache_margin
+    }
+
+    /// [`ContactTerm::report`] with the search up to
+    /// [`ContactTerm::report_reach`], from the step's candidate pairs where
+    /// they hold every pair that close (the contact vertices have moved
+    /// less than the slack their search left): what the contact outputs
+    /// read after each step, with no search of their own.
+    pub fn report_near(&self, q: &[f64]) -> ContactReport {
+        let mut x = Vec::new();
+        self.surf.positions(q, &mut x);
+        let reach = self.report_reach();
+        // The cache holds every pair within `pad + 2 margin` of its search
+        // positions; a pair within `xi + reach` now was within that of
+        // them while no vertex moved more than `slack`.
+        let slack = 0.5 * (self.cache.pad + 2.0 * self.cache_margin - self.xi - reach);
+        let searched;
+        let pairs: &[Pair] = if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
+            &self.cache.pairs
+        } else {
+            searched = self.candidates(&x, None, self.xi + reach);
+            &searched
+        };
+        self.report_over(&x, pairs, reach)
     }
 
     /// Barrier stiffness kappa in force (N/m).
@@ -269,7 +364,6 @@ impl ContactTerm {
             }
             Aabb::around(&pts, 0.5 * pad)
         };
-        let rest_min = self.xi + self.s_hat;
         let mut out = Vec::new();
         // Facets first: only facets near a facet they share no vertex with
         // take part in the fine search (most of a sheet, most of the time,
@@ -306,6 +400,7 @@ impl ContactTerm {
             out.push(Pair {
                 kind: Kind::PointTriangle { p, t },
                 mass: self.mass_fine,
+                xi: self.xi,
             });
         }
         let edges: Vec<usize> = (0..s.fine_edges.len())
@@ -356,17 +451,75 @@ impl ContactTerm {
                     t: s.coarse_tri(&self.mesh, g),
                 },
                 mass: self.mass_coarse,
+                xi: self.xi,
             });
         }
         for (i, j) in edge_pairs {
             out.push(self.edge_pair(s.coarse_edges[i].0, s.coarse_edges[j].0, self.mass_coarse));
         }
+        self.neighbour_pairs(x, &bx, &near_neighbours, &mut out);
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
-        out.retain(|p| self.rest_distance(p) >= rest_min);
+        out.retain(|p| self.rest_distance(p) >= p.xi + self.s_hat_of(p));
         // A canonical order: sums over pairs do not depend on the search.
         out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
         out
+    }
+
+    /// Fine pairs between neighbouring facets (sharing a vertex) that face
+    /// each other, folded past a right angle: each one's samples off the
+    /// other against the other's sub-triangles. A midsurface crease folded
+    /// flat closes to a wedge (its facets meet at the crease, their far
+    /// corners a thickness apart), so such a pair keeps a thickness that
+    /// grows with the two points' distance in the flat pattern `d`:
+    /// `NEIGHBOUR_SHARE xi min(1, d / (2 w))` (`w` the mean facet side: the
+    /// wedge's own opening at mirror points is `xi d / (2 w)`), and pairs
+    /// closer than [`NEIGHBOUR_MIN`] of the thickness are left to the crease
+    /// stops. Without them the facets beside a crease folded flat, bent
+    /// towards each other, crossed within a sixteenth of a facet of it.
+    fn neighbour_pairs(
+        &self,
+        x: &[Vector3<f64>],
+        bx: &dyn Fn(&[usize]) -> Aabb,
+        near: &[(usize, usize)],
+        out: &mut Vec<Pair>,
+    ) {
+        let s = &self.surf;
+        let normal = |f: usize| {
+            let c = s.coarse_tri(&self.mesh, f).map(|i| x[i]);
+            (c[1] - c[0]).cross(&(c[2] - c[0]))
+        };
+        for &(f, g) in near {
+            if normal(f).dot(&normal(g)) >= 0.0 {
+                continue;
+            }
+            for (a, b) in [(f, g), (g, f)] {
+                let pts: Vec<usize> = s.facet_vertices[a]
+                    .iter()
+                    .copied()
+                    .filter(|&p| s.vertex_facets[p].binary_search(&b).is_err())
+                    .collect();
+                let tris = &s.facet_fine_tris[b];
+                let pt_boxes: Vec<Aabb> = pts.iter().map(|&p| bx(&[p])).collect();
+                let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
+                for (i, j) in overlapping(&pt_boxes, &tri_boxes, false) {
+                    let pair = Pair {
+                        kind: Kind::PointTriangle {
+                            p: pts[i],
+                            t: s.fine_tris[tris[j]].0,
+                        },
+                        mass: self.mass_fine,
+                        xi: self.xi,
+                    };
+                    let xi = NEIGHBOUR_SHARE
+                        * self.xi
+                        * (self.rest_distance(&pair) / (2.0 * self.mean_side)).min(1.0);
+                    if xi >= NEIGHBOUR_MIN * self.xi {
+                        out.push(Pair { xi, ..pair });
+                    }
+                }
+            }
+        }
     }
 
     /// The candidate pairs at `x` (swept by `dx`) with pad `pad`, or a
@@ -408,6 +561,7 @@ impl ContactTerm {
         Pair {
             kind: Kind::EdgeEdge { a, b, eps_x },
             mass,
+            xi: self.xi,
         }
     }
 
@@ -460,11 +614,60 @@ impl ContactTerm {
         for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
             let (xs, ds) = (self.points(&x, p), self.points(&d, p));
             let toi = match p.kind {
-                Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, self.xi, t),
-                Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, self.xi, t),
+                Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, p.xi, t),
+                Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, p.xi, t),
             };
             if let Some(s) = toi {
                 t = t.min(s);
+            }
+        }
+        t
+    }
+
+    /// The fraction of a Newton correction at which the first sliding
+    /// friction pair it would carry through sticking (to sliding the other
+    /// way, beyond the stick velocity) comes closest to rest; 1 if none.
+    /// In slip the friction force is constant along the slide and Newton's
+    /// linear model does not see it stop, so a correction that should stop
+    /// a pair overshoots to the opposite slip, and the next one back: the
+    /// iteration cycles (a line search only creeps towards the stick). At
+    /// rest the pair's stick stiffness is in the next matrix.
+    pub fn friction_fraction(&self, v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
+        if self.mu <= 0.0 || self.lagged.is_empty() {
+            return 1.0;
+        }
+        let mut t: f64 = 1.0;
+        let at = |x: &[f64], i: usize| -> Vector3<f64> {
+            super::surface::eval_map(&self.surf.maps[i], x)
+        };
+        for lg in self.lagged.iter().filter(|lg| lg.lambda > 0.0) {
+            let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * at(v, lg.ids[k])).sum();
+            let dr: Vector3<f64> = (0..4)
+                .map(|k| lg.w[k] * at(dq, lg.ids[k]))
+                .sum::<Vector3<f64>>()
+                * dv_dq;
+            let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
+            let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
+            let end = u + du;
+            // A pair that slid at the step start only where it slides that
+            // way and is carried past rest to slide back (an iterate
+            // sliding the other way, such as the held predictor's, is on
+            // its way back); one that stuck, wherever it is carried past.
+            let start = if lg.slide.norm() > self.eps_v {
+                lg.slide
+            } else {
+                u
+            };
+            if u.norm() <= self.eps_v
+                || end.norm() <= self.eps_v
+                || u.dot(&start) <= 0.0
+                || end.dot(&start) >= 0.0
+            {
+                continue;
+            }
+            let stop = -u.dot(&du) / du.norm_squared();
+            if stop > 0.0 && stop < t {
+                t = stop;
             }
         }
         t
@@ -475,19 +678,25 @@ impl ContactTerm {
     pub fn report(&self, q: &[f64], search: f64) -> ContactReport {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
+        self.report_over(&x, &self.candidates(&x, None, search + self.xi), search)
+    }
+
+    /// The report over `pairs` at contact-vertex positions `x`, the
+    /// smallest gap capped at `search`.
+    fn report_over(&self, x: &[Vector3<f64>], pairs: &[Pair], search: f64) -> ContactReport {
         let mut r = ContactReport {
             min_gap: search,
             ..Default::default()
         };
-        for p in self.candidates(&x, None, search + self.xi) {
-            let xs = self.points(&x, &p);
+        for p in pairs {
+            let xs = self.points(x, p);
             let d = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt();
-            let s = d - self.xi;
+            let s = d - p.xi;
             r.min_gap = r.min_gap.min(s);
-            if s < self.s_hat {
+            if s < self.s_hat_of(p) {
                 r.pairs += 1;
                 if s > 0.0 {
-                    r.normal_force += self.normal_force(&p, &xs, s);
+                    r.normal_force += self.normal_force(p, &xs, s);
                 }
             }
         }
@@ -496,12 +705,29 @@ impl ContactTerm {
 
     /// Normal force of a pair at gap `s` (N): `-kappa m(x) b'(s)`.
     fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64) -> f64 {
-        self.kappa * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat)
+        self.kappa_of(p) * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat_of(p))
     }
 
     /// Dashpot coefficients, friction's normal forces and bases from
     /// contact-vertex positions `x`.
-    fn lag_at(&mut self, x: &[Vector3<f64>]) {
+    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>]) {
+        // Pair stiffnesses: kept for pairs inside the barrier (their energy
+        // is not zero), set anew for the others.
+        let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
+        for p in &self.cache.pairs {
+            let xs = self.points(x, p);
+            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
+            let k = match self.pair_kappa.get(&key(p)) {
+                Some(&k) if s < self.s_hat_of(p) => k,
+                _ => self.pair_stiffness(p, x, v),
+            };
+            kappa.insert(key(p), k);
+        }
+        self.pair_kappa = kappa;
+        self.x_start.clear();
+        self.x_start.extend_from_slice(x);
+        self.v_start.clear();
+        self.v_start.extend_from_slice(v);
         self.lagged.clear();
         let act = self.active(x).unwrap_or_default();
         self.touching = !act.is_empty();
@@ -509,15 +735,124 @@ impl ContactTerm {
             let xs = self.points(x, &p);
             let (w, n) = self.closest(&p, &xs);
             // Critical for zeta = 1 at the pair's barrier stiffness.
-            let k = self.kappa * ddb(s, self.s_hat).max(0.0);
+            let k = self.kappa_of(&p) * ddb(s, self.s_hat_of(&p)).max(0.0);
+            let basis = tangent_basis(&n);
+            let ids = p.ids();
+            let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
             self.lagged.push(Lagged {
-                ids: p.ids(),
+                ids,
                 c: 2.0 * self.zeta * (k * p.mass).sqrt(),
                 w,
                 normal: n,
-                basis: tangent_basis(&n),
+                basis,
                 lambda: self.normal_force(&p, &xs, s),
+                slide: Vector2::new(basis[0].dot(&vr), basis[1].dot(&vr)),
             });
+        }
+    }
+
+    /// The barrier stiffness a pair outside the barrier takes at a step
+    /// start with contact-vertex positions `x` and velocities `v`: the
+    /// default, or more where the pair approaches so fast that the default
+    /// barrier's energy scale `kappa s_hat^2` would let it come much
+    /// closer than a few hundredths of the barrier width:
+    /// `m v_n^2 / (PAIR_SPEED_DIVISOR s_hat^2)` for its sample mass `m` and
+    /// normal approach `v_n` (IPC raises one global stiffness where the
+    /// smallest gap falls, which changes the energy of every pair in the
+    /// barrier). Set while the pair's barrier energy is zero and kept while
+    /// it is inside, the stiffness changes no energy. A panel's corner
+    /// whipping onto the layer below (a flat stack released in one held
+    /// step) reaches the default barrier's energy scale many times over and
+    /// would be stopped at a gap of 1e-13 m, where Newton cannot move it.
+    fn pair_stiffness(&self, p: &Pair, x: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
+        if v.len() != x.len() || x.is_empty() {
+            return self.kappa;
+        }
+        let xs = self.points(x, p);
+        let (w, n) = self.closest(p, &xs);
+        let ids = p.ids();
+        let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
+        // Along the normal of the second primitive's surface (the
+        // triangle's; for two edges, a facet of the second), not the
+        // closest points' direction: a sample sliding onto the next
+        // sub-triangle, or an edge sliding sideways onto a parallel one,
+        // comes closer to it at the sliding speed, but it does not
+        // approach the surface.
+        let surface = match p.kind {
+            Kind::PointTriangle { .. } => (xs[2] - xs[1]).cross(&(xs[3] - xs[1])),
+            Kind::EdgeEdge { b, .. } => {
+                let fb = &self.surf.vertex_facets;
+                match fb[b[0]].iter().find(|f| fb[b[1]].contains(f)) {
+                    Some(&f) => {
+                        let c = self.surf.coarse_tri(&self.mesh, f).map(|i| x[i]);
+                        (c[1] - c[0]).cross(&(c[2] - c[0]))
+                    }
+                    None => n,
+                }
+            }
+        };
+        let normal = match surface.try_normalize(0.0) {
+            Some(u) if u.dot(&n) < 0.0 => -u,
+            Some(u) => u,
+            None => n,
+        };
+        let approach = (-normal.dot(&vr)).max(0.0);
+        self.kappa
+            .max(p.mass * approach * approach / (PAIR_SPEED_DIVISOR * self.s_hat_of(p).powi(2)))
+    }
+
+    /// A pair's barrier width (m): the same share of its thickness for all.
+    fn s_hat_of(&self, p: &Pair) -> f64 {
+        self.s_hat * p.xi / self.xi
+    }
+
+    /// The pair stiffnesses of [`ForceTerm::memory`]'s list (untrusted: a
+    /// restored state's): sixes of edge flag (0 or 1), four contact-vertex
+    /// ids and a positive stiffness up to MAX_MAGNITUDE.
+    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<PairKey, f64>, String> {
+        if !memory.len().is_multiple_of(6) {
+            return Err(format!(
+                "{} values; the pair stiffnesses come in sixes (kind, four vertices, \
+                 stiffness)",
+                memory.len()
+            ));
+        }
+        let n = self.surf.n_vertices();
+        let max = crate::scene::limits::MAX_MAGNITUDE;
+        let mut map = HashMap::with_capacity(memory.len() / 6);
+        for (k, m) in memory.chunks_exact(6).enumerate() {
+            let id = |x: f64| {
+                (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
+                    .then_some(x as usize)
+                    .ok_or_else(|| format!("pair {k}: {x} is not a contact vertex (0..{n})"))
+            };
+            if m[0] != 0.0 && m[0] != 1.0 {
+                return Err(format!(
+                    "pair {k}: kind {} is neither 0 (point-triangle) nor 1 (edge-edge)",
+                    m[0]
+                ));
+            }
+            let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
+            if !(m[5] > 0.0 && m[5] <= max) {
+                return Err(format!(
+                    "pair {k}: stiffness {} is not a positive number up to {max:e}",
+                    m[5]
+                ));
+            }
+            map.insert((m[0] == 1.0, ids), m[5]);
+        }
+        Ok(map)
+    }
+
+    /// A pair's barrier stiffness: the one set at the last step start, or
+    /// (a pair found since) the one it would have been given there (a
+    /// pair the next step start finds inside the barrier and not in the
+    /// map, having come closer than the candidate search's margin in one
+    /// step, takes the stiffness of that step start).
+    fn kappa_of(&self, p: &Pair) -> f64 {
+        match self.pair_kappa.get(&key(p)) {
+            Some(&k) => k,
+            None => self.pair_stiffness(p, &self.x_start, &self.v_start),
         }
     }
 
@@ -532,8 +867,8 @@ impl ContactTerm {
         let mut out = Vec::new();
         for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
-            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - self.xi;
-            if s >= self.s_hat {
+            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
+            if s >= self.s_hat_of(&p) {
                 continue;
             }
             if s <= 0.0 {
@@ -541,7 +876,7 @@ impl ContactTerm {
                 return Err(format!(
                     "contact: surfaces at facets {:?} and {:?} are closer than the contact \
                      thickness {} m (gap {s:.3e} m)",
-                    self.surf.vertex_facets[ids[0]], self.surf.vertex_facets[ids[3]], self.xi
+                    self.surf.vertex_facets[ids[0]], self.surf.vertex_facets[ids[3]], p.xi
                 ));
             }
             out.push((p, s));
@@ -655,6 +990,91 @@ impl MatrixBatch {
     }
 }
 
+/// The crease stops' points: [`STOP_POINTS`] along every crease edge.
+fn stop_points(
+    mesh: &Mesh,
+    layout: &DofLayout,
+    elements: &[crate::element::ShellElement],
+) -> Vec<StopPoint> {
+    let mut out = Vec::new();
+    for (e, edge) in mesh.edge_ids().zip(mesh.edges()) {
+        if edge.kind != crate::mesh::EdgeKind::Crease || mesh.faces_of(e).len() != 2 {
+            continue;
+        }
+        let (v, w) = (edge.v[0], edge.v[1]);
+        let chord = mesh.coord(w) - mesh.coord(v);
+        let length = mesh.edge_length(e) / STOP_POINTS as f64;
+        for k in 0..STOP_POINTS {
+            let s = k as f64 / (STOP_POINTS - 1) as f64;
+            let mut right = None;
+            let mut left = None;
+            let mut tangent = None;
+            for &f in mesh.faces_of(e) {
+                let tri = mesh.triangle(f);
+                let at = |x| tri.iter().position(|&y| y == x).expect("on the facet");
+                let (iv, iw) = (at(v), at(w));
+                let ik = 3 - iv - iw;
+                let mut l = [0.0; 3];
+                l[iv] = 1.0 - s;
+                l[iw] = s;
+                // Into the facet: towards its third corner; along the crease.
+                let mut into = [0.0; 3];
+                into[ik] = 1.0;
+                for i in 0..3 {
+                    into[i] -= l[i];
+                }
+                let mut along = [0.0; 3];
+                along[iw] = 1.0;
+                along[iv] = -1.0;
+                let shape = elements[f.index()].shape();
+                let map = |dir: [f64; 3]| {
+                    let d = shape.d_along(l, dir);
+                    let mut terms: HashMap<usize, f64> = HashMap::new();
+                    for (node, combo) in layout.local[f.index()].iter().enumerate() {
+                        for (slot, c) in combo.terms() {
+                            *terms.entry(slot).or_insert(0.0) += d[node] * c;
+                        }
+                    }
+                    let mut m: super::surface::VertexMap =
+                        terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
+                    m.sort_unstable_by_key(|&(s, _)| s);
+                    m
+                };
+                let x = mesh.coord(tri[ik]) - mesh.coord(v);
+                if chord.x * x.y - chord.y * x.x < 0.0 {
+                    right = Some(map(into));
+                } else {
+                    left = Some(map(into));
+                }
+                tangent.get_or_insert_with(|| map(along));
+            }
+            if let (Some(a), Some(b), Some(t)) = (right, left, tangent) {
+                out.push(StopPoint {
+                    edge: e,
+                    length,
+                    maps: [a, b, t],
+                });
+            }
+        }
+    }
+    out
+}
+
+/// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
+/// theta` on the valley side (-1), `theta` on the mountain side (+1).
+fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
+    let theta = crate::crease::theta(a, b, t);
+    if theta > std::f64::consts::PI {
+        (std::f64::consts::TAU - theta, -1.0)
+    } else {
+        (theta, 1.0)
+    }
+}
+
+fn key(p: &Pair) -> PairKey {
+    (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
+}
+
 /// Barrier `b(s)` and its first two derivatives in `s`.
 fn barrier<T: Real>(s: T, s_hat: f64) -> T {
     let u = s - s_hat;
@@ -730,19 +1150,179 @@ impl ContactTerm {
         let d2 = distance_sq(&p.kind, &xs);
         let dv = d2.val();
         let r = dv.sqrt();
-        let s = r - self.xi;
-        let (b1, b2) = (db(s, self.s_hat), ddb(s, self.s_hat));
+        let s = r - p.xi;
+        let s_hat = self.s_hat_of(p);
+        let (b1, b2) = (db(s, s_hat), ddb(s, s_hat));
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
-        let k = self.kappa;
+        let k = self.kappa_of(p);
         let f = d2.map(
-            k * barrier(s, self.s_hat),
+            k * barrier(s, s_hat),
             k * b1 * sd,
             k * (b2 * sd * sd + b1 * sdd),
         );
         match p.kind {
             Kind::PointTriangle { .. } => f,
             Kind::EdgeEdge { .. } => f * mollifier(&p.kind, &xs),
+        }
+    }
+
+    /// Crease stops: a crease cannot fold past flat, where the facets across
+    /// it would pass through each other. Its facets share a vertex, so no
+    /// contact pair between them acts near the crease (a midsurface crease
+    /// folded flat closes to a wedge, only its open end a thickness wide),
+    /// and a crease pressed past flat (by a moment, or by layers above it)
+    /// crossed its facets there. At [`STOP_POINTS`] points along every
+    /// crease, the angle between the facets' surfaces (as the crease
+    /// springs read it at the ends) that comes within `flat_width` (the
+    /// thickness over the mean facet side: the wedge's angle) of flat, on
+    /// either side, meets the barrier `k b(g)` in its gap to flat `g`
+    /// (rad), `k` the crease spring stiffness of the point's share of the
+    /// crease (a spring driven to exactly flat then rests about half-way
+    /// into the stop). The iteration matrix takes the Gauss-Newton part
+    /// `k b'' grad grad^T` (positive semi-definite) unless exact Hessians
+    /// are asked for. The stops keep every accepted angle within (0, 2 pi),
+    /// so the raw angle is the unwrapped one.
+    fn crease_stops(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<MatrixCoeffs>,
+        batch: &mut MatrixBatch,
+    ) -> Result<(), String> {
+        let w = self.flat_width;
+        for sp in &self.stops {
+            let [a, b, t] = sp
+                .maps
+                .each_ref()
+                .map(|m| super::surface::eval_map(m, st.q));
+            let (g, sign) = flat_gap(&a, &b, &t);
+            if g >= w {
+                continue;
+            }
+            if g <= 0.0 {
+                return Err(format!(
+                    "contact: the crease on edge {} is folded past flat",
+                    sp.edge
+                ));
+            }
+            let k = asm.physics.crease_k_per_length * sp.length;
+            let d = crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
+            out.term_energy += k * barrier(g, w);
+            out.barrier_pairs += 1;
+            let grad = d.grad9() * sign;
+            let f = grad * (k * db(g, w));
+            self.scatter_maps(&sp.maps, &f, &mut out.force);
+            if let Some(co) = matrix.filter(|co| co.k != 0.0) {
+                let mut h = grad * grad.transpose() * (k * ddb(g, w));
+                if let Some(hess) = d.hess9() {
+                    h += hess * (sign * k * db(g, w));
+                }
+                self.scatter_maps_matrix(&sp.maps, &(co.k * h), batch);
+            }
+        }
+        Ok(())
+    }
+
+    /// The largest fraction of the move `q -> q + dq` that keeps every
+    /// crease stop's point from passing flat: on the same side, its gap to
+    /// flat not below the collision checks' share of the gap it had
+    /// (halving the fraction until it holds).
+    fn crease_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        let mut fraction: f64 = 1.0;
+        for sp in &self.stops {
+            let vecs = |x: &[f64]| sp.maps.each_ref().map(|m| super::surface::eval_map(m, x));
+            let [a, b, t] = vecs(q);
+            let [da, db_, dt] = vecs(dq);
+            let raw0 = crate::crease::theta(&a, &b, &t);
+            let keep = (super::ccd::MIN_SEPARATION * flat_gap(&a, &b, &t).0).min(self.flat_width);
+            // Passing flat wraps the raw angle across 0 = 2 pi.
+            let clear = |alpha: f64| {
+                let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
+                (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
+                    && flat_gap(&a, &b, &t).0 >= keep
+            };
+            let mut halvings = 0;
+            while !clear(fraction) && halvings < 60 {
+                fraction *= 0.5;
+                halvings += 1;
+            }
+            if halvings == 60 {
+                return 0.0;
+            }
+        }
+        fraction
+    }
+
+    /// Whether a crease stop's point at `q` is within twice the stop's
+    /// width of flat.
+    fn near_flat(&self, q: &[f64]) -> bool {
+        self.stops.iter().any(|sp| {
+            let [a, b, t] = sp.maps.each_ref().map(|m| super::surface::eval_map(m, q));
+            flat_gap(&a, &b, &t).0 < 2.0 * self.flat_width
+        })
+    }
+
+    /// Add a 9-vector over the crease vectors `(a, b, t)` to the slots.
+    fn scatter_maps(
+        &self,
+        maps: &[super::surface::VertexMap; 3],
+        f: &SVector<f64, 9>,
+        force: &mut [f64],
+    ) {
+        for (j, m) in maps.iter().enumerate() {
+            for &(s, w) in m {
+                for x in 0..3 {
+                    force[3 * s + x] += w * f[3 * j + x];
+                }
+            }
+        }
+    }
+
+    /// Add a 9x9 matrix over the crease vectors `(a, b, t)` to `batch`.
+    fn scatter_maps_matrix(
+        &self,
+        maps: &[super::surface::VertexMap; 3],
+        h: &SMatrix<f64, 9, 9>,
+        batch: &mut MatrixBatch,
+    ) {
+        let mut slots: Vec<usize> = maps
+            .iter()
+            .flat_map(|m| m.iter().map(|&(s, _)| s))
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        let ns = slots.len();
+        let mut wt = vec![[0.0; 3]; ns];
+        for (j, m) in maps.iter().enumerate() {
+            for &(s, w) in m {
+                let a = slots.binary_search(&s).expect("slot listed");
+                wt[a][j] += w;
+            }
+        }
+        let dense = batch.group(slots);
+        let n3 = 3 * ns;
+        for bs in 0..ns {
+            for l in 0..3 {
+                if wt[bs][l] == 0.0 {
+                    continue;
+                }
+                for a in 0..ns {
+                    for k in 0..3 {
+                        let c = wt[a][k] * wt[bs][l];
+                        if c == 0.0 {
+                            continue;
+                        }
+                        for y in 0..3 {
+                            let col = &mut dense[(3 * bs + y) * n3 + 3 * a..][..3];
+                            for x in 0..3 {
+                                col[x] += c * h[(3 * k + x, 3 * l + y)];
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -778,27 +1358,67 @@ impl ForceTerm for ContactTerm {
         Some(self)
     }
 
-    fn before_step(&mut self, asm: &Assembler, q: &[f64], _v: &[f64]) -> Vec<(usize, usize)> {
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
         let mut x = Vec::new();
+        let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
         self.cache_at(&x);
-        self.lag_at(&x);
+        self.lag_at(&x, &vx);
+        self.creases_near_flat = self.near_flat(q);
         self.pattern_pairs(asm)
     }
 
-    fn lag(&mut self, _asm: &Assembler, q: &[f64], _v: &[f64]) {
+    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
         let mut x = Vec::new();
+        let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
         self.cache_at(&x);
-        self.lag_at(&x);
+        self.lag_at(&x, &vx);
+        self.creases_near_flat = self.near_flat(q);
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
-        self.safe_fraction(q, dq)
+        self.safe_fraction(q, dq).min(self.crease_fraction(q, dq))
+    }
+
+    /// The pairs' barrier stiffnesses: six numbers a pair (edge-edge or
+    /// not, its four contact vertices, the stiffness), in key order.
+    fn memory(&self) -> Vec<f64> {
+        let mut pairs: Vec<(&PairKey, &f64)> = self.pair_kappa.iter().collect();
+        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
+        let mut out = Vec::with_capacity(6 * pairs.len());
+        for ((edge, ids), &k) in pairs {
+            out.push(if *edge { 1.0 } else { 0.0 });
+            out.extend(ids.iter().map(|&i| i as f64));
+            out.push(k);
+        }
+        out
+    }
+
+    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+        self.parse_memory(memory).map(|_| ())
+    }
+
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+        self.pair_kappa = self.parse_memory(memory)?;
+        Ok(())
+    }
+
+    fn max_correction_fraction(
+        &self,
+        _asm: &Assembler,
+        _q: &[f64],
+        v: &[f64],
+        dq: &[f64],
+        dv_dq: f64,
+    ) -> f64 {
+        self.friction_fraction(v, dq, dv_dq)
     }
 
     fn limits_steps(&self) -> bool {
-        self.touching || !self.cache.pairs.is_empty()
+        self.touching || self.creases_near_flat || !self.cache.pairs.is_empty()
     }
 
     fn reports_power(&self) -> bool {
@@ -841,6 +1461,7 @@ impl ForceTerm for ContactTerm {
                 self.scatter_matrix(&ids, &(co.k * h), &mut batch);
             }
         }
+        self.crease_stops(asm, st, out, matrix.as_ref().map(|(_, co)| *co), &mut batch)?;
         // Dashpots on the gap rates along the lagged normals, with the
         // lagged coefficients and closest-point weights (the pair's own
         // distance gradient would turn tangential once a sample slides off

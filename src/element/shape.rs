@@ -219,6 +219,15 @@ impl Shape {
         self.partials(l).0
     }
 
+    /// Derivatives `dS_k / d lambda` along the straight path `l + lambda dir`
+    /// in area coordinates (`dir` sums to zero), at `l`: the position's
+    /// derivative along it is `sum_k e_k dS_k`, the deformation gradient
+    /// times the reference vector the path covers per unit `lambda`.
+    pub fn d_along(&self, l: [f64; 3], dir: [f64; 3]) -> [f64; 9] {
+        let (_, g, _) = self.partials(l);
+        g.map(|gk| gk[0] * dir[0] + gk[1] * dir[1] + gk[2] * dir[2])
+    }
+
     /// First derivatives `[dS_k/d eta, dS_k/d zeta]` at `u = (eta, zeta)`, with
     /// `xi = 1 - eta - zeta`.
     pub fn d1(&self, eta: f64, zeta: f64) -> [[f64; 2]; 9] {

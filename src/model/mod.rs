@@ -182,6 +182,8 @@ impl Model {
             work: Default::default(),
             dissipative_force: Default::default(),
             extra_pairs: Vec::new(),
+            term_memory: Vec::new(),
+            viscous_force: Vec::new(),
         };
         // Build once now so that a bad scene fails at instantiation.
         let auto_damping = scene.auto_damping;
@@ -267,7 +269,9 @@ impl Model {
     #[doc(hidden)]
     /// Contact at the current state (None without contact, and before
     /// [`Model::initialize`], when there are no positions to search):
-    /// smallest gap, active pairs, normal force.
+    /// smallest gap (up to [`crate::contact::ContactTerm::report_reach`]),
+    /// active pairs, normal force. Each step reports its end state from its
+    /// candidate pairs; reads return that report.
     pub fn contact(&self) -> Option<crate::contact::ContactReport> {
         if self.state.phase != Phase::Running {
             return None;
@@ -278,7 +282,7 @@ impl Model {
             *self
                 .read_cache
                 .contact
-                .get_or_init(|| c.report(&self.state.dynamics.q, c.mean_side())),
+                .get_or_init(|| c.report_near(&self.state.dynamics.q)),
         )
     }
 
@@ -291,19 +295,31 @@ impl Model {
 
     #[doc(hidden)]
     /// Run the intersection checker on the current state: facets sampled
-    /// with `m` subdivisions, distances searched up to `search` (m).
+    /// with `m` subdivisions, distances searched up to `search` (m), and
+    /// the creases whose fold angle is past +-180 degrees.
     pub fn check_intersections(
         &self,
         m: usize,
         search: f64,
     ) -> Option<crate::contact::check::IntersectionReport> {
         let sys = self.sys.as_ref()?;
-        Some(crate::contact::check::check(
+        let mut rep = crate::contact::check::check(
             &sys.asm,
             &self.scene.mesh,
             &self.state.dynamics.q,
             m,
             search,
-        ))
+        );
+        let tau = std::f64::consts::TAU;
+        rep.past_flat = sys
+            .asm
+            .creases
+            .iter()
+            .zip(&self.state.crease_theta)
+            .filter(|&(_, &theta)| !(0.0..=tau).contains(&theta))
+            .map(|(c, _)| c.edge)
+            .collect();
+        rep.past_flat.dedup();
+        Some(rep)
     }
 }

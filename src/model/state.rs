@@ -84,6 +84,14 @@ pub struct ModelState {
     #[serde(default)]
     #[doc(hidden)]
     pub extra_pairs: Vec<(usize, usize)>,
+    /// What the force terms carry from step to step (contact: each pair's
+    /// barrier stiffness), in the assembler's term order; empty: as built.
+    #[serde(default)]
+    pub term_memory: Vec<Vec<f64>>,
+    /// The viscous force at the last accepted state (its work over the
+    /// next step starts from it; empty: zero).
+    #[serde(default)]
+    pub viscous_force: Vec<f64>,
 }
 
 /// Work done so far (J): dissipated by contact, and put in by the inputs.
@@ -93,13 +101,25 @@ pub struct Work {
     pub friction: f64,
     /// Work of the normal dashpots.
     pub contact_damping: f64,
+    /// Work of the viscous forces: mass and stiffness damping, crease
+    /// dashpots.
+    #[serde(default)]
+    pub viscous: f64,
     /// Work done on the sheet by the crease actuators (rest angles moved
     /// against the springs' moments, applied crease moments) and by external
     /// forces (gravity, force inputs); prescribed motions not counted.
-    /// Kinetic + strain + crease + contact energy + dissipated work - this
-    /// is constant.
+    /// Kinetic + strain + crease + contact energy + dissipated work
+    /// ([`Work::dissipated`]) - this is constant (up to the integrator's
+    /// error; generalized-alpha below rho_inf = 1 dissipates some more).
     #[serde(default)]
     pub input: f64,
+}
+
+impl Work {
+    /// All work dissipated: friction, contact dashpots and viscous forces.
+    pub fn dissipated(&self) -> f64 {
+        self.friction + self.contact_damping + self.viscous
+    }
 }
 
 impl Model {
@@ -152,6 +172,11 @@ impl Model {
             self.sys = Some(sys);
             self.scene = scene;
             self.built_with = Some(parameters);
+        }
+        if let Some(sys) = self.sys.as_mut() {
+            sys.asm
+                .restore_term_memory(&s.term_memory)
+                .map_err(Error::State)?;
         }
         self.state = s;
         self.read_cache = Default::default();
@@ -218,9 +243,13 @@ impl Model {
         number("work.friction", w.friction)?;
         number("work.contact_damping", w.contact_damping)?;
         number("work.input", w.input)?;
+        number("work.viscous", w.viscous)?;
         let f = &s.dissipative_force;
         values("dissipative_force.friction", &f.friction, &[0, n])?;
         values("dissipative_force.damping", &f.damping, &[0, n])?;
+        values("viscous_force", &s.viscous_force, &[0, n])?;
+        asm.check_term_memory(&s.term_memory)
+            .map_err(|e| format!("term_memory: {e}"))?;
         let slots = asm.layout.n_slots();
         for (k, &(a, b)) in s.extra_pairs.iter().enumerate() {
             let sorted = k == 0 || s.extra_pairs[k - 1] < (a, b);
@@ -435,8 +464,8 @@ impl Model {
         self.state.dynamics.abar = qdd.clone();
         self.state.dynamics.qdd = qdd;
         self.state.crease_theta = ev.theta.clone();
-        self.state.outputs = Some(self.compute_outputs(&ev, &d));
         self.read_cache = Default::default();
+        self.state.outputs = Some(self.compute_outputs(&ev, &d));
         Ok(())
     }
 }

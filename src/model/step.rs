@@ -11,6 +11,24 @@ use crate::solver::stepper::{Attempt, Dynamics, Failure, Mechanics, Outcome, Ste
 use crate::text::num;
 use serde::{Deserialize, Serialize};
 
+/// Work of the viscous forces over a step from `q0` to `end` by the
+/// trapezoidal rule (the integrator's own energy identity), `force` the
+/// force at the step start (empty: zero), set to the one at its end.
+fn viscous_work(
+    asm: &crate::assembly::Assembler,
+    force: &mut Vec<f64>,
+    q0: &[f64],
+    end: &Dynamics,
+) -> f64 {
+    let mut f1 = Vec::new();
+    asm.viscous_force(&end.q, &end.v, &mut f1);
+    let w = (0..q0.len())
+        .map(|i| 0.5 * (force.get(i).copied().unwrap_or(0.0) + f1[i]) * (end.q[i] - q0[i]))
+        .sum();
+    *force = f1;
+    w
+}
+
 /// What one [`Model::advance`] did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StepReport {
@@ -94,6 +112,11 @@ impl Model {
             Ok(r) => Ok(r),
             Err(e) => {
                 self.state = saved;
+                if let Some(sys) = self.sys.as_mut() {
+                    // Back to what the terms carried before the failed
+                    // steps (their own memory: it fits).
+                    let _ = sys.asm.restore_term_memory(&self.state.term_memory);
+                }
                 self.read_cache = Default::default();
                 Err(self.with_suspects(e))
             }
@@ -122,6 +145,7 @@ impl Model {
         adv.report.solve_time = (solve_time - adv.linear_times.1).as_secs_f64();
         sys.stepper.end_advance(&mut state.memory);
         state.extra_pairs = sys.asm.extra_pairs().to_vec();
+        state.term_memory = sys.asm.term_memory();
         // The outputs now, where the last step evaluated its state in full
         // or the scene reports reactions (they need the forces at the step
         // end); else they are evaluated from the state when read.
@@ -152,8 +176,8 @@ impl Model {
         self.state.time = t0 + big_h;
         self.state.inputs_now.clone_from(&u);
         self.state.inputs_next = u;
-        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         self.read_cache = Default::default();
+        self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         let d = &self.state.dynamics;
         let finite = match &self.state.outputs {
             Some(o) => o.iter().all(|x| x.is_finite()),
@@ -468,6 +492,12 @@ impl Advance {
             state.work.contact_damping += wd;
             state.dissipative_force.clone_from(&ev.dissipative_force);
         }
+        state.work.viscous += viscous_work(
+            &sys.asm,
+            &mut state.viscous_force,
+            &state.dynamics.q,
+            &self.next,
+        );
         std::mem::swap(&mut state.dynamics, &mut self.next);
         state.crease_theta.clone_from_slice(angles);
         state.memory.newton = out.memory;

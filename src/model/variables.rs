@@ -141,6 +141,22 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
             "crease spring energy".into(),
             0.0,
         ));
+        v.push(spec(
+            "energy.input_work".into(),
+            "J",
+            "work done on the sheet by the inputs so far (crease actuators, applied moments, \
+             forces and gravity)"
+                .into(),
+            0.0,
+        ));
+        v.push(spec(
+            "energy.dissipated".into(),
+            "J",
+            "work dissipated so far (damping, crease dashpots, contact dashpots and friction): \
+             kinetic + strain + crease (+ contact) energy + this - energy.input_work is constant"
+                .into(),
+            0.0,
+        ));
     }
     if scene.contact.is_some() {
         for (name, unit, what) in CONTACT_OUTPUTS {
@@ -188,12 +204,15 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
     v
 }
 
+/// The energy outputs: kinetic, strain, crease, input work, dissipated.
+const ENERGY_OUTPUTS: usize = 5;
+
 /// The outputs of a scene with contact (after the energies).
 const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
     (
         "contact.min_gap",
         "m",
-        "smallest surface distance minus the contact thickness (searched up to a facet size)",
+        "smallest surface distance minus the contact thickness (looked for up to a tenth of a facet side)",
     ),
     (
         "contact.pairs",
@@ -477,6 +496,10 @@ impl Model {
                 .energies
                 .get_or_init(|| self.evaluate_energies())[i];
         }
+        if o.energies && i < ENERGY_OUTPUTS {
+            let w = &self.state.work;
+            return [w.input, w.dissipated()][i - 3];
+        }
         // Contact outputs: a scene with contact evaluates its outputs in
         // every step, so this is not reached; evaluate in full all the same.
         self.evaluate_outputs()[k]
@@ -596,12 +619,25 @@ impl Model {
             );
         }
         if o.energies {
-            out.extend([self.kinetic_energy(), ev.strain_energy, ev.crease_energy]);
+            let w = &self.state.work;
+            out.extend([
+                self.kinetic_energy(),
+                ev.strain_energy,
+                ev.crease_energy,
+                w.input,
+                w.dissipated(),
+            ]);
         }
         if self.contact_outputs().is_some() {
-            // The search's three are read from the state when read
-            // (`contact_output`); zero here keeps the stored list finite.
-            out.extend([0.0, 0.0, 0.0, ev.term_energy, self.state.work.friction]);
+            // The report of this state (kept for its reads).
+            let r = self.contact().unwrap_or_default();
+            out.extend([
+                r.min_gap,
+                r.pairs as f64,
+                r.normal_force,
+                ev.term_energy,
+                self.state.work.friction,
+            ]);
         }
         let dynm = &self.state.dynamics;
         sys.reactions.values(
@@ -627,7 +663,7 @@ impl Model {
             k += sys.angle_ends.len();
         }
         if o.energies {
-            k += 3;
+            k += ENERGY_OUTPUTS;
         }
         Some(k)
     }

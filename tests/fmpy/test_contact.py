@@ -114,13 +114,20 @@ def test_states_continue_bit_identically_through_contact(unzipped, save_at, fric
     initialized with the scene's own parameters (friction 0), so with
     friction 0.5 the restore must also bring the parameter back. Saved at
     0.5 s the panels are still centimetres apart and close after the save;
-    saved at 0.7 s they are in contact (pairs active, friction lagged)."""
+    saved at the first step from 0.7 s with pairs in the barrier they are
+    in contact (pairs active, friction lagged)."""
     d = unzipped("diagonal_contact")
     a = Instance(d, "original").initialize({"contact.friction": friction})
     b = Instance(d, "restored").initialize()
     try:
         col = columns(a)
         fold_until(a, save_at)
+        if save_at > RAMP:
+            # The free corners rest at the edge of the barrier (the crease
+            # stop holds the fold just short of pressing them): save at the
+            # first step from here with pairs in it.
+            while a.get()[col["contact.pairs"]] == 0 and a.time < END - 0.1:
+                fold_until(a, a.time + H)
         in_contact = a.get()[col["contact.pairs"]] > 0
         assert in_contact == (save_at > RAMP)
         state = a.slave.getFMUstate()

@@ -489,6 +489,6 @@ mod tests {
             assert_eq!(s.mesh.edge(e).fold_edge, Some(FoldEdgeId(6)));
         }
         let m = crate::model::Model::new(s).unwrap();
-        assert_eq!(m.outputs().len(), 6 * 3 + 1 + 3);
+        assert_eq!(m.outputs().len(), 6 * 3 + 1 + 5);
     }
 }

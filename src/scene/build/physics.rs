@@ -535,6 +535,8 @@ mod tests {
                 "energy.kinetic",
                 "energy.strain",
                 "energy.crease",
+                "energy.input_work",
+                "energy.dissipated",
                 "support[0].force.x",
                 "support[0].force.y",
                 "support[0].force.z",

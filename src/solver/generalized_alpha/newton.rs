@@ -292,14 +292,17 @@ impl Newton {
         if self.line_search {
             self.slope0 = slope_along(asm, &ws.rhs_prev, &ws.dq);
         }
-        let fraction = asm.max_step_fraction(&next.q, &ws.dq);
+        let collision_free = asm.max_step_fraction(&next.q, &ws.dq);
+        let stiffness_kept = asm.max_correction_fraction(&next.q, &next.v, &ws.dq, self.coeffs.c);
+        let fraction = collision_free.min(stiffness_kept);
         if fraction <= 0.0 {
             return Err(StepError::NoCollisionFreeStep);
         }
         if fraction < 1.0 {
-            // The matrix did not see the contact that stopped the step.
+            // The matrix did not see the contact that stopped the step, or
+            // the stiffness changes where the step stops.
             out.limited_steps += 1;
-            self.refresh |= stale;
+            self.refresh |= stale || stiffness_kept < collision_free;
         }
         for (q, d) in next.q.iter_mut().zip(&ws.dq) {
             *q += fraction * d;

@@ -1,0 +1,256 @@
+//! Real crease patterns folded with self-contact, as a user runs them: each
+//! driven to its full fold over 1 s (the `fold` input ramped 0 -> 1 with
+//! its slope, 10 ms communication steps, as a master with input
+//! derivatives drives it), then held to 1.5 s, at default settings, with
+//! contact on and off. Per run: CPU s of the fold (the checks apart),
+//! internal steps, Newton iterations, the smallest `contact.min_gap` over
+//! the outputs, whether it finished (else where it failed), the longest
+//! single communication step in CPU s, the outputs at which the checker (16
+//! samples per facet side, neighbours included, creases past flat) found a
+//! crossing, and for the patterns folded flat the distance of the end
+//! state from the flat-folding map (share of the folded size, in the
+//! state's best-fit plane).
+//!
+//! (A flat stack released in one held communication step, and what
+//! reading every output costs, are parts 3 and 4 of `benches/contact.rs`.)
+//!
+//! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,bird]
+//! [--fold PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]`
+//! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
+//! targets, not flat and not in the default list; `--cpu-limit S` stops a
+//! run once its fold has taken S CPU s, reported as not finished.)
+//! (`--fold PATH` adds a FOLD file of your own, its creases driven to +-180
+//! degrees by their sign: e.g. Rabbit Ear's kraft-bird-base.fold, which this
+//! repository cannot hold.)
+
+mod common;
+use common::cpu_seconds;
+use nalgebra::Vector3;
+use origami_fmu::benchmarks::{flat_fold_error, flat_folded_positions};
+use origami_fmu::contact::ContactSettings;
+use origami_fmu::ids::{EdgeId, VertexId};
+use origami_fmu::mesh::EdgeKind;
+use origami_fmu::model::Model;
+use origami_fmu::scene::Scene;
+use std::f64::consts::PI;
+
+/// One run's results.
+struct Row {
+    cpu: f64,
+    steps: usize,
+    newton: usize,
+    min_gap: Option<f64>,
+    failed: Option<String>,
+    longest: (f64, f64),
+    crossings: usize,
+    outputs: usize,
+    flat_error: Option<f64>,
+}
+
+/// Every crease to +-180 degrees by the sign of its target.
+fn fold_flat(scene: &mut Scene) {
+    for e in 0..scene.mesh.edges().len() {
+        let edge = &scene.mesh.edges()[e];
+        if edge.kind == EdgeKind::Crease && edge.fold_target != 0.0 {
+            let t = PI * edge.fold_target.signum();
+            scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
+        }
+    }
+}
+
+/// The waterbomb base collapsed: diagonals valley, the x midline mountain,
+/// the y midline unfolded (the shipped scene's targets are a 3D waterbomb).
+fn waterbomb_base(scene: &mut Scene) {
+    for e in 0..scene.mesh.edges().len() {
+        let edge = &scene.mesh.edges()[e];
+        if edge.kind != EdgeKind::Crease {
+            continue;
+        }
+        let d = scene.mesh.coord(edge.v[1]) - scene.mesh.coord(edge.v[0]);
+        let t = if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
+            PI
+        } else if d.y.abs() <= 1e-9 {
+            -PI
+        } else {
+            0.0
+        };
+        scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
+    }
+}
+
+fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> Row {
+    let mut scene = scene;
+    if contact {
+        scene.contact = Some(ContactSettings {
+            thickness: scene.material.thickness,
+            ..Default::default()
+        });
+    }
+    let map = flat.then(|| flat_folded_positions(&scene.mesh));
+    let mut model = Model::new(scene).unwrap();
+    model.initialize().unwrap();
+    let fold = model.input_id("fold").unwrap();
+    let dt = 0.01;
+    let mut row = Row {
+        cpu: 0.0,
+        steps: 0,
+        newton: 0,
+        min_gap: None,
+        failed: None,
+        longest: (0.0, 0.0),
+        crossings: 0,
+        outputs: 0,
+        flat_error: None,
+    };
+    for k in 0..150 {
+        let t = k as f64 * dt;
+        model.set_input(fold, t.min(1.0)).unwrap();
+        model
+            .set_input_derivative(fold, 1, if t < 1.0 { 1.0 } else { 0.0 })
+            .unwrap();
+        let c0 = cpu_seconds();
+        let r = model.advance(dt);
+        let c = cpu_seconds() - c0;
+        row.cpu += c;
+        if c > row.longest.0 {
+            row.longest = (c, t);
+        }
+        match r {
+            Ok(r) => {
+                row.steps += r.steps;
+                row.newton += r.newton_iterations;
+            }
+            Err(e) => {
+                row.failed = Some(format!("at {t:.2} s: {e}"));
+                break;
+            }
+        }
+        row.outputs += 1;
+        if row.cpu > cpu_limit && k + 1 < 150 {
+            row.failed = Some(format!(
+                "stopped at {:.2} s: over the {cpu_limit} CPU s limit",
+                t + dt
+            ));
+            break;
+        }
+        if let Some(c) = model.contact() {
+            row.min_gap = Some(row.min_gap.map_or(c.min_gap, |g| g.min(c.min_gap)));
+        }
+        if check && !model.check_intersections(16, 0.0).unwrap().is_clear() {
+            row.crossings += 1;
+        }
+    }
+    if let (Some(map), None) = (&map, &row.failed) {
+        let x: Vec<Vector3<f64>> = (0..model.scene().mesh.n_vertices())
+            .map(|v| Vector3::from(model.vertex_position(VertexId(v))))
+            .collect();
+        row.flat_error = Some(flat_fold_error(map, &x));
+    }
+    row
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let value = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let patterns: Vec<String> = value("--patterns")
+        .map(|v| v.split(',').map(String::from).collect())
+        .unwrap_or_else(|| {
+            ["miura", "yoshimura", "kresling", "waterbomb", "bird"]
+                .map(String::from)
+                .to_vec()
+        });
+    let folds: Vec<String> = args
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| *a == "--fold")
+        .filter_map(|(i, _)| args.get(i + 1).cloned())
+        .collect();
+    let which = value("--contact").unwrap_or_else(|| "both".into());
+    let modes: Vec<bool> = match which.as_str() {
+        "on" => vec![true],
+        "off" => vec![false],
+        _ => vec![false, true],
+    };
+    let check = !args.iter().any(|a| a == "--no-check");
+    let cpu_limit: f64 = value("--cpu-limit").map_or(f64::INFINITY, |v| v.parse().unwrap());
+    let root = env!("CARGO_MANIFEST_DIR");
+    let mut scenes: Vec<(String, Scene, bool)> = Vec::new();
+    for p in &patterns {
+        let load = |f: &str| origami_fmu::scene::load(format!("{root}/{f}")).unwrap().0;
+        let (name, scene, flat) = match p.as_str() {
+            "miura" => {
+                let mut s = load("scenes/miura_4x4.fold");
+                fold_flat(&mut s);
+                ("Miura 4x4 folded flat", s, true)
+            }
+            "yoshimura" => {
+                let mut s = load("scenes/yoshimura.fold");
+                fold_flat(&mut s);
+                ("Yoshimura folded flat", s, true)
+            }
+            "kresling" => {
+                let mut s = load("scenes/kresling.fold");
+                fold_flat(&mut s);
+                ("Kresling folded flat", s, true)
+            }
+            "waterbomb" => {
+                let mut s = load("scenes/waterbomb.fold");
+                waterbomb_base(&mut s);
+                ("waterbomb base", s, true)
+            }
+            "bird" => {
+                let mut s = load("tests/data/flat-folder/089_traditionaloripa_9_Birdbase.fold");
+                fold_flat(&mut s);
+                ("9 bird bases (flat-folder)", s, true)
+            }
+            "pyramid" => {
+                // Its own targets (not flat): it ends at them, uncrossed.
+                let s = load("tests/data/origami-simulator/BoxPleatPyramid.fold");
+                ("BoxPleatPyramid (Origami Simulator)", s, false)
+            }
+            other => panic!("unknown pattern {other}"),
+        };
+        scenes.push((name.to_string(), scene, flat));
+    }
+    for f in &folds {
+        let (mut s, _) = origami_fmu::scene::load(f).unwrap();
+        fold_flat(&mut s);
+        scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, true));
+    }
+    println!(
+        "## Patterns folded over 1 s and held to 1.5 s (default settings, 10 ms steps; CPU of the folds, the checks apart)"
+    );
+    println!(
+        "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing (16/side) | flat-fold error |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    for (name, scene, flat) in &scenes {
+        for &contact in &modes {
+            let facets = scene.mesh.triangles().len();
+            let r = run(scene.clone(), contact, check, *flat, cpu_limit);
+            println!(
+                "| {name} | {facets} | {} | {:.2} | {} | {} | {} | {} | {:.2} (at {:.2} s) | {} | {} |",
+                if contact { "on" } else { "off" },
+                r.cpu,
+                r.steps,
+                r.newton,
+                r.min_gap.map_or("-".into(), |g| format!("{g:.2e}")),
+                r.failed.as_deref().unwrap_or("yes"),
+                r.longest.0,
+                r.longest.1,
+                if check {
+                    format!("{} of {}", r.crossings, r.outputs)
+                } else {
+                    "-".into()
+                },
+                r.flat_error
+                    .map_or("-".into(), |e| format!("{:.2} %", 100.0 * e)),
+            );
+        }
+    }
+}
