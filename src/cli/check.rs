@@ -69,53 +69,9 @@ pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<
     summary_with(path, scene, warnings, &[])
 }
 
-fn summary_with(
-    path: &str,
-    scene: &scene::Scene,
-    warnings: &[String],
-    notes: &[String],
-) -> Result<String, String> {
+/// The material, crease, damping, supports, solver and contact lines.
+fn physics_lines(o: &mut String, scene: &scene::Scene) {
     use std::fmt::Write as _;
-    let m = &scene.mesh;
-    let count = |k: EdgeKind| m.edges().iter().filter(|e| e.kind == k).count();
-    let creases: Vec<f64> = m.creases().map(|e| e.fold_target).collect();
-    let mountains = creases.iter().filter(|&&t| t < 0.0).count();
-    let valleys = creases.iter().filter(|&&t| t > 0.0).count();
-    let mut o = String::new();
-    let _ = writeln!(o, "scene '{}' ({path}): valid", scene.name);
-    let _ = writeln!(
-        o,
-        "  FOLD:      {} vertices, {} edges",
-        scene.fold_vertex_count, scene.fold_edge_count
-    );
-    for n in notes {
-        // "label: text" aligned with the lines around it.
-        let _ = match n.split_once(": ") {
-            Some((label, text)) if label.len() < 10 => {
-                writeln!(o, "  {:<11}{text}", format!("{label}:"))
-            }
-            _ => writeln!(o, "  {n}"),
-        };
-    }
-    let _ = writeln!(
-        o,
-        "  mesh:      {} vertices, {} facets (triangles); {} creases ({mountains} mountain, \
-         {valleys} valley, {} zero targets), {} smooth and {} boundary edges",
-        m.n_vertices(),
-        m.triangles().len(),
-        creases.len(),
-        creases.len() - mountains - valleys,
-        count(EdgeKind::Smooth),
-        count(EdgeKind::Boundary)
-    );
-    // One model build serves the DOF count and the variable tables.
-    let model = Model::new(scene.clone()).map_err(|e| format!("{path}: {e}"))?;
-    let _ = writeln!(
-        o,
-        "  DOFs:      {} ({} vector slots: positions and sector gradients)",
-        model.n_dofs(),
-        model.n_dofs() / 3
-    );
     let mat = &scene.material;
     let _ = writeln!(
         o,
@@ -190,6 +146,11 @@ fn summary_with(
         ),
         None => writeln!(o, "  contact:   off (--contact turns it on)"),
     };
+}
+
+/// The inputs, the output groups and the parameter count.
+fn variable_lines(o: &mut String, scene: &scene::Scene, model: &Model) {
+    use std::fmt::Write as _;
     let inputs: Vec<String> = model.inputs().iter().map(|v| v.name.clone()).collect();
     let _ = writeln!(o, "  inputs ({}): {}", inputs.len(), list(&inputs));
     let outs = model.outputs();
@@ -213,6 +174,57 @@ fn summary_with(
         }
     );
     let _ = writeln!(o, "  parameters ({})", model.parameters().len());
+}
+
+fn summary_with(
+    path: &str,
+    scene: &scene::Scene,
+    warnings: &[String],
+    notes: &[String],
+) -> Result<String, String> {
+    use std::fmt::Write as _;
+    let m = &scene.mesh;
+    let count = |k: EdgeKind| m.edges().iter().filter(|e| e.kind == k).count();
+    let creases: Vec<f64> = m.creases().map(|e| e.fold_target).collect();
+    let mountains = creases.iter().filter(|&&t| t < 0.0).count();
+    let valleys = creases.iter().filter(|&&t| t > 0.0).count();
+    let mut o = String::new();
+    let _ = writeln!(o, "scene '{}' ({path}): valid", scene.name);
+    let _ = writeln!(
+        o,
+        "  FOLD:      {} vertices, {} edges",
+        scene.fold_vertex_count, scene.fold_edge_count
+    );
+    for n in notes {
+        // "label: text" aligned with the lines around it.
+        let _ = match n.split_once(": ") {
+            Some((label, text)) if label.len() < 10 => {
+                writeln!(o, "  {:<11}{text}", format!("{label}:"))
+            }
+            _ => writeln!(o, "  {n}"),
+        };
+    }
+    let _ = writeln!(
+        o,
+        "  mesh:      {} vertices, {} facets (triangles); {} creases ({mountains} mountain, \
+         {valleys} valley, {} zero targets), {} smooth and {} boundary edges",
+        m.n_vertices(),
+        m.triangles().len(),
+        creases.len(),
+        creases.len() - mountains - valleys,
+        count(EdgeKind::Smooth),
+        count(EdgeKind::Boundary)
+    );
+    // One model build serves the DOF count and the variable tables.
+    let model = Model::new(scene.clone()).map_err(|e| format!("{path}: {e}"))?;
+    let _ = writeln!(
+        o,
+        "  DOFs:      {} ({} vector slots: positions and sector gradients)",
+        model.n_dofs(),
+        model.n_dofs() / 3
+    );
+    physics_lines(&mut o, scene);
+    variable_lines(&mut o, scene, &model);
     let _ = writeln!(o, "  warnings ({})", warnings.len());
     for w in warnings {
         let _ = writeln!(o, "    - {w}");

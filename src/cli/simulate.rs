@@ -187,6 +187,25 @@ struct Pictures {
 }
 
 impl Pictures {
+    /// What `--gif`, `--snapshots` and `--plot` ask to record over `n`
+    /// communication steps (None: no pictures).
+    fn for_args(args: &SimulateArgs, model: &Model, n: usize) -> Option<Pictures> {
+        let rows = |on: bool, count| {
+            if on {
+                crate::pictures::frame_rows(n + 1, count)
+            } else {
+                vec![]
+            }
+        };
+        (args.gif.is_some() || args.snapshots.is_some() || args.plot.is_some()).then(|| Pictures {
+            sheet: crate::pictures::Sheet::new(model),
+            gif_rows: rows(args.gif.is_some(), 50),
+            snapshot_rows: rows(args.snapshots.is_some(), 6),
+            frames: Vec::new(),
+            series: Default::default(),
+        })
+    }
+
     fn record(&mut self, row: usize, model: &Model, values: &[f64]) {
         if self.gif_rows.contains(&row) || self.snapshot_rows.contains(&row) {
             self.frames.push((row, self.sheet.frame(model, values)));
@@ -294,46 +313,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     }
     let scene = loaded.scene;
     let stop = args.stop_time.unwrap_or(scene.solver.stop_time);
-    if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
-        return Err("--step and --stop-time must be positive numbers".into());
-    }
-    if stop / args.step > MAX_STEPS as f64 {
-        return Err(format!(
-            "--stop-time / --step gives {} communication steps; at most {MAX_STEPS} \
-             (one CSV row each): take a longer --step",
-            crate::text::num((stop / args.step).round())
-        ));
-    }
-    if !(args.ramp >= 0.0 && args.ramp.is_finite()) {
-        return Err("--ramp must be zero or a positive number of seconds".into());
-    }
+    check_times(args, stop)?;
     let title = scene.name.clone();
     let mut model = Model::new(scene).map_err(|e| e.to_string())?;
-    let signals = match &args.input {
-        Some(p) => Some(read_inputs(p, &model)?),
-        None => {
-            // The built-in ramp of the model (the FMU's ramp.time): the
-            // same signal whatever the stop time.
-            let shape = match args.ramp_shape {
-                RampShapeArg::Linear => 0.0,
-                RampShapeArg::Smooth => 1.0,
-            };
-            let has = set_parameter(&mut model, "ramp.time", args.ramp)?;
-            set_parameter(&mut model, "ramp.shape", shape)?;
-            if has && args.ramp > 0.0 {
-                super::err(&format!(
-                    "input: every rest-angle actuator ramps from 0 to 1 over {} s ({}), then holds 1\n",
-                    args.ramp,
-                    if shape == 0.0 { "linear" } else { "smooth" }
-                ));
-            } else if !has {
-                super::err(
-                    "input: the scene has no rest-angle actuator; inputs stay at their start values\n",
-                );
-            }
-            None
-        }
-    };
+    let signals = choose_signals(args, &mut model)?;
     if let Some(sig) = &signals {
         for (i, v) in sig.at(0.0) {
             model
@@ -342,88 +325,31 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         }
     }
     model.initialize().map_err(|e| e.to_string())?;
-    let mut csv = match &args.output {
-        Some(path) => {
-            let file = std::fs::File::create(path)
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-            let mut out = std::io::BufWriter::new(file);
-            let names: Vec<&str> = model.outputs().iter().map(|v| v.name.as_str()).collect();
-            writeln!(out, "time,{}", names.join(","))
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-            Some((out, path))
-        }
-        None => None,
-    };
-    let write_row = |csv: &mut Option<(std::io::BufWriter<std::fs::File>, &PathBuf)>,
-                     t: f64,
-                     vals: &[f64]|
-     -> Result<(), String> {
-        if let Some((out, path)) = csv {
-            let mut line = format!("{t}");
-            for v in vals {
-                line.push_str(&format!(",{v}"));
-            }
-            writeln!(out, "{line}").map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        }
-        Ok(())
-    };
+    let mut csv = args
+        .output
+        .as_ref()
+        .map(|path| Csv::create(path, &model))
+        .transpose()?;
     let n = (stop / args.step).round().max(1.0) as usize;
-    let mut pictures = (args.gif.is_some() || args.snapshots.is_some() || args.plot.is_some())
-        .then(|| Pictures {
-            sheet: crate::pictures::Sheet::new(&model),
-            gif_rows: if args.gif.is_some() {
-                crate::pictures::frame_rows(n + 1, 50)
-            } else {
-                vec![]
-            },
-            snapshot_rows: if args.snapshots.is_some() {
-                crate::pictures::frame_rows(n + 1, 6)
-            } else {
-                vec![]
-            },
-            frames: Vec::new(),
-            series: Default::default(),
-        });
+    let mut pictures = Pictures::for_args(args, &model, n);
     let values = model.output_values();
-    write_row(&mut csv, 0.0, &values)?;
+    if let Some(c) = csv.as_mut() {
+        c.row(0.0, &values)?;
+    }
     if let Some(p) = pictures.as_mut() {
         p.record(0, &model, &values);
     }
-    let mut series = match &args.pvd {
-        Some(dir) => {
-            let stem = args
-                .scene
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "scene".into());
-            let mut s =
-                crate::paraview::Series::new(dir, &stem, &model).map_err(|e| e.to_string())?;
-            s.write(&model).map_err(|e| e.to_string())?;
-            Some(s)
-        }
-        None => None,
-    };
+    let mut series = pvd_series(args, &model)?;
     let clock = crate::cpu_time::Stopwatch::start();
     let mut progress = Progress::new(n, stop);
     let mut total = crate::model::StepReport::default();
     let mut failure = None;
     for k in 1..=n {
         let t = (k as f64 * args.step).min(stop);
-        let t0 = model.time();
-        let h = t - t0;
-        // The table's value at the step start and its slope over the step
-        // (the FMU's held input plus derivative): the piecewise linear
-        // signal itself, never a staircase.
         if let Some(sig) = &signals {
-            for ((i, v0), (_, v1)) in sig.at(t0).into_iter().zip(sig.at(t)) {
-                let i = crate::model::InputId(i);
-                model.set_input(i, v0).map_err(|e| e.to_string())?;
-                model
-                    .set_input_derivative(i, 1, (v1 - v0) / h)
-                    .map_err(|e| e.to_string())?;
-            }
+            set_signals(&mut model, sig, t)?;
         }
-        match model.advance(h) {
+        match model.advance(t - model.time()) {
             Ok(r) => total.accumulate(&r),
             Err(e) => {
                 failure = Some(e.to_string());
@@ -431,7 +357,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             }
         }
         let values = model.output_values();
-        write_row(&mut csv, t, &values)?;
+        if let Some(c) = csv.as_mut() {
+            c.row(t, &values)?;
+        }
         if let Some(p) = pictures.as_mut() {
             p.record(k, &model, &values);
         }
@@ -442,9 +370,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     }
     progress.finish();
     let (cpu, wall) = (clock.cpu(), clock.wall());
-    if let Some((out, path)) = csv.as_mut() {
-        out.flush()
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    if let Some(c) = csv.as_mut() {
+        c.flush()?;
     }
     if let Some(s) = &series {
         super::err(&format!(
@@ -464,7 +391,137 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     super::err(&format!(
         "simulated {reached} s in {cpu:.2} s of CPU ({wall:.2} s wall){to}\n"
     ));
-    super::err(&format!(
+    super::err(&closing_report(&total));
+    match failure {
+        None => Ok(()),
+        Some(e) => Err(format!(
+            "{e}; the run stopped at t = {reached} of {stop} s (outputs up to there are written)"
+        )),
+    }
+}
+
+/// The communication step, the stop time and the ramp are usable.
+fn check_times(args: &SimulateArgs, stop: f64) -> Result<(), String> {
+    if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
+        return Err("--step and --stop-time must be positive numbers".into());
+    }
+    if stop / args.step > MAX_STEPS as f64 {
+        return Err(format!(
+            "--stop-time / --step gives {} communication steps; at most {MAX_STEPS} \
+             (one CSV row each): take a longer --step",
+            crate::text::num((stop / args.step).round())
+        ));
+    }
+    if !(args.ramp >= 0.0 && args.ramp.is_finite()) {
+        return Err("--ramp must be zero or a positive number of seconds".into());
+    }
+    Ok(())
+}
+
+/// The input table of `--input`, or else the model's built-in ramp (the
+/// FMU's ramp.time: the same signal whatever the stop time), said on stderr.
+fn choose_signals(args: &SimulateArgs, model: &mut Model) -> Result<Option<Signals>, String> {
+    if let Some(p) = &args.input {
+        return Ok(Some(read_inputs(p, model)?));
+    }
+    let shape = match args.ramp_shape {
+        RampShapeArg::Linear => 0.0,
+        RampShapeArg::Smooth => 1.0,
+    };
+    let has = set_parameter(model, "ramp.time", args.ramp)?;
+    set_parameter(model, "ramp.shape", shape)?;
+    if has && args.ramp > 0.0 {
+        super::err(&format!(
+            "input: every rest-angle actuator ramps from 0 to 1 over {} s ({}), then holds 1\n",
+            args.ramp,
+            if shape == 0.0 { "linear" } else { "smooth" }
+        ));
+    } else if !has {
+        super::err(
+            "input: the scene has no rest-angle actuator; inputs stay at their start values\n",
+        );
+    }
+    Ok(None)
+}
+
+/// The table's value at the step start and its slope over the step to `t`
+/// (the FMU's held input plus derivative): the piecewise linear signal
+/// itself, never a staircase.
+fn set_signals(model: &mut Model, sig: &Signals, t: f64) -> Result<(), String> {
+    let t0 = model.time();
+    let h = t - t0;
+    for ((i, v0), (_, v1)) in sig.at(t0).into_iter().zip(sig.at(t)) {
+        let i = crate::model::InputId(i);
+        model.set_input(i, v0).map_err(|e| e.to_string())?;
+        model
+            .set_input_derivative(i, 1, (v1 - v0) / h)
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// The CSV of `--output`: a header of the output names, a row per
+/// communication point.
+struct Csv<'a> {
+    out: std::io::BufWriter<std::fs::File>,
+    path: &'a PathBuf,
+}
+
+impl<'a> Csv<'a> {
+    fn create(path: &'a PathBuf, model: &Model) -> Result<Self, String> {
+        let file = std::fs::File::create(path)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        let mut csv = Csv {
+            out: std::io::BufWriter::new(file),
+            path,
+        };
+        let names: Vec<&str> = model.outputs().iter().map(|v| v.name.as_str()).collect();
+        let header = format!("time,{}", names.join(","));
+        csv.line(&header)?;
+        Ok(csv)
+    }
+
+    fn line(&mut self, line: &str) -> Result<(), String> {
+        writeln!(self.out, "{line}")
+            .map_err(|e| format!("cannot write {}: {e}", self.path.display()))
+    }
+
+    fn row(&mut self, t: f64, vals: &[f64]) -> Result<(), String> {
+        let mut line = format!("{t}");
+        for v in vals {
+            line.push_str(&format!(",{v}"));
+        }
+        self.line(&line)
+    }
+
+    fn flush(&mut self) -> Result<(), String> {
+        self.out
+            .flush()
+            .map_err(|e| format!("cannot write {}: {e}", self.path.display()))
+    }
+}
+
+/// The ParaView series of `--pvd`, its first frame written.
+fn pvd_series(
+    args: &SimulateArgs,
+    model: &Model,
+) -> Result<Option<crate::paraview::Series>, String> {
+    let Some(dir) = &args.pvd else {
+        return Ok(None);
+    };
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let mut s = crate::paraview::Series::new(dir, &stem, model).map_err(|e| e.to_string())?;
+    s.write(model).map_err(|e| e.to_string())?;
+    Ok(Some(s))
+}
+
+/// The stepper's work over the run, a line for stderr.
+fn closing_report(total: &crate::model::StepReport) -> String {
+    format!(
         "{} internal steps ({} rejected, smallest {:.3e} s), {} Newton iterations, \
          {} factorizations; CPU in assembly {:.2} s, factorization {:.2} s, solves {:.2} s\n",
         total.steps,
@@ -475,13 +532,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         total.assembly_time,
         total.factor_time,
         total.solve_time
-    ));
-    match failure {
-        None => Ok(()),
-        Some(e) => Err(format!(
-            "{e}; the run stopped at t = {reached} of {stop} s (outputs up to there are written)"
-        )),
-    }
+    )
 }
 
 #[cfg(test)]

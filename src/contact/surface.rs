@@ -59,6 +59,50 @@ enum Site {
     Inside(usize, usize, usize),
 }
 
+/// Each sub-triangle side once, with the facets it lies on.
+#[allow(clippy::type_complexity)]
+fn fine_edges(fine_tris: &[([usize; 3], usize)]) -> Vec<([usize; 2], Vec<usize>)> {
+    let mut edge_of: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut fine_edges: Vec<([usize; 2], Vec<usize>)> = Vec::new();
+    for &(t, f) in fine_tris {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            let e = *edge_of.entry(key).or_insert_with(|| {
+                fine_edges.push(([key.0, key.1], Vec::new()));
+                fine_edges.len() - 1
+            });
+            if !fine_edges[e].1.contains(&f) {
+                fine_edges[e].1.push(f);
+                fine_edges[e].1.sort_unstable();
+            }
+        }
+    }
+    fine_edges
+}
+
+/// For each facet, the facets that share a vertex with it (itself too).
+fn facet_neighbours(mesh: &Mesh) -> Vec<Vec<usize>> {
+    let mut vertex_faces = vec![Vec::new(); mesh.n_vertices()];
+    for (f, tri) in mesh.triangles().iter().enumerate() {
+        for &v in tri {
+            vertex_faces[v.index()].push(f);
+        }
+    }
+    mesh.triangles()
+        .iter()
+        .map(|tri| {
+            let mut nb: Vec<usize> = tri
+                .iter()
+                .flat_map(|&v| vertex_faces[v.index()].iter().copied())
+                .collect();
+            nb.sort_unstable();
+            nb.dedup();
+            nb
+        })
+        .collect()
+}
+
 impl ContactSurface {
     /// Sample every facet of `mesh` with `n >= 1` subdivisions per side.
     #[allow(clippy::needless_range_loop)] // i, j are lattice coordinates
@@ -136,23 +180,7 @@ impl ContactSurface {
             .vertex_ids()
             .map(|v| index.get(&Site::Corner(v)).copied().unwrap_or(usize::MAX))
             .collect();
-        // Fine edges: each sub-triangle side once, with the facets it lies on.
-        let mut edge_of: HashMap<(usize, usize), usize> = HashMap::new();
-        let mut fine_edges: Vec<([usize; 2], Vec<usize>)> = Vec::new();
-        for &(t, f) in &fine_tris {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                let key = (a.min(b), a.max(b));
-                let e = *edge_of.entry(key).or_insert_with(|| {
-                    fine_edges.push(([key.0, key.1], Vec::new()));
-                    fine_edges.len() - 1
-                });
-                if !fine_edges[e].1.contains(&f) {
-                    fine_edges[e].1.push(f);
-                    fine_edges[e].1.sort_unstable();
-                }
-            }
-        }
+        let fine_edges = fine_edges(&fine_tris);
         let coarse_edges = mesh
             .edges()
             .iter()
@@ -163,25 +191,7 @@ impl ContactSurface {
                 ([corner[e.v[0].index()], corner[e.v[1].index()]], fs)
             })
             .collect();
-        let mut vertex_faces = vec![Vec::new(); mesh.n_vertices()];
-        for (f, tri) in mesh.triangles().iter().enumerate() {
-            for &v in tri {
-                vertex_faces[v.index()].push(f);
-            }
-        }
-        let neighbours = mesh
-            .triangles()
-            .iter()
-            .map(|tri| {
-                let mut nb: Vec<usize> = tri
-                    .iter()
-                    .flat_map(|&v| vertex_faces[v.index()].iter().copied())
-                    .collect();
-                nb.sort_unstable();
-                nb.dedup();
-                nb
-            })
-            .collect();
+        let neighbours = facet_neighbours(mesh);
         let mut facet_fine_tris = vec![Vec::new(); mesh.triangles().len()];
         for (k, &(_, f)) in fine_tris.iter().enumerate() {
             facet_fine_tris[f].push(k);

@@ -135,31 +135,9 @@ impl System {
         let mesh = &sc.mesh;
         let layout = crate::dofs::DofLayout::new(mesh);
         let q_ref = layout.reference_state(mesh);
-        let mut fixed = Vec::new();
         let mut is_fixed = vec![false; layout.n_slots()];
-        let mut supported = Vec::new();
-        // The slots each support holds (slot, is a position).
-        let mut support_slots = Vec::with_capacity(sc.supports.len());
-        for sup in &sc.supports {
-            let mut mine = Vec::new();
-            for &v in &sup.vertices {
-                let slots = match sup.fix {
-                    Fix::Position => vec![layout.position_slot[v.index()]],
-                    Fix::Clamped => layout.vertex_slots(v),
-                };
-                for s in slots {
-                    if !is_fixed[s] {
-                        is_fixed[s] = true;
-                        fixed.push(s);
-                        mine.push((s, layout.slot_kind[s] == SlotKind::Position));
-                        for c in 0..3 {
-                            supported.push((3 * s + c, q_ref[3 * s + c]));
-                        }
-                    }
-                }
-            }
-            support_slots.push(mine);
-        }
+        let (mut fixed, supported, support_slots) =
+            support_slots(sc, &layout, &q_ref, &mut is_fixed);
         let n_act = sc.actuators.len();
         let mut motion = Vec::new();
         let mut idx = n_act + 3 * sc.vertex_forces.len();
@@ -203,24 +181,7 @@ impl System {
                 && sc.solver.integration.lag_membrane_stiffness,
         );
         if let Some(c) = &sc.contact {
-            if sc.solver.integrator == SceneIntegrator::CentralDifference {
-                return Err(Error::Scene(
-                    "ancf:contact needs the implicit integrator (its Newton steps are \
-                     collision-checked); remove \"integrator\": \"central_difference\""
-                        .into(),
-                ));
-            }
-            let m = &physics.material;
-            let term = ContactTerm::new(
-                mesh,
-                &asm.layout,
-                &asm.elements,
-                c,
-                m.density * m.thickness,
-                m.youngs_modulus * m.thickness,
-            )
-            .map_err(Error::Scene)?;
-            asm.add_term(Box::new(term));
+            add_contact(sc, c, &mut asm)?;
         }
         // Damping leaves alone the rigid motion the supports allow; a sheet
         // held by frames, the frames' motion.
@@ -248,52 +209,9 @@ impl System {
             Some(&block_coords),
         )
         .map_err(|e| Error::Scene(e.to_string()))?;
-        let nends = asm.creases.len();
-        let mut rest = vec![Vec::new(); nends];
-        let mut torque = vec![Vec::new(); nends];
-        // The actuators of each mesh edge, in actuator order.
-        let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges().len()];
-        for (a, act) in sc.actuators.iter().enumerate() {
-            for &e in &act.edges {
-                if driven_by[e.index()].last() != Some(&a) {
-                    driven_by[e.index()].push(a);
-                }
-            }
-        }
-        for (i, ce) in asm.creases.iter().enumerate() {
-            for &a in &driven_by[ce.edge.index()] {
-                match sc.actuators[a].mode {
-                    ActuatorMode::RestAngle => rest[i].push((a, mesh.edge(ce.edge).fold_target)),
-                    ActuatorMode::Torque => torque[i].push(a),
-                }
-            }
-        }
-        let gravity = sc.gravity.map(|g| {
-            let mut qg = vec![0.0; asm.n_dofs()];
-            for v in mesh.vertex_ids() {
-                let s = asm.position_slot(v);
-                qg[3 * s..3 * s + 3].copy_from_slice(&g);
-            }
-            let mut f = vec![0.0; asm.n_dofs()];
-            asm.mass_mul(&qg, &mut f);
-            f
-        });
-        // For each crease output (FOLD edge), its crease ends in order.
-        let outputs = fold_edges(sc);
-        let mut output_of: HashMap<FoldEdgeId, usize> = HashMap::with_capacity(outputs.len());
-        for (k, &fe) in outputs.iter().enumerate() {
-            output_of.insert(fe, k);
-        }
-        let mut angle_ends: Vec<Vec<usize>> = vec![Vec::new(); outputs.len()];
-        for (i, ce) in asm.creases.iter().enumerate() {
-            if let Some(&k) = mesh
-                .edge(ce.edge)
-                .fold_edge
-                .and_then(|fe| output_of.get(&fe))
-            {
-                angle_ends[k].push(i);
-            }
-        }
+        let (rest, torque) = crease_actuators(sc, &asm);
+        let gravity = sc.gravity.map(|g| gravity_force(mesh, &asm, g));
+        let angle_ends = angle_ends(sc, &asm);
         let length = mesh.size().max(f64::MIN_POSITIVE);
         let stepper = stepper(sc, &asm, &q_ref, length)?;
         Ok(System {
@@ -318,6 +236,133 @@ impl System {
             asm,
         })
     }
+}
+
+/// Self-contact's force term on the assembler (the implicit integrator only).
+fn add_contact(
+    sc: &Scene,
+    c: &crate::contact::ContactSettings,
+    asm: &mut Assembler,
+) -> Result<(), Error> {
+    let mesh = &sc.mesh;
+    if sc.solver.integrator == SceneIntegrator::CentralDifference {
+        return Err(Error::Scene(
+            "ancf:contact needs the implicit integrator (its Newton steps are \
+             collision-checked); remove \"integrator\": \"central_difference\""
+                .into(),
+        ));
+    }
+    let m = &asm.physics.material;
+    let term = ContactTerm::new(
+        mesh,
+        &asm.layout,
+        &asm.elements,
+        c,
+        m.density * m.thickness,
+        m.youngs_modulus * m.thickness,
+    )
+    .map_err(Error::Scene)?;
+    asm.add_term(Box::new(term));
+    Ok(())
+}
+
+/// The consistent nodal force of gravity `g` (m/s^2) on the sheet: M
+/// times the uniform acceleration of every position slot.
+fn gravity_force(mesh: &crate::mesh::Mesh, asm: &Assembler, g: [f64; 3]) -> Vec<f64> {
+    let mut qg = vec![0.0; asm.n_dofs()];
+    for v in mesh.vertex_ids() {
+        let s = asm.position_slot(v);
+        qg[3 * s..3 * s + 3].copy_from_slice(&g);
+    }
+    let mut f = vec![0.0; asm.n_dofs()];
+    asm.mass_mul(&qg, &mut f);
+    f
+}
+
+/// The slots the supports fix (marked in `is_fixed`), the supported
+/// scalar DOFs with their reference values, and each support's slots
+/// (slot, is a position).
+#[allow(clippy::type_complexity)]
+fn support_slots(
+    sc: &Scene,
+    layout: &crate::dofs::DofLayout,
+    q_ref: &[f64],
+    is_fixed: &mut [bool],
+) -> (Vec<usize>, Vec<(usize, f64)>, Vec<Vec<(usize, bool)>>) {
+    let mut fixed = Vec::new();
+    let mut supported = Vec::new();
+    // The slots each support holds (slot, is a position).
+    let mut support_slots = Vec::with_capacity(sc.supports.len());
+    for sup in &sc.supports {
+        let mut mine = Vec::new();
+        for &v in &sup.vertices {
+            let slots = match sup.fix {
+                Fix::Position => vec![layout.position_slot[v.index()]],
+                Fix::Clamped => layout.vertex_slots(v),
+            };
+            for s in slots {
+                if !is_fixed[s] {
+                    is_fixed[s] = true;
+                    fixed.push(s);
+                    mine.push((s, layout.slot_kind[s] == SlotKind::Position));
+                    for c in 0..3 {
+                        supported.push((3 * s + c, q_ref[3 * s + c]));
+                    }
+                }
+            }
+        }
+        support_slots.push(mine);
+    }
+    (fixed, supported, support_slots)
+}
+
+/// For each crease end, the rest-angle actuators (with the crease's full
+/// target) and the torque actuators that drive it, in actuator order.
+#[allow(clippy::type_complexity)]
+fn crease_actuators(sc: &Scene, asm: &Assembler) -> (Vec<Vec<(usize, f64)>>, Vec<Vec<usize>>) {
+    let mesh = &sc.mesh;
+    let nends = asm.creases.len();
+    let mut rest = vec![Vec::new(); nends];
+    let mut torque = vec![Vec::new(); nends];
+    // The actuators of each mesh edge, in actuator order.
+    let mut driven_by: Vec<Vec<usize>> = vec![Vec::new(); mesh.edges().len()];
+    for (a, act) in sc.actuators.iter().enumerate() {
+        for &e in &act.edges {
+            if driven_by[e.index()].last() != Some(&a) {
+                driven_by[e.index()].push(a);
+            }
+        }
+    }
+    for (i, ce) in asm.creases.iter().enumerate() {
+        for &a in &driven_by[ce.edge.index()] {
+            match sc.actuators[a].mode {
+                ActuatorMode::RestAngle => rest[i].push((a, mesh.edge(ce.edge).fold_target)),
+                ActuatorMode::Torque => torque[i].push(a),
+            }
+        }
+    }
+    (rest, torque)
+}
+
+/// For each crease output (FOLD edge), its crease ends in order.
+fn angle_ends(sc: &Scene, asm: &Assembler) -> Vec<Vec<usize>> {
+    let mesh = &sc.mesh;
+    let outputs = fold_edges(sc);
+    let mut output_of: HashMap<FoldEdgeId, usize> = HashMap::with_capacity(outputs.len());
+    for (k, &fe) in outputs.iter().enumerate() {
+        output_of.insert(fe, k);
+    }
+    let mut angle_ends: Vec<Vec<usize>> = vec![Vec::new(); outputs.len()];
+    for (i, ce) in asm.creases.iter().enumerate() {
+        if let Some(&k) = mesh
+            .edge(ce.edge)
+            .fold_edge
+            .and_then(|fe| output_of.get(&fe))
+        {
+            angle_ends[k].push(i);
+        }
+    }
+    angle_ends
 }
 
 /// The time integrator scene `sc` asks for: generalized-alpha with its
