@@ -791,11 +791,9 @@ impl Assembler {
         self.terms.iter().any(|t| t.limits_steps())
     }
 
-    /// The force term of type `T`, if the assembler has one.
-    pub fn term<T: 'static>(&self) -> Option<&T> {
-        self.terms
-            .iter()
-            .find_map(|t| t.as_any().and_then(|a| a.downcast_ref::<T>()))
+    /// The self-contact term, if the assembler has one.
+    pub fn contact(&self) -> Option<&crate::contact::ContactTerm> {
+        self.terms.iter().find_map(|t| t.as_contact())
     }
 
     /// The viscous force at `(q, v)` (all DOFs; [`ForceTerm::viscous_force`]

@@ -335,7 +335,7 @@ fn friction_stops_a_correction_where_a_sliding_pair_comes_to_rest() {
     };
     let v0 = slide(0.02);
     asm.before_step(&q, &v0);
-    let term = asm.term::<ContactTerm>().unwrap();
+    let term = asm.contact().unwrap();
     // dv/dq of the correction: any positive factor.
     let c = 1e3;
     let dq = |dv: f64| -> Vec<f64> { slide(dv / c) };
@@ -346,7 +346,7 @@ fn friction_stops_a_correction_where_a_sliding_pair_comes_to_rest() {
     // Without friction nothing stops.
     let (mut plain, q) = tilted_pair(&fd_settings(0.0, 0.0));
     plain.before_step(&q, &v0);
-    let term = plain.term::<ContactTerm>().unwrap();
+    let term = plain.contact().unwrap();
     assert_eq!(term.friction_fraction(&v0, &dq(-0.04), c), 1.0);
 }
 
@@ -360,7 +360,7 @@ fn the_step_report_equals_a_fresh_search() {
     let (mut asm, q) = tilted_pair(&fd_settings(0.3, 1.0));
     let v = vec![0.0; q.len()];
     asm.before_step(&q, &v);
-    let term = asm.term::<ContactTerm>().unwrap();
+    let term = asm.contact().unwrap();
     let reach = term.report_reach();
     for dz in [0.0, -0.1 * reach, 3.0 * reach] {
         let mut qm = q.clone();

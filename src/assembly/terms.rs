@@ -123,8 +123,9 @@ pub trait ForceTerm: Send + Sync {
         None
     }
 
-    /// The term as `Any`, for callers that need its own reports.
-    fn as_any(&self) -> Option<&dyn std::any::Any> {
+    /// The term as self-contact, for the contact reports (typed access,
+    /// no downcast).
+    fn as_contact(&self) -> Option<&crate::contact::ContactTerm> {
         None
     }
 

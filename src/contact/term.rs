@@ -34,7 +34,6 @@ use crate::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, State};
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
-use std::any::Any;
 use std::collections::HashMap;
 
 /// Contact settings (scene keys under `ancf:contact`).
@@ -1354,7 +1353,7 @@ impl ForceTerm for ContactTerm {
         "contact"
     }
 
-    fn as_any(&self) -> Option<&dyn Any> {
+    fn as_contact(&self) -> Option<&ContactTerm> {
         Some(self)
     }
 

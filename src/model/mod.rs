@@ -277,7 +277,7 @@ impl Model {
             return None;
         }
         let sys = self.sys.as_ref()?;
-        let c = sys.asm.term::<crate::contact::ContactTerm>()?;
+        let c = sys.asm.contact()?;
         Some(
             *self
                 .read_cache
