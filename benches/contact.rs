@@ -93,17 +93,7 @@ fn main() {
     // midline unfolded: the file's targets are a 3D waterbomb).
     let own = |_: &Mesh, _: usize, t: f64| t;
     let flat = |_: &Mesh, _: usize, t: f64| PI * t.signum();
-    let base = |m: &Mesh, e: usize, _: f64| {
-        let [a, b] = m.edges()[e].v;
-        let d = m.coord(b) - m.coord(a);
-        if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
-            PI
-        } else if d.y.abs() <= 1e-9 {
-            -PI
-        } else {
-            0.0
-        }
-    };
+    let base = |m: &Mesh, e: usize, _: f64| origami_fmu::benchmarks::waterbomb_base_target(m, e);
     let scenes: [(&str, &str, &Target); 4] = [
         ("diagonal to 180 deg", "diag", &flat),
         (

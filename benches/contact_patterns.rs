@@ -66,14 +66,7 @@ fn waterbomb_base(scene: &mut Scene) {
         if edge.kind != EdgeKind::Crease {
             continue;
         }
-        let d = scene.mesh.coord(edge.v[1]) - scene.mesh.coord(edge.v[0]);
-        let t = if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
-            PI
-        } else if d.y.abs() <= 1e-9 {
-            -PI
-        } else {
-            0.0
-        };
+        let t = origami_fmu::benchmarks::waterbomb_base_target(&scene.mesh, e);
         scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
     }
 }
@@ -151,12 +144,7 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> 
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = origami_fmu::benchmarks::arg_text;
     let patterns: Vec<String> = value("--patterns")
         .map(|v| v.split(',').map(String::from).collect())
         .unwrap_or_else(|| {

@@ -152,13 +152,7 @@ fn crease_step(path: Path, tau: Option<f64>) -> (f64, StepReport, f64) {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = origami_fmu::benchmarks::arg_text;
     let sizes: Vec<usize> = value("--sizes")
         .map(|v| v.split(',').map(|x| x.parse().expect("a size")).collect())
         .unwrap_or_else(|| vec![4, 10, 16]);

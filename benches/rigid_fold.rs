@@ -33,12 +33,7 @@ use origami_fmu::scene::patterns::Miura;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = origami_fmu::benchmarks::arg_text;
     let panels: Vec<usize> = value("--panels")
         .map(|v| v.split(',').map(|x| x.parse().expect("panels")).collect())
         .unwrap_or_else(|| vec![4, 8, 10, 16]);

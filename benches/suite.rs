@@ -256,15 +256,7 @@ fn contact(tweak: &dyn Fn(&mut Scene)) -> Row {
     let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
     for e in 0..scene.mesh.edges().len() {
         if scene.mesh.edges()[e].kind == origami_fmu::mesh::EdgeKind::Crease {
-            let [a, b] = scene.mesh.edges()[e].v;
-            let d = scene.mesh.coord(b) - scene.mesh.coord(a);
-            let t = if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
-                PI
-            } else if d.y.abs() <= 1e-9 {
-                -PI
-            } else {
-                0.0
-            };
+            let t = origami_fmu::benchmarks::waterbomb_base_target(&scene.mesh, e);
             scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
         }
     }
@@ -407,13 +399,7 @@ fn mean_ratio(base: &Rows, rows: &Rows, f: impl Fn(&Row) -> f64) -> Option<f64> 
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = origami_fmu::benchmarks::arg_text;
     let wanted: Option<Vec<String>> =
         value("--scenes").map(|v| v.split(',').map(String::from).collect());
     let chosen: Vec<_> = scenes()

@@ -699,15 +699,36 @@ pub fn unit_grid_fold(n: usize) -> crate::scene::FoldFile {
     }
 }
 
-/// The whole-number value after `name` on the bench's command line, or
-/// `default` (the benches' one argument reader).
-pub fn arg(name: &str, default: usize) -> usize {
+/// The target (rad) of mesh edge `e` in the waterbomb base collapsed flat
+/// (`scenes/waterbomb.fold`'s own targets are a 3D waterbomb): the
+/// diagonals valley, the midline along x mountain, the midline along y
+/// unfolded.
+pub fn waterbomb_base_target(mesh: &crate::mesh::Mesh, e: usize) -> f64 {
+    let [a, b] = mesh.edges()[e].v;
+    let d = mesh.coord(b) - mesh.coord(a);
+    if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
+        std::f64::consts::PI
+    } else if d.y.abs() <= 1e-9 {
+        -std::f64::consts::PI
+    } else {
+        0.0
+    }
+}
+
+/// The text after `name` on the bench's command line (the benches' one
+/// argument reader).
+pub fn arg_text(name: &str) -> Option<String> {
     let args: Vec<String> = std::env::args().collect();
     args.iter()
         .position(|a| a == name)
         .and_then(|i| args.get(i + 1))
-        .map(|v| v.parse().expect("a number"))
-        .unwrap_or(default)
+        .cloned()
+}
+
+/// The whole-number value after `name` on the bench's command line, or
+/// `default`.
+pub fn arg(name: &str, default: usize) -> usize {
+    arg_text(name).map_or(default, |v| v.parse().expect("a number"))
 }
 
 /// Best-of-`repeats` CPU time of `f` on this thread in microseconds (the

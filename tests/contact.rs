@@ -671,17 +671,7 @@ fn miura_folds_flat_into_a_stack_without_intersection() {
 /// unfolded (the scene's own targets are a 3D waterbomb, not flat).
 #[test]
 fn waterbomb_base_collapses_without_intersection() {
-    let target = |m: &Mesh, e: usize| {
-        let [a, b] = m.edges()[e].v;
-        let d = m.coord(b) - m.coord(a);
-        if d.x.abs() > 1e-9 && d.y.abs() > 1e-9 {
-            PI
-        } else if d.y.abs() <= 1e-9 {
-            -PI
-        } else {
-            0.0
-        }
-    };
+    let target = origami_fmu::benchmarks::waterbomb_base_target;
     let (model, least) = fold_flat("scenes/waterbomb.fold", target, 0.5, 0.8);
     let c = model.contact().unwrap();
     assert!(c.pairs > 0, "the layers touch");

@@ -10,32 +10,9 @@ mod common;
 use common::fmi::*;
 use origami_fmu::fmi::container;
 use origami_fmu::fmi::exports::*;
-use origami_fmu::ids::VertexId;
-use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::Model;
-use origami_fmu::scene::{Scene, VertexInput};
+use origami_fmu::scene::Scene;
 use serde_json::{Value, json};
-
-/// The square of `tests/fmi_abi.rs`: one creased diagonal, a vertex force.
-fn square() -> Scene {
-    let mut s = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));
-    s.vertex_forces.push(VertexInput {
-        name: "tip".into(),
-        vertex: VertexId(2),
-    });
-    s
-}
-
-/// The square with self-contact on (contact outputs, extra matrix pairs).
-fn contact_square() -> Scene {
-    let mut s = square();
-    s.name = "contact_square".into();
-    s.contact = Some(origami_fmu::contact::ContactSettings {
-        thickness: 5e-4,
-        ..Default::default()
-    });
-    s
-}
 
 /// Value reference of the variable called `name`.
 fn vr(scene: &Scene, name: &str) -> u32 {

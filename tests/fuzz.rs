@@ -16,11 +16,9 @@ use common::fmi::*;
 use origami_fmu::fmi::container;
 use origami_fmu::fmi::exports::*;
 use origami_fmu::fmi::types::fmi2FMUstate;
-use origami_fmu::ids::VertexId;
-use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::Model;
 use origami_fmu::rng::XorShift;
-use origami_fmu::scene::{self, FrameSelector, LoadOptions, Scene, VertexInput};
+use origami_fmu::scene::{self, FrameSelector, LoadOptions, Scene};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::ptr::null_mut;
@@ -231,25 +229,6 @@ fn pointers(v: &Value) -> Vec<String> {
     let mut out = Vec::new();
     walk(v, String::new(), &mut out);
     out
-}
-
-fn square() -> Scene {
-    let mut s = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));
-    s.vertex_forces.push(VertexInput {
-        name: "tip".into(),
-        vertex: VertexId(2),
-    });
-    s
-}
-
-fn contact_square() -> Scene {
-    let mut s = square();
-    s.name = "contact_square".into();
-    s.contact = Some(origami_fmu::contact::ContactSettings {
-        thickness: 5e-4,
-        ..Default::default()
-    });
-    s
 }
 
 /// Names of the variables of `scene` in value-reference order.

@@ -6,14 +6,37 @@
 use origami_fmu::fmi::exports::*;
 use origami_fmu::fmi::resources::{SCENE_FILE, guid, scene_bytes};
 use origami_fmu::fmi::types::*;
+use origami_fmu::ids::VertexId;
+use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::Model;
-use origami_fmu::scene::Scene;
+use origami_fmu::scene::{Scene, VertexInput};
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::PathBuf;
 use std::ptr::null_mut;
 use std::sync::Mutex;
 
 pub use fmi2Status::*;
+
+/// The square of `tests/fmi_abi.rs`: one creased diagonal, a vertex force.
+pub fn square() -> Scene {
+    let mut s = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));
+    s.vertex_forces.push(VertexInput {
+        name: "tip".into(),
+        vertex: VertexId(2),
+    });
+    s
+}
+
+/// The square with self-contact on (contact outputs, extra matrix pairs).
+pub fn contact_square() -> Scene {
+    let mut s = square();
+    s.name = "contact_square".into();
+    s.contact = Some(origami_fmu::contact::ContactSettings {
+        thickness: 5e-4,
+        ..Default::default()
+    });
+    s
+}
 
 /// Log lines captured by the test logger: (status, category, message).
 pub type Log = Mutex<Vec<(fmi2Status, String, String)>>;
