@@ -135,6 +135,10 @@ pub struct Evaluation {
     /// Pairs within a barrier's reach (contact): Newton's line search
     /// watches iterates with any.
     pub barrier_pairs: usize,
+    /// The wrench the sheet exerts on each rigid obstacle (force, then
+    /// moment about the obstacle's origin; N, N m, world axes), from the
+    /// obstacle term (empty without obstacles).
+    pub obstacle_wrenches: Vec<[f64; 6]>,
 }
 
 /// Dissipative parts of an evaluation's internal force (N, all slots).
@@ -625,6 +629,7 @@ impl Assembler {
         out.dissipative_force.friction.clear();
         out.dissipative_force.damping.clear();
         out.barrier_pairs = 0;
+        out.obstacle_wrenches.clear();
         if let Some((vals, co)) = matrix.as_mut() {
             for (v, m) in vals.iter_mut().zip(&self.mass_values) {
                 *v = co.m * m;
@@ -789,6 +794,11 @@ impl Assembler {
     /// stepper then backtracks corrections that raise the residual.
     pub fn limits_steps(&self) -> bool {
         self.terms.iter().any(|t| t.limits_steps())
+    }
+
+    /// The rigid obstacles' term, if the assembler has one.
+    pub fn obstacles(&self) -> Option<&crate::contact::ObstacleTerm> {
+        self.terms.iter().find_map(|t| t.as_obstacles())
     }
 
     /// The self-contact term, if the assembler has one.

@@ -129,6 +129,12 @@ pub trait ForceTerm: Send + Sync {
         None
     }
 
+    /// The term as the rigid obstacles' contact, for their reports (typed
+    /// access, no downcast).
+    fn as_obstacles(&self) -> Option<&crate::contact::ObstacleTerm> {
+        None
+    }
+
     /// Add this term's force to `out.force` (all DOFs, internal-force sign:
     /// it opposes the motion it resists) and its energy to `out`; with a
     /// matrix, add `k df/dq + c df/dv` (free DOFs, pattern order).

@@ -65,7 +65,6 @@ fn advance(
     t_max: f64,
     closest: impl Fn(&[Vector3<f64>; 4]) -> (Vector3<f64>, Vector3<f64>),
 ) -> Option<f64> {
-    let s = MIN_SEPARATION;
     // Each primitive's mean translation and its vertices' largest deviation
     // from it.
     let mean = |r: &[Vector3<f64>]| r.iter().sum::<Vector3<f64>>() / r.len() as f64;
@@ -87,6 +86,16 @@ fn advance(
         };
         (d, spread + approach.max(0.0))
     };
+    advance_by(probe, xi, t_max)
+}
+
+/// Conservative advancement of a distance along a motion: `probe(t)`
+/// gives the distance at fraction `t` and a bound on its rate of decrease
+/// from there on (`d(t + r) >= d(t) - r rate`). As [`point_triangle_toi`]:
+/// `Some(t)` safe with the gap above `s (d0 - xi)`, or `None` when the
+/// motion up to `t_max` stays clear of `xi`.
+pub(crate) fn advance_by(probe: impl Fn(f64) -> (f64, f64), xi: f64, t_max: f64) -> Option<f64> {
+    let s = MIN_SEPARATION;
     let (d0, mut rate) = probe(0.0);
     if d0 <= xi {
         return Some(0.0);

@@ -1,15 +1,20 @@
 //! Self-contact of the sheet: the sampled contact surface, the broad phase,
 //! the barrier and friction force term, and the geometric kernels under them
 //! (distances with exact derivatives, continuous collision detection,
-//! triangle-triangle intersection).
+//! triangle-triangle intersection); and contact with rigid obstacles
+//! (their shapes, and their force term in the same barrier).
 
 pub mod broad;
 pub mod ccd;
 pub mod check;
 pub mod distance;
 pub mod intersect;
+pub mod obstacles;
 pub mod scalar;
+pub mod shapes;
 pub mod surface;
 pub mod term;
 
+pub use obstacles::ObstacleTerm;
+pub use shapes::{Obstacle, Shape};
 pub use term::{ContactReport, ContactSettings, ContactTerm};

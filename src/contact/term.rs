@@ -212,7 +212,7 @@ pub struct ContactTerm {
 /// The kinetic energy `m v_n^2 / 2` of a pair's approach is stopped at
 /// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2`: at about 4 % of the barrier
 /// width (see [`ContactTerm::pair_stiffness`]).
-const PAIR_SPEED_DIVISOR: f64 = 6.0;
+pub(crate) const PAIR_SPEED_DIVISOR: f64 = 6.0;
 
 /// A point of a crease where its stop acts: the crease's `[a, b, t]` there
 /// (into the facet on the right of `t`, into the left one, along the
@@ -647,25 +647,9 @@ impl ContactTerm {
                 * dv_dq;
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
-            let end = u + du;
-            // A pair that slid at the step start only where it slides that
-            // way and is carried past rest to slide back (an iterate
-            // sliding the other way, such as the held predictor's, is on
-            // its way back); one that stuck, wherever it is carried past.
-            let start = if lg.slide.norm() > self.eps_v {
-                lg.slide
-            } else {
-                u
-            };
-            if u.norm() <= self.eps_v
-                || end.norm() <= self.eps_v
-                || u.dot(&start) <= 0.0
-                || end.dot(&start) >= 0.0
+            if let Some(stop) = reversal_fraction(u, du, lg.slide, self.eps_v)
+                && stop < t
             {
-                continue;
-            }
-            let stop = -u.dot(&du) / du.norm_squared();
-            if stop > 0.0 && stop < t {
                 t = stop;
             }
         }
@@ -796,8 +780,7 @@ impl ContactTerm {
             None => n,
         };
         let approach = (-normal.dot(&vr)).max(0.0);
-        self.kappa
-            .max(p.mass * approach * approach / (PAIR_SPEED_DIVISOR * self.s_hat_of(p).powi(2)))
+        speed_stiffness(self.kappa, p.mass, approach, self.s_hat_of(p))
     }
 
     /// A pair's barrier width (m): the same share of its thickness for all.
@@ -1070,24 +1053,85 @@ fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) 
     }
 }
 
+/// The fraction of a correction `du` of a pair's tangential velocity `u`
+/// at which it comes closest to rest, where the correction would carry it
+/// through sticking to sliding the other way (`slide` its velocity at the
+/// step start, `eps` the stick velocity); None where it would not (see
+/// [`ContactTerm::friction_fraction`]).
+pub(crate) fn reversal_fraction(
+    u: Vector2<f64>,
+    du: Vector2<f64>,
+    slide: Vector2<f64>,
+    eps: f64,
+) -> Option<f64> {
+    let end = u + du;
+    // A pair that slid at the step start only where it slides that
+    // way and is carried past rest to slide back (an iterate
+    // sliding the other way, such as the held predictor's, is on
+    // its way back); one that stuck, wherever it is carried past.
+    let start = if slide.norm() > eps { slide } else { u };
+    if u.norm() <= eps || end.norm() <= eps || u.dot(&start) <= 0.0 || end.dot(&start) >= 0.0 {
+        return None;
+    }
+    let stop = -u.dot(&du) / du.norm_squared();
+    (stop > 0.0).then_some(stop)
+}
+
+/// Smoothed Coulomb friction's `f1(y) / y` and its derivative over `y`
+/// at tangential speed `y` (`f1` rises as `2y/eps - (y/eps)^2` up to the
+/// stick velocity `eps`, then is 1).
+pub(crate) fn slip_factor(y: f64, eps: f64) -> (f64, f64) {
+    if y < eps {
+        (
+            2.0 / eps - y / (eps * eps),
+            if y > 0.0 { -1.0 / (eps * eps * y) } else { 0.0 },
+        )
+    } else {
+        (1.0 / y, -1.0 / (y * y * y))
+    }
+}
+
+/// `scale T [phi I + (phi'/y) u u^T] T^T`: friction's derivative in the
+/// relative velocity times `scale` (`c mu lambda`), `T` the tangent
+/// `basis`, `u` the tangential velocity in it, `(phi, dphi_y)` from
+/// [`slip_factor`].
+pub(crate) fn friction_matrix(
+    scale: f64,
+    basis: &[Vector3<f64>; 2],
+    u: Vector2<f64>,
+    (phi, dphi_y): (f64, f64),
+) -> Matrix3<f64> {
+    let t = nalgebra::Matrix3x2::from_columns(basis);
+    let inner = nalgebra::Matrix2::identity() * phi + dphi_y * u * u.transpose();
+    scale * t * inner * t.transpose()
+}
+
 fn key(p: &Pair) -> PairKey {
     (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
 }
 
+/// The barrier stiffness a pair of sample mass `mass` approaching at
+/// `approach` (m/s) takes: `kappa`, or enough to stop it at
+/// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2` (see
+/// [`ContactTerm::pair_stiffness`]).
+pub(crate) fn speed_stiffness(kappa: f64, mass: f64, approach: f64, s_hat: f64) -> f64 {
+    kappa.max(mass * approach * approach / (PAIR_SPEED_DIVISOR * s_hat.powi(2)))
+}
+
 /// Barrier `b(s)` and its first two derivatives in `s`.
-fn barrier<T: Real>(s: T, s_hat: f64) -> T {
+pub(crate) fn barrier<T: Real>(s: T, s_hat: f64) -> T {
     let u = s - s_hat;
     -(u * u) * (s / s_hat).ln()
 }
 
 /// `b'(s)` (negative inside the width).
-fn db(s: f64, s_hat: f64) -> f64 {
+pub(crate) fn db(s: f64, s_hat: f64) -> f64 {
     let u = s - s_hat;
     -2.0 * u * (s / s_hat).ln() - u * u / s
 }
 
 /// `b''(s)`.
-fn ddb(s: f64, s_hat: f64) -> f64 {
+pub(crate) fn ddb(s: f64, s_hat: f64) -> f64 {
     let u = s - s_hat;
     -2.0 * (s / s_hat).ln() - 4.0 * u / s + u * u / (s * s)
 }
@@ -1129,7 +1173,7 @@ fn project_psd(h: &SMatrix<f64, 12, 12>) -> SMatrix<f64, 12, 12> {
 }
 
 /// An orthonormal basis of the plane normal to `n` (unit).
-fn tangent_basis(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
+pub(crate) fn tangent_basis(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
     let a = if n.x.abs() < 0.9 {
         Vector3::x()
     } else {
@@ -1493,16 +1537,7 @@ impl ForceTerm for ContactTerm {
             let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let y = u.norm();
-            let eps = self.eps_v;
-            // f1(y)/y and its derivative over y.
-            let (phi, dphi_y) = if y < eps {
-                (
-                    2.0 / eps - y / (eps * eps),
-                    if y > 0.0 { -1.0 / (eps * eps * y) } else { 0.0 },
-                )
-            } else {
-                (1.0 / y, -1.0 / (y * y * y))
-            };
+            let (phi, dphi_y) = slip_factor(y, self.eps_v);
             let ml = self.mu * lg.lambda;
             let ut = lg.basis[0] * u.x + lg.basis[1] * u.y;
             let fr = ml * phi * ut;
@@ -1515,9 +1550,7 @@ impl ForceTerm for ContactTerm {
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.friction);
             if let Some((_, co)) = matrix.as_ref() {
                 // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
-                let t = nalgebra::Matrix3x2::from_columns(&lg.basis);
-                let inner = nalgebra::Matrix2::identity() * phi + dphi_y * u * u.transpose();
-                let k3 = (co.c * ml) * t * inner * t.transpose();
+                let k3 = friction_matrix(co.c * ml, &lg.basis, u, (phi, dphi_y));
                 let mut h = SMatrix::<f64, 12, 12>::zeros();
                 for a in 0..4 {
                     for b in 0..4 {

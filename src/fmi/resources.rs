@@ -179,6 +179,13 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             })?;
         }
     }
+    for (i, o) in s.obstacles.iter().enumerate() {
+        o.shape
+            .check()
+            .map_err(|e| format!("obstacles[{i}] ({}): {e}", o.name))?;
+        crate::scene::limits::check("contact.friction", o.friction)
+            .map_err(|e| format!("obstacles[{i}] ({}).friction: {e}", o.name))?;
+    }
     for (what, list) in [
         ("vertex_forces", &s.vertex_forces),
         ("vertex_motions", &s.vertex_motions),

@@ -287,6 +287,19 @@ impl Model {
     }
 
     #[doc(hidden)]
+    /// The smallest gap (m) of any contact sample of the sheet to any
+    /// rigid obstacle now, beyond the clearance it keeps (half the contact
+    /// thickness), with that clearance; None without obstacles or before
+    /// [`Model::initialize`].
+    pub fn obstacle_gap(&self) -> Option<(f64, f64)> {
+        if self.state.phase != Phase::Running {
+            return None;
+        }
+        let t = self.sys.as_ref()?.asm.obstacles()?;
+        Some((t.min_gap(&self.state.dynamics.q), t.clearance()))
+    }
+
+    #[doc(hidden)]
     /// Work so far: dissipated by contact (friction and normal dashpots)
     /// and done by the inputs.
     pub fn work(&self) -> state::Work {

@@ -183,6 +183,9 @@ impl System {
         if let Some(c) = &sc.contact {
             add_contact(sc, c, &mut asm)?;
         }
+        if !sc.obstacles.is_empty() {
+            add_obstacles(sc, &mut asm)?;
+        }
         // Damping leaves alone the rigid motion the supports allow; a sheet
         // held by frames, the frames' motion.
         let mut held_dofs: Vec<usize> = supported.iter().map(|&(i, _)| i).collect();
@@ -258,6 +261,40 @@ fn add_contact(
         &asm.layout,
         &asm.elements,
         c,
+        m.density * m.thickness,
+        m.youngs_modulus * m.thickness,
+    )
+    .map_err(Error::Scene)?;
+    asm.add_term(Box::new(term));
+    Ok(())
+}
+
+/// The contact settings obstacles use: self-contact's, or its defaults
+/// with the sheet's thickness where self-contact is off.
+pub(super) fn obstacle_settings(sc: &Scene) -> crate::contact::ContactSettings {
+    sc.contact.unwrap_or(crate::contact::ContactSettings {
+        thickness: sc.material.thickness,
+        ..Default::default()
+    })
+}
+
+/// The rigid obstacles' force term on the assembler (the implicit
+/// integrator only).
+fn add_obstacles(sc: &Scene, asm: &mut Assembler) -> Result<(), Error> {
+    if sc.solver.integrator == SceneIntegrator::CentralDifference {
+        return Err(Error::Scene(
+            "ancf:obstacles needs the implicit integrator (its Newton steps are \
+             collision-checked); remove \"integrator\": \"central_difference\""
+                .into(),
+        ));
+    }
+    let m = &asm.physics.material;
+    let term = crate::contact::ObstacleTerm::new(
+        &sc.mesh,
+        &asm.layout,
+        &asm.elements,
+        &sc.obstacles,
+        &obstacle_settings(sc),
         m.density * m.thickness,
         m.youngs_modulus * m.thickness,
     )
@@ -383,8 +420,13 @@ fn stepper(
         SceneIntegrator::GeneralizedAlpha => {
             let params = s.integration;
             let coeffs = ga::Coefficients::new(s.rho_inf);
+            let obstacle_friction = sc.obstacles.iter().any(|o| o.friction > 0.0);
             let stick_bound = match &sc.contact {
-                Some(c) if c.friction > 0.0 => {
+                Some(c) if c.friction > 0.0 || obstacle_friction => {
+                    ga::stick_bound(coeffs, &params, c.stick_velocity, length)
+                }
+                None if obstacle_friction => {
+                    let c = obstacle_settings(sc);
                     ga::stick_bound(coeffs, &params, c.stick_velocity, length)
                 }
                 _ => f64::INFINITY,

@@ -201,6 +201,15 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
             wrench(&m.name, &what, "", false);
         }
     }
+    for o in &scene.obstacles {
+        let what = format!("obstacle {}", o.name);
+        let about = match o.shape {
+            crate::contact::Shape::HalfSpace { .. } => "its plane's point",
+            crate::contact::Shape::Capsule { .. } => "its segment's midpoint",
+            _ => "its centre",
+        };
+        wrench(&o.name, &what, about, true);
+    }
     v
 }
 
@@ -647,6 +656,10 @@ impl Model {
             &d.frames,
             &mut out,
         );
+        // The wrench on each obstacle (zero where the evaluation has none).
+        for k in 0..self.scene.obstacles.len() {
+            out.extend(ev.obstacle_wrenches.get(k).copied().unwrap_or_default());
+        }
         out
     }
 

@@ -13,6 +13,7 @@
 //! | `ancf:motions` | `[{name, vertex}]` |
 //! | `ancf:attachments` | `[{name, vertices}]` |
 //! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
+//! | `ancf:obstacles` | `[{name, shape, ...its parameters, friction}]` |
 //! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, quadrature}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies", "reactions"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
@@ -95,6 +96,18 @@ pub struct AttachmentSpec {
     pub key: String,
 }
 
+/// A rigid obstacle as written in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObstacleSpec {
+    /// Variable name prefix, shape and placement (friction filled in when
+    /// the scene is built).
+    pub obstacle: crate::contact::Obstacle,
+    /// `friction` as given (`None`: the contact's).
+    pub friction: Option<f64>,
+    /// `ancf:obstacles[i]`, for messages.
+    pub key: String,
+}
+
 /// Everything the `ancf:` keys say, checked key by key; defaults filled in.
 /// (Not to be confused with [`crate::assembly::Physics`], the coefficients
 /// the assembly is given once the scene is built.)
@@ -130,6 +143,10 @@ pub struct PhysicsKeys {
     pub outputs: Outputs,
     /// `ancf:contact` when enabled (thickness 0: the sheet's).
     pub contact: Option<ContactSettings>,
+    /// `ancf:contact.friction` as given (enabled or not).
+    pub contact_friction: Option<f64>,
+    /// `ancf:obstacles`.
+    pub obstacles: Vec<ObstacleSpec>,
     /// `ancf:refine`.
     pub refine: usize,
     /// `ancf:import`.
@@ -372,6 +389,7 @@ const PARSERS: &[(&str, KeyParser)] = &[
     ("ancf:motions", key_motions),
     ("ancf:attachments", key_attachments),
     ("ancf:contact", key_contact),
+    ("ancf:obstacles", key_obstacles),
     ("ancf:solver", key_solver),
     ("ancf:outputs", key_outputs),
     ("ancf:refine", key_refine),
@@ -418,6 +436,11 @@ fn check_unique_names(p: &PhysicsKeys) -> Result<(), SceneError> {
             p.attachments
                 .iter()
                 .map(|a| (a.name.as_str(), format!("{}.name", a.key))),
+        )
+        .chain(
+            p.obstacles
+                .iter()
+                .map(|o| (o.obstacle.name.as_str(), format!("{}.name", o.key))),
         );
     for (name, key) in names {
         if let Some((_, first)) = seen.iter().find(|(n, _)| *n == name) {
@@ -737,6 +760,7 @@ fn key_contact(
     let stick = o.num_limited("stick_velocity", "contact.stick_velocity")?;
     let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
     let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
+    p.contact_friction = friction;
     if enabled {
         p.contact = Some(ContactSettings {
             // 0 = the sheet thickness (filled in with the material).
@@ -747,6 +771,179 @@ fn key_contact(
             stick_velocity: stick.unwrap_or(d.stick_velocity),
             damping_ratio: zeta.unwrap_or(d.damping_ratio),
             subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
+        });
+    }
+    Ok(())
+}
+
+/// A 3-vector field of an obstacle (m, or rad for a rotation vector).
+fn vector3(o: &Obj, f: &str) -> Result<[f64; 3], SceneError> {
+    let key = o.path(f);
+    let arr = expect_array(o.required(f)?, &key)?;
+    if arr.len() != 3 {
+        return Err(SceneError::invalid(
+            key,
+            format!("expected 3 components [x, y, z], found {}", arr.len()),
+        ));
+    }
+    let mut out = [0.0; 3];
+    for (c, x) in arr.iter().enumerate() {
+        out[c] = number(x, &format!("{key}[{c}]"))?;
+    }
+    Ok(out)
+}
+
+/// `ancf:obstacles`: rigid shapes fixed in the world that the sheet
+/// touches through the contact barrier.
+fn key_obstacles(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    use crate::contact::{Obstacle, Shape};
+    const SHAPES: &[&str] = &["half_space", "sphere", "box", "capsule"];
+    for (i, item) in expect_array(v, "ancf:obstacles")?.iter().enumerate() {
+        let key = format!("ancf:obstacles[{i}]");
+        // The shape first: it says which fields are allowed.
+        let shape_name = match item.get("shape") {
+            Some(s) => expect_string(s, &format!("{key}.shape"))?,
+            None if item.is_object() => {
+                return Err(SceneError::invalid(
+                    format!("{key}.shape"),
+                    format!("missing (required): one of {}", SHAPES.join(", ")),
+                ));
+            }
+            None => "",
+        };
+        if item.is_object() && !SHAPES.contains(&shape_name) {
+            let options: Vec<(&str, ())> = SHAPES.iter().map(|&s| (s, ())).collect();
+            enum_value(&format!("{key}.shape"), shape_name, &options)?;
+        }
+        let fields: &[&str] = match shape_name {
+            "half_space" => &["name", "shape", "friction", "moving", "point", "normal"],
+            "sphere" => &["name", "shape", "friction", "moving", "center", "radius"],
+            "box" => &[
+                "name",
+                "shape",
+                "friction",
+                "moving",
+                "center",
+                "half_extents",
+                "rotation",
+            ],
+            "capsule" => &["name", "shape", "friction", "moving", "ends", "radius"],
+            _ => &["name", "shape"],
+        };
+        let o = Obj::new(&key, item, fields)?;
+        let name = expect_string(o.required("name")?, &o.path("name"))?;
+        check_name(&o.path("name"), name)?;
+        match o.get("moving") {
+            None | Some(Value::Bool(false)) => {}
+            Some(Value::Bool(true)) => {
+                return Err(SceneError::invalid(
+                    o.path("moving"),
+                    "moving obstacles (pose inputs) are not supported yet; obstacles are fixed \
+                     in the world",
+                ));
+            }
+            Some(other) => {
+                return Err(SceneError::invalid(
+                    o.path("moving"),
+                    format!("expected true or false, found {}", type_name(other)),
+                ));
+            }
+        }
+        let length = |f: &str| -> Result<f64, SceneError> {
+            let x = number(o.required(f)?, &o.path(f))?;
+            if x > 0.0 {
+                Ok(x)
+            } else {
+                Err(SceneError::invalid(
+                    o.path(f),
+                    format!("{} is not a positive length (m)", num(x)),
+                ))
+            }
+        };
+        let shape = match shape_name {
+            "half_space" => {
+                let normal = vector3(&o, "normal")?;
+                let len = normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if !(len > 0.0 && len.is_finite()) {
+                    return Err(SceneError::invalid(
+                        o.path("normal"),
+                        "the outward normal must be a nonzero vector",
+                    ));
+                }
+                Shape::HalfSpace {
+                    point: vector3(&o, "point")?,
+                    normal: normal.map(|x| x / len),
+                }
+            }
+            "sphere" => Shape::Sphere {
+                center: vector3(&o, "center")?,
+                radius: length("radius")?,
+            },
+            "box" => {
+                let half = vector3(&o, "half_extents")?;
+                if let Some(c) = half.iter().position(|&h| h <= 0.0) {
+                    return Err(SceneError::invalid(
+                        format!("{}[{c}]", o.path("half_extents")),
+                        format!("{} is not a positive length (m)", num(half[c])),
+                    ));
+                }
+                Shape::Box {
+                    center: vector3(&o, "center")?,
+                    half_extents: half,
+                    rotation: match o.get("rotation") {
+                        Some(_) => vector3(&o, "rotation")?,
+                        None => [0.0; 3],
+                    },
+                }
+            }
+            _ => {
+                let key = o.path("ends");
+                let arr = expect_array(o.required("ends")?, &key)?;
+                if arr.len() != 2 {
+                    return Err(SceneError::invalid(
+                        key,
+                        format!(
+                            "expected the segment's 2 end points [[x, y, z], [x, y, z]], found {}",
+                            arr.len()
+                        ),
+                    ));
+                }
+                let mut ends = [[0.0; 3]; 2];
+                for (e, end) in arr.iter().enumerate() {
+                    let ke = format!("{key}[{e}]");
+                    let xs = expect_array(end, &ke)?;
+                    if xs.len() != 3 {
+                        return Err(SceneError::invalid(
+                            ke,
+                            format!("expected 3 components [x, y, z], found {}", xs.len()),
+                        ));
+                    }
+                    for (c, x) in xs.iter().enumerate() {
+                        ends[e][c] = number(x, &format!("{ke}[{c}]"))?;
+                    }
+                }
+                Shape::Capsule {
+                    ends,
+                    radius: length("radius")?,
+                }
+            }
+        };
+        shape
+            .check()
+            .map_err(|e| SceneError::invalid(key.clone(), e))?;
+        let friction = o.num_limited("friction", "contact.friction")?;
+        p.obstacles.push(ObstacleSpec {
+            obstacle: Obstacle {
+                name: name.to_string(),
+                shape,
+                friction: friction.unwrap_or(0.0),
+            },
+            friction,
+            key,
         });
     }
     Ok(())

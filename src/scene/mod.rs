@@ -522,6 +522,10 @@ pub struct Scene {
     /// before.)
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub attachments: Vec<Attachment>,
+    /// Rigid obstacles the sheet touches through the contact barrier
+    /// (left out of the scene file when empty, as attachments are).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacles: Vec<crate::contact::Obstacle>,
     /// Solver settings.
     pub solver: SolverSettings,
     /// Output groups.
@@ -638,6 +642,7 @@ impl Scene {
             vertex_forces: vec![],
             vertex_motions: vec![],
             attachments: vec![],
+            obstacles: vec![],
             solver: SolverSettings::default(),
             outputs: Outputs::default(),
             ramp: InputRamp::default(),

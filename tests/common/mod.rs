@@ -1,6 +1,8 @@
 //! Scene builders and measuring helpers shared by the dynamics test files.
 #![allow(dead_code)] // each test file uses a different subset
 
+pub mod fd;
+
 use nalgebra::{Matrix3x2, Vector2, Vector3};
 use origami_fmu::dofs::DofLayout;
 use origami_fmu::ids::{FacetId, VertexId};

@@ -89,6 +89,19 @@ pub(super) fn apply_physics(
             vertices: with_copies(&a.vertices, nv, copies),
         })
         .collect();
+    // An obstacle's friction: its own, else the contact's (given, even
+    // with self-contact off), else the contact default.
+    let friction = p
+        .contact_friction
+        .unwrap_or(crate::contact::ContactSettings::default().friction);
+    scene.obstacles = p
+        .obstacles
+        .into_iter()
+        .map(|o| crate::contact::Obstacle {
+            friction: o.friction.unwrap_or(friction),
+            ..o.obstacle
+        })
+        .collect();
     scene.vertex_forces = p.vertex_forces.into_iter().map(|x| x.0).collect();
     scene.vertex_motions = p.vertex_motions.into_iter().map(|x| x.0).collect();
     Ok(())

@@ -1,0 +1,596 @@
+//! Rigid obstacles as a force term: each contact sample of the sheet (the
+//! points of [`ContactSurface`]) against each obstacle's analytic shape
+//! ([`Shape`]), in the same barrier as self-contact ([`super::term`]):
+//! energy `kappa b(s)` in the gap `s = d - xi` (`d` the sample's signed
+//! distance to the shape, `xi` half the contact thickness: the sheet's
+//! midsurface keeps half its thickness from the obstacle), a per-pair
+//! stiffness raised for fast approaches, a normal dashpot and smoothed
+//! Coulomb friction with the normal force and tangent basis lagged from
+//! the step start. The obstacles are fixed in the world.
+//!
+//! The pair Hessian is `kappa (b'' n n^T + b' H)`, `H` the distance's
+//! Hessian; every shape is convex, so `H` is positive semi-definite with
+//! `n` in its null space and `b' H` (`b' < 0`) is negative semi-definite
+//! on the plane normal to `n`: its projection to positive semi-definite is
+//! `kappa b'' n n^T` in closed form. Newton steps are limited by
+//! conservative advancement of each sample's distance, which is convex
+//! along a straight motion (it never falls below its tangent).
+//!
+//! Each evaluation also gives the wrench the sheet exerts on each obstacle
+//! ([`Evaluation::obstacle_wrenches`]): the sum of the pairs' forces (the
+//! barrier's, the dashpot's and friction's, in internal-force sign: what
+//! pushes the obstacle), with their moments about the shape's origin
+//! taken at the closest points of its surface.
+
+use super::ccd;
+use super::shapes::{Closest, Obstacle, Shape};
+use super::surface::{ContactSurface, VertexMap, eval_map};
+use super::term::{
+    ContactSettings, barrier, db, ddb, friction_matrix, reversal_fraction, slip_factor,
+    speed_stiffness, tangent_basis,
+};
+use crate::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, State};
+use crate::mesh::Mesh;
+use nalgebra::{Matrix3, Vector2, Vector3};
+use std::collections::HashMap;
+
+/// Dashpot and friction data of one pair, from the step start.
+#[derive(Clone, Debug)]
+struct Lagged {
+    obstacle: usize,
+    sample: usize,
+    /// Normal dashpot coefficient (N s/m).
+    c: f64,
+    /// Unit outward normal of the shape at the closest point.
+    normal: Vector3<f64>,
+    /// Orthonormal tangent basis.
+    basis: [Vector3<f64>; 2],
+    /// Normal force (N).
+    lambda: f64,
+    /// Tangential velocity at the step start (in `basis`).
+    slide: Vector2<f64>,
+}
+
+/// A pair in the barrier: obstacle, sample, the sample's closest point
+/// data and gap.
+struct Active {
+    obstacle: usize,
+    sample: usize,
+    closest: Closest,
+    gap: f64,
+}
+
+/// The obstacle force term of one mesh.
+pub struct ObstacleTerm {
+    surf: ContactSurface,
+    obstacles: Vec<Obstacle>,
+    /// Distance the midsurface keeps from an obstacle (m): half the contact
+    /// thickness.
+    xi: f64,
+    /// Barrier width (m).
+    s_hat: f64,
+    /// Default barrier stiffness (N/m).
+    kappa: f64,
+    eps_v: f64,
+    zeta: f64,
+    /// Sample mass (kg), for the dashpot and the speed stiffness.
+    mass: f64,
+    /// How far beyond the barrier a pair's stiffness is kept (m).
+    margin: f64,
+    /// Project each pair's Hessian to positive semi-definite (Newton).
+    project: bool,
+    lagged: Vec<Lagged>,
+    /// Barrier stiffness of the pairs near at the last step start (N/m),
+    /// keyed by (obstacle, sample).
+    pair_kappa: HashMap<(usize, usize), f64>,
+    x_start: Vec<Vector3<f64>>,
+    v_start: Vec<Vector3<f64>>,
+    /// Whether a pair was within `margin` of the barrier at the step start.
+    near: bool,
+}
+
+impl ObstacleTerm {
+    /// Obstacles against the sheet `mesh` (facets `elements`), with the
+    /// contact `settings` (thickness, barrier width, stiffness, stick
+    /// velocity, damping ratio, subdivisions: self-contact's); `areal_mass`
+    /// is density times thickness (kg/m^2), `membrane` the membrane
+    /// stiffness E h (N/m) that sets the default barrier stiffness.
+    pub fn new(
+        mesh: &Mesh,
+        layout: &crate::dofs::DofLayout,
+        elements: &[crate::element::ShellElement],
+        obstacles: &[Obstacle],
+        settings: &ContactSettings,
+        areal_mass: f64,
+        membrane: f64,
+    ) -> Result<ObstacleTerm, String> {
+        if settings.thickness.is_nan() || settings.thickness <= 0.0 {
+            return Err("obstacles need a positive contact thickness".into());
+        }
+        for o in obstacles {
+            o.shape
+                .check()
+                .map_err(|e| format!("obstacle {}: {e}", o.name))?;
+        }
+        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
+        let nf = mesh.triangles().len().max(1);
+        let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
+        let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
+            / mesh.edges().len().max(1) as f64;
+        let n = surf.n as f64;
+        let xi = 0.5 * settings.thickness;
+        let s_hat = settings.width * xi;
+        Ok(ObstacleTerm {
+            surf,
+            obstacles: obstacles.to_vec(),
+            xi,
+            s_hat,
+            // Self-contact's default: E h xi / l.
+            kappa: settings
+                .stiffness
+                .unwrap_or(membrane * settings.thickness / edge),
+            eps_v: settings.stick_velocity,
+            zeta: settings.damping_ratio,
+            mass: areal_mass * area / (n * n),
+            margin: (xi + s_hat).max(0.1 * edge),
+            project: true,
+            lagged: Vec::new(),
+            pair_kappa: HashMap::new(),
+            x_start: Vec::new(),
+            v_start: Vec::new(),
+            near: false,
+        })
+    }
+
+    /// Keep the exact pair Hessians in the matrix (no projection to
+    /// positive semi-definite): for derivative tests.
+    pub fn with_exact_hessian(mut self) -> Self {
+        self.project = false;
+        self
+    }
+
+    /// The sampled surface.
+    pub fn surface(&self) -> &ContactSurface {
+        &self.surf
+    }
+
+    /// Distance the sheet's midsurface keeps from an obstacle (m).
+    pub fn clearance(&self) -> f64 {
+        self.xi
+    }
+
+    /// Barrier width (m).
+    pub fn barrier_width(&self) -> f64 {
+        self.s_hat
+    }
+
+    /// The smallest gap `d - xi` (m) of any sample to any obstacle at slot
+    /// vector `q` (infinity without obstacles).
+    pub fn min_gap(&self, q: &[f64]) -> f64 {
+        let mut x = Vec::new();
+        self.surf.positions(q, &mut x);
+        let mut gap = f64::INFINITY;
+        for o in &self.obstacles {
+            for xi in &x {
+                gap = gap.min(o.shape.closest(xi).distance - self.xi);
+            }
+        }
+        gap
+    }
+
+    /// The pairs within the barrier at positions `x`; fails where a sample
+    /// is already within the clearance.
+    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<Active>, String> {
+        let mut out = Vec::new();
+        for (k, o) in self.obstacles.iter().enumerate() {
+            for (i, p) in x.iter().enumerate() {
+                let c = o.shape.closest(p);
+                let gap = c.distance - self.xi;
+                if gap >= self.s_hat {
+                    continue;
+                }
+                if gap <= 0.0 {
+                    return Err(format!(
+                        "obstacle {}: the sheet (facets {:?}) is closer than half the contact \
+                         thickness {} m (gap {gap:.3e} m)",
+                        o.name, self.surf.vertex_facets[i], self.xi
+                    ));
+                }
+                out.push(Active {
+                    obstacle: k,
+                    sample: i,
+                    closest: c,
+                    gap,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// The stiffness a pair takes at a step start with sample positions
+    /// `x` and velocities `v`: the default, or more where the sample
+    /// approaches the obstacle fast ([`speed_stiffness`]).
+    fn pair_stiffness(&self, k: usize, i: usize, x: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
+        if v.len() != x.len() || i >= x.len() {
+            return self.kappa;
+        }
+        let n = self.obstacles[k].shape.closest(&x[i]).normal;
+        let approach = (-n.dot(&v[i])).max(0.0);
+        speed_stiffness(self.kappa, self.mass, approach, self.s_hat)
+    }
+
+    /// A pair's barrier stiffness: the one kept at the last step start, or
+    /// the one it would have been given there.
+    fn kappa_of(&self, k: usize, i: usize) -> f64 {
+        match self.pair_kappa.get(&(k, i)) {
+            Some(&kap) => kap,
+            None => self.pair_stiffness(k, i, &self.x_start, &self.v_start),
+        }
+    }
+
+    /// Pair stiffnesses, dashpot coefficients, friction's normal forces
+    /// and bases from the step start's sample positions `x` and velocities
+    /// `v`.
+    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>]) {
+        let mut kappa = HashMap::new();
+        for (k, o) in self.obstacles.iter().enumerate() {
+            for (i, p) in x.iter().enumerate() {
+                let gap = o.shape.closest(p).distance - self.xi;
+                if gap >= self.s_hat + self.margin {
+                    continue;
+                }
+                // Kept inside the barrier (its energy is not zero), set
+                // anew outside.
+                let kap = match self.pair_kappa.get(&(k, i)) {
+                    Some(&kap) if gap < self.s_hat => kap,
+                    _ => self.pair_stiffness(k, i, x, v),
+                };
+                kappa.insert((k, i), kap);
+            }
+        }
+        self.near = !kappa.is_empty();
+        self.pair_kappa = kappa;
+        self.x_start.clear();
+        self.x_start.extend_from_slice(x);
+        self.v_start.clear();
+        self.v_start.extend_from_slice(v);
+        self.lagged.clear();
+        for a in self.active(x).unwrap_or_default() {
+            let kap = self.kappa_of(a.obstacle, a.sample);
+            let n = a.closest.normal;
+            let basis = tangent_basis(&n);
+            let vi = v.get(a.sample).copied().unwrap_or_default();
+            // Critical for zeta = 1 at the pair's barrier stiffness.
+            let k = kap * ddb(a.gap, self.s_hat).max(0.0);
+            self.lagged.push(Lagged {
+                obstacle: a.obstacle,
+                sample: a.sample,
+                c: 2.0 * self.zeta * (k * self.mass).sqrt(),
+                normal: n,
+                basis,
+                lambda: -kap * db(a.gap, self.s_hat),
+                slide: Vector2::new(basis[0].dot(&vi), basis[1].dot(&vi)),
+            });
+        }
+    }
+
+    /// Largest fraction in (0, 1] of the motion `q -> q + dq` over which
+    /// no sample comes within the clearance of an obstacle (conservative
+    /// advancement, keeping [`ccd::MIN_SEPARATION`] of each gap).
+    pub fn safe_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        let mut x = Vec::new();
+        let mut d = Vec::new();
+        self.surf.positions(q, &mut x);
+        self.surf.positions(dq, &mut d);
+        let mut t: f64 = 1.0;
+        for o in &self.obstacles {
+            for (p, dp) in x.iter().zip(&d) {
+                let c0 = o.shape.closest(p);
+                // Out of reach over the whole motion (the distance is
+                // 1-Lipschitz).
+                if c0.distance - self.xi > dp.norm() {
+                    continue;
+                }
+                let probe = |s: f64| {
+                    let c = o.shape.closest(&(p + dp * s));
+                    (c.distance, (-c.normal.dot(dp)).max(0.0))
+                };
+                if let Some(s) = ccd::advance_by(probe, self.xi, t) {
+                    t = t.min(s);
+                }
+            }
+        }
+        t
+    }
+
+    /// The fraction of a Newton correction at which a sliding pair it
+    /// would carry through sticking comes closest to rest (as
+    /// [`super::ContactTerm::friction_fraction`]); 1 if none.
+    pub fn friction_fraction(&self, v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
+        let mut t: f64 = 1.0;
+        for lg in &self.lagged {
+            if self.obstacles[lg.obstacle].friction <= 0.0 || lg.lambda <= 0.0 {
+                continue;
+            }
+            let m = &self.surf.maps[lg.sample];
+            let (vr, dr) = (eval_map(m, v), eval_map(m, dq) * dv_dq);
+            let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
+            let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
+            if let Some(stop) = reversal_fraction(u, du, lg.slide, self.eps_v) {
+                t = t.min(stop);
+            }
+        }
+        t
+    }
+
+    /// Add a sample's force `f` (internal-force sign) to the slots, and
+    /// to the wrench on obstacle `k` at the shape's closest point to the
+    /// sample `x`.
+    fn apply(
+        &self,
+        k: usize,
+        i: usize,
+        x: &Vector3<f64>,
+        f: &Vector3<f64>,
+        force: &mut [f64],
+        wrenches: &mut [[f64; 6]],
+    ) {
+        scatter(&self.surf.maps[i], f, force);
+        let shape = &self.obstacles[k].shape;
+        let c = shape.closest(x);
+        let arm = x - c.distance * c.normal - shape.origin();
+        let m = arm.cross(f);
+        let w = &mut wrenches[k];
+        for a in 0..3 {
+            w[a] += f[a];
+            w[3 + a] += m[a];
+        }
+    }
+
+    /// The barrier's, dashpots' and friction's forces, energy and matrix
+    /// at `st` (see [`ForceTerm::add`]).
+    fn add_obstacles(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String> {
+        let mut x = Vec::new();
+        let mut v = Vec::new();
+        self.surf.positions(st.q, &mut x);
+        self.surf.positions(st.v, &mut v);
+        let n = out.force.len();
+        if out.dissipative_force.friction.len() != n {
+            out.dissipative_force.zeroed(n);
+        }
+        let mut wrenches = vec![[0.0; 6]; self.obstacles.len()];
+        let mut matrix = matrix;
+        let active = self.active(&x)?;
+        out.barrier_pairs += active.len();
+        for a in &active {
+            let (k, i) = (a.obstacle, a.sample);
+            let kap = self.kappa_of(k, i);
+            let (b1, b2) = (db(a.gap, self.s_hat), ddb(a.gap, self.s_hat));
+            let nrm = a.closest.normal;
+            out.term_energy += kap * barrier(a.gap, self.s_hat);
+            let f = (kap * b1) * nrm;
+            self.apply(k, i, &x[i], &f, &mut out.force, &mut wrenches);
+            if let Some((vals, co)) = matrix.as_mut()
+                && co.k != 0.0
+            {
+                let mut h = (kap * b2) * nrm * nrm.transpose();
+                if !self.project {
+                    h += (kap * b1) * a.closest.hessian;
+                }
+                add_matrix(asm, &self.surf.maps[i], &(co.k * h), vals);
+            }
+        }
+        // Dashpots on the normal velocity along the lagged normals.
+        for lg in self.lagged.iter().filter(|lg| lg.c > 0.0) {
+            let vi = v[lg.sample];
+            let rate = lg.normal.dot(&vi);
+            out.contact_damping_power += lg.c * rate * rate;
+            let f = (lg.c * rate) * lg.normal;
+            self.apply(
+                lg.obstacle,
+                lg.sample,
+                &x[lg.sample],
+                &f,
+                &mut out.force,
+                &mut wrenches,
+            );
+            scatter(
+                &self.surf.maps[lg.sample],
+                &f,
+                &mut out.dissipative_force.damping,
+            );
+            if let Some((vals, co)) = matrix.as_mut() {
+                let h = (co.c * lg.c) * lg.normal * lg.normal.transpose();
+                add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
+            }
+        }
+        // Friction with the lagged normal forces and bases.
+        for lg in &self.lagged {
+            let mu = self.obstacles[lg.obstacle].friction;
+            if mu <= 0.0 {
+                continue;
+            }
+            let vi = v[lg.sample];
+            let u = Vector2::new(lg.basis[0].dot(&vi), lg.basis[1].dot(&vi));
+            let slip = slip_factor(u.norm(), self.eps_v);
+            let ml = mu * lg.lambda;
+            let ut = lg.basis[0] * u.x + lg.basis[1] * u.y;
+            let f = (ml * slip.0) * ut;
+            out.friction_power += f.dot(&vi);
+            self.apply(
+                lg.obstacle,
+                lg.sample,
+                &x[lg.sample],
+                &f,
+                &mut out.force,
+                &mut wrenches,
+            );
+            scatter(
+                &self.surf.maps[lg.sample],
+                &f,
+                &mut out.dissipative_force.friction,
+            );
+            if let Some((vals, co)) = matrix.as_mut() {
+                let h = friction_matrix(co.c * ml, &lg.basis, u, slip);
+                add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
+            }
+        }
+        out.obstacle_wrenches = wrenches;
+        Ok(())
+    }
+
+    /// The pair stiffnesses as [`ForceTerm::memory`] gives them: triples
+    /// (obstacle, sample, stiffness) in key order.
+    fn memory_list(&self) -> Vec<f64> {
+        let mut pairs: Vec<(&(usize, usize), &f64)> = self.pair_kappa.iter().collect();
+        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
+        let mut out = Vec::with_capacity(3 * pairs.len());
+        for (&(k, i), &kap) in pairs {
+            out.extend([k as f64, i as f64, kap]);
+        }
+        out
+    }
+
+    /// The pair stiffnesses of a memory list (untrusted: a restored
+    /// state's): triples of an obstacle index, a sample index and a
+    /// positive stiffness up to MAX_MAGNITUDE.
+    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<(usize, usize), f64>, String> {
+        if !memory.len().is_multiple_of(3) {
+            return Err(format!(
+                "{} values; the obstacle pairs' stiffnesses come in threes (obstacle, sample, \
+                 stiffness)",
+                memory.len()
+            ));
+        }
+        let max = crate::scene::limits::MAX_MAGNITUDE;
+        let index = |x: f64, n: usize, what: &str, k: usize| {
+            (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
+                .then_some(x as usize)
+                .ok_or_else(|| format!("pair {k}: {x} is not a {what} (0..{n})"))
+        };
+        let mut map = HashMap::with_capacity(memory.len() / 3);
+        for (k, m) in memory.chunks_exact(3).enumerate() {
+            let o = index(m[0], self.obstacles.len(), "obstacle", k)?;
+            let i = index(m[1], self.surf.n_vertices(), "contact sample", k)?;
+            if !(m[2] > 0.0 && m[2] <= max) {
+                return Err(format!(
+                    "pair {k}: stiffness {} is not a positive number up to {max:e}",
+                    m[2]
+                ));
+            }
+            map.insert((o, i), m[2]);
+        }
+        Ok(map)
+    }
+
+    /// Sample positions and velocities of the slot vectors `q`, `v`.
+    fn samples(&self, q: &[f64], v: &[f64]) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+        let mut x = Vec::new();
+        let mut vx = Vec::new();
+        self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
+        (x, vx)
+    }
+
+    /// The obstacles.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// Obstacle `k`'s shape.
+    pub fn shape(&self, k: usize) -> &Shape {
+        &self.obstacles[k].shape
+    }
+}
+
+/// Add a sample's 3-vector `f` to the slots it maps to.
+fn scatter(m: &VertexMap, f: &Vector3<f64>, force: &mut [f64]) {
+    for &(slot, c) in m {
+        for a in 0..3 {
+            force[3 * slot + a] += c * f[a];
+        }
+    }
+}
+
+/// Add a sample's 3x3 matrix `h` to the iteration matrix `vals` through
+/// its slot weights.
+fn add_matrix(asm: &Assembler, m: &VertexMap, h: &Matrix3<f64>, vals: &mut [f64]) {
+    for &(a, ca) in m {
+        for &(b, cb) in m {
+            asm.try_add_block(a, b, &(ca * cb * h), vals);
+        }
+    }
+}
+
+impl ForceTerm for ObstacleTerm {
+    fn name(&self) -> &str {
+        "obstacles"
+    }
+
+    fn as_obstacles(&self) -> Option<&ObstacleTerm> {
+        Some(self)
+    }
+
+    fn before_step(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
+        let (x, vx) = self.samples(q, v);
+        self.lag_at(&x, &vx);
+        Vec::new()
+    }
+
+    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
+        let (x, vx) = self.samples(q, v);
+        self.lag_at(&x, &vx);
+    }
+
+    fn memory(&self) -> Vec<f64> {
+        self.memory_list()
+    }
+
+    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+        self.parse_memory(memory).map(|_| ())
+    }
+
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+        self.pair_kappa = self.parse_memory(memory)?;
+        Ok(())
+    }
+
+    fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
+        self.safe_fraction(q, dq)
+    }
+
+    fn max_correction_fraction(
+        &self,
+        _asm: &Assembler,
+        _q: &[f64],
+        v: &[f64],
+        dq: &[f64],
+        dv_dq: f64,
+    ) -> f64 {
+        self.friction_fraction(v, dq, dv_dq)
+    }
+
+    fn limits_steps(&self) -> bool {
+        self.near
+    }
+
+    fn reports_power(&self) -> bool {
+        true
+    }
+
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), String> {
+        self.add_obstacles(asm, st, out, matrix)
+    }
+}

@@ -1,0 +1,563 @@
+//! Rigid obstacles (`ancf:obstacles`): a sheet dropped on the ground comes
+//! to rest half its thickness above it with the ground carrying its weight;
+//! on an incline steeper than the friction angle it slides with
+//! g (sin a - mu cos a); the obstacle force equals minus its energy's
+//! gradient and the iteration matrix the force's derivative; the shapes'
+//! closed-form distances against finite differences; bad entries are
+//! refused with the key and the fault named.
+
+mod common;
+
+use common::fd::{eval_at, force_and_tangent_match_finite_differences, matrix_fd_error};
+use nalgebra::Vector3;
+use origami_fmu::Model;
+use origami_fmu::assembly::{Assembler, MatrixCoeffs};
+use origami_fmu::contact::{ContactSettings, Obstacle, ObstacleTerm, Shape};
+use origami_fmu::element::ElementOptions;
+use origami_fmu::mesh::builders::grid;
+use origami_fmu::scene::Scene;
+
+/// A 0.1 x 0.1 m square of 1 mm plastic (2 GPa, 1200 kg/m^3) in the plane
+/// z = 0, under gravity `g`, with the obstacles `obstacles` (JSON) and the
+/// extra keys `extra`.
+fn square(g: [f64; 3], obstacles: &str, extra: &str) -> origami_fmu::Scene {
+    let text = format!(
+        r#"{{
+          "frame_unit": "m",
+          "vertices_coords": [[0,0],[0.1,0],[0.1,0.1],[0,0.1]],
+          "edges_vertices": [[0,1],[1,2],[2,3],[3,0]],
+          "edges_assignment": ["B","B","B","B"],
+          "faces_vertices": [[0,1,2,3]],
+          "ancf:material": {{"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200}},
+          "ancf:loads": {{"gravity": [{}, {}, {}]}},
+          "ancf:obstacles": {obstacles}{extra}
+        }}"#,
+        g[0], g[1], g[2]
+    );
+    origami_fmu::scene::from_str(&text).unwrap().0
+}
+
+/// The outputs `prefix.x/y/z` now.
+fn vector(m: &Model, prefix: &str) -> Vector3<f64> {
+    let at = |c: &str| {
+        let name = format!("{prefix}.{c}");
+        let id = m
+            .output_id(&name)
+            .unwrap_or_else(|| panic!("no output {name}"));
+        m.output(id).unwrap()
+    };
+    Vector3::new(at("x"), at("y"), at("z"))
+}
+
+fn vertex(m: &Model, i: usize) -> Vector3<f64> {
+    vector(m, &format!("vertex[{i}]"))
+}
+
+/// A sheet dropped flat from 2 mm above the ground comes to rest on it:
+/// no contact sample ever within half the thickness of the plane (at every
+/// output, every 10 ms), and after 0.5 s every vertex's height above the
+/// plane is half the thickness to within the barrier width (a tenth of
+/// it, 50 um), the sheet at rest (speed below 1e-4 m/s), and the ground's
+/// force output the sheet's weight, pointing down, within 1e-3 relative,
+/// its moment about the plane's point the weight's about it (1e-3 of the
+/// weight times the lever arm).
+#[test]
+fn a_sheet_dropped_on_the_ground_rests_half_its_thickness_above_it() {
+    let ground = r#"[{"name": "ground", "shape": "half_space", "point": [0, 0, -0.0025], "normal": [0, 0, 1]}]"#;
+    let mut m = Model::new(square([0.0, 0.0, -9.81], ground, "")).unwrap();
+    m.initialize().unwrap();
+    let (mass, _) = m.mass_properties();
+    let weight = mass * 9.81;
+    let h = 1e-3;
+    let mut steps = 0;
+    for k in 0..50 {
+        steps += m.advance(0.01).unwrap().steps;
+        let (gap, clearance) = m.obstacle_gap().unwrap();
+        assert!((clearance - h / 2.0).abs() < 1e-15);
+        assert!(
+            gap > 0.0,
+            "t = {}: a sample within h/2 (gap {gap:e})",
+            0.01 * (k + 1) as f64
+        );
+    }
+    let (gap, _) = m.obstacle_gap().unwrap();
+    let top: f64 = (0..4)
+        .map(|i| vertex(&m, i).z + 0.0025)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let (_, c) = m.mass_properties();
+    let f = vector(&m, "ground.force");
+    let mom = vector(&m, "ground.moment");
+    eprintln!(
+        "steps {steps}; smallest gap {gap:.3e} m, highest vertex {top:.6e} m; force {f:?} \
+         (weight {weight:.6e} N); moment {mom:?}"
+    );
+    assert!(gap > 0.0 && top - h / 2.0 < 0.1 * h / 2.0, "{gap}, {top}");
+    // At rest: speed below 1e-4 m/s.
+    assert!(
+        kinetic(&m) < 0.5 * mass * 1e-8,
+        "kinetic energy {}",
+        kinetic(&m)
+    );
+    assert!(
+        (f.z + weight).abs() < 1e-3 * weight && f.xy().norm() < 1e-3 * weight,
+        "force {f:?}, weight {weight}"
+    );
+    // The weight acts at the centre of mass, over the plane's point (0, 0).
+    let want = Vector3::new(c[0], c[1], 0.0).cross(&Vector3::new(0.0, 0.0, -weight));
+    assert!(
+        (mom - want).norm() < 1e-3 * weight * 0.05,
+        "moment {mom:?}, want {want:?}"
+    );
+}
+
+/// The sheet's kinetic energy output now (J).
+fn kinetic(m: &Model) -> f64 {
+    m.output(m.output_id("energy.kinetic").unwrap()).unwrap()
+}
+
+/// On the ground tilted at 30 degrees (gravity turned instead: the plane
+/// z = const, g = 9.81 (sin a, 0, -cos a)), friction mu = 0.3 (friction
+/// angle 16.7 degrees), a square resting on it slides down with
+/// g (sin a - mu cos a) = 2.356 m/s^2: measured from the centre of mass at
+/// 0.1, 0.2 and 0.3 s (second difference), within 2 %; it does not leave
+/// the plane (every output's smallest gap within the barrier width).
+#[test]
+fn a_sheet_on_a_plane_steeper_than_friction_slides_with_g_sin_minus_mu_cos() {
+    let a = 30f64.to_radians();
+    let (g, mu) = (9.81, 0.3);
+    let ground = r#"[{"name": "ground", "shape": "half_space", "point": [0, 0, -0.00052], "normal": [0, 0, 1], "friction": 0.3}]"#;
+    let mut m = Model::new(square([g * a.sin(), 0.0, -g * a.cos()], ground, "")).unwrap();
+    m.initialize().unwrap();
+    let mut xs = Vec::new();
+    let mut steps = 0;
+    for k in 1..=30 {
+        steps += m.advance(0.01).unwrap().steps;
+        let (gap, _) = m.obstacle_gap().unwrap();
+        assert!(
+            gap > 0.0 && gap < 5e-5,
+            "t = {}: gap {gap:e}",
+            0.01 * k as f64
+        );
+        if k % 10 == 0 {
+            xs.push(m.mass_properties().1[0]);
+        }
+    }
+    let acc = (xs[2] - 2.0 * xs[1] + xs[0]) / (0.1 * 0.1);
+    let want = g * (a.sin() - mu * a.cos());
+    eprintln!("steps {steps}; acceleration {acc:.5} m/s^2, g (sin a - mu cos a) = {want:.5}");
+    assert!((acc - want).abs() < 0.02 * want, "{acc} vs {want}");
+}
+
+/// On a plane tilted at 10 degrees (below the friction angle of mu = 0.3)
+/// the square stays where it landed: after 0.3 s it has moved less than
+/// 0.1 mm along the slope over the last 0.2 s.
+#[test]
+fn a_sheet_on_a_plane_below_the_friction_angle_sticks() {
+    let a = 10f64.to_radians();
+    let g = 9.81;
+    let ground = r#"[{"name": "ground", "shape": "half_space", "point": [0, 0, -0.00052], "normal": [0, 0, 1], "friction": 0.3}]"#;
+    let mut m = Model::new(square([g * a.sin(), 0.0, -g * a.cos()], ground, "")).unwrap();
+    m.initialize().unwrap();
+    m.advance(0.1).unwrap();
+    let x0 = m.mass_properties().1[0];
+    for _ in 0..20 {
+        m.advance(0.01).unwrap();
+    }
+    let dx = m.mass_properties().1[0] - x0;
+    eprintln!("slid {dx:e} m in 0.2 s; kinetic energy {:e} J", kinetic(&m));
+    assert!(dx.abs() < 1e-4, "slid {dx} m");
+}
+
+/// A 0.1 m square as 8 facets in z = 0, nudged off flat (the same small
+/// deviation for every shape), an assembler without damping of its own
+/// (the velocity derivatives are the obstacles' alone) with `shape`
+/// below it in the barrier (barrier width half the clearance, so that a
+/// few contact samples are in it), exact Hessians.
+fn assembler_with(shape: Shape, friction: f64) -> (Assembler, Vec<f64>) {
+    let mesh = grid(0.1, 0.1, 2, 2, &[]);
+    let scene = Scene::with_defaults("fd", mesh.clone());
+    let physics = origami_fmu::assembly::Physics {
+        alpha: 0.0,
+        beta: 0.0,
+        ..origami_fmu::model::physics(&scene)
+    };
+    let mut asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
+    let settings = ContactSettings {
+        thickness: 1e-3,
+        width: 1.0,
+        stiffness: Some(10.0),
+        damping_ratio: 1.0,
+        subdivisions: 3,
+        ..Default::default()
+    };
+    let obstacle = Obstacle {
+        name: "o".into(),
+        shape,
+        friction,
+    };
+    let term = ObstacleTerm::new(
+        &mesh,
+        &asm.layout,
+        &asm.elements,
+        &[obstacle],
+        &settings,
+        0.2,
+        1e3,
+    )
+    .unwrap()
+    .with_exact_hessian();
+    asm.add_term(Box::new(term));
+    let mut q = asm.layout.reference_state(&mesh);
+    let mut rng = origami_fmu::rng::XorShift(11);
+    for x in q.iter_mut() {
+        *x += rng.range(-1e-5, 1e-5);
+    }
+    (asm, q)
+}
+
+/// Shapes under the square whose closest samples are within the barrier:
+/// a tilted plane, a ball, a box turned so that an edge is highest, and a
+/// slanted capsule.
+fn fd_shapes() -> Vec<Shape> {
+    let n = Vector3::new(0.002, -0.001, 1.0).normalize();
+    vec![
+        Shape::HalfSpace {
+            point: [0.05, 0.05, -0.0008],
+            normal: [n.x, n.y, n.z],
+        },
+        Shape::Sphere {
+            center: [0.05, 0.05, -0.5006],
+            radius: 0.5,
+        },
+        Shape::Box {
+            center: [0.05, 0.05, -0.0113],
+            half_extents: [0.02, 0.03, 0.01],
+            rotation: [0.02, 0.0, 0.3],
+        },
+        Shape::Capsule {
+            ends: [[0.01, 0.05, -0.2007], [0.09, 0.05, -0.2008]],
+            radius: 0.2,
+        },
+    ]
+}
+
+/// The obstacle force is the gradient of its energy and its matrix (exact
+/// Hessians `kappa (b'' n n^T + b' H)`) the derivative of its force, for
+/// each shape (central differences with step 1e-8; 1e-5 of the largest
+/// force, or of the largest matrix entry).
+#[test]
+fn obstacle_force_and_tangent_match_finite_differences() {
+    for shape in fd_shapes() {
+        let (mut asm, q) = assembler_with(shape.clone(), 0.0);
+        let zeros = vec![0.0; q.len()];
+        asm.before_step(&q, &zeros);
+        let ev = eval_at(&asm, &q, &zeros, None);
+        eprintln!("{shape:?}: {} pairs in the barrier", ev.barrier_pairs);
+        assert!(ev.barrier_pairs >= 1, "{shape:?}: no pair in the barrier");
+        force_and_tangent_match_finite_differences(&asm, &q);
+    }
+}
+
+/// The obstacle's damping matrix (normal dashpot and friction, with the
+/// normal force and basis lagged from the step start) is the derivative of
+/// its force in the velocities, with the square sliding (friction
+/// slipping) and approaching, for each shape (central differences with
+/// step 1e-7 m/s; 1e-5 of the largest entry);
+/// and the powers are positive.
+#[test]
+fn obstacle_dashpot_and_friction_match_finite_differences() {
+    for shape in fd_shapes() {
+        let (mut asm, q) = assembler_with(shape.clone(), 0.5);
+        let mut v = vec![0.0; q.len()];
+        let mut rng = origami_fmu::rng::XorShift(5);
+        for s in 0..q.len() / 3 {
+            if asm.layout.slot_kind[s] == origami_fmu::dofs::SlotKind::Position {
+                let w = [0.02, 0.01, -0.005].map(|x| x * (1.0 + rng.range(-0.2, 0.2)));
+                v[3 * s..3 * s + 3].copy_from_slice(&w);
+            }
+        }
+        asm.before_step(&q, &v);
+        let mut c = vec![0.0; asm.nnz()];
+        let co = MatrixCoeffs {
+            k: 0.0,
+            m: 0.0,
+            c: 1.0,
+        };
+        let ev = eval_at(&asm, &q, &v, Some((&mut c, co)));
+        assert!(
+            ev.contact_damping_power > 0.0 && ev.friction_power > 0.0,
+            "{shape:?}: {} {}",
+            ev.contact_damping_power,
+            ev.friction_power
+        );
+        // Velocities of 2 cm/s: steps of 1e-7 m/s (at 1e-9 rounding
+        // reaches 1e-5 of the matrix with the box's two pairs).
+        let err = matrix_fd_error(&asm, &q, &v, &c, true, 1e-7);
+        assert!(err <= 1e-5, "{shape:?}: damping matrix vs force: {err:.3e}");
+    }
+}
+
+/// The wrench outputs are the obstacle forces summed: the force on the
+/// obstacle is minus the sum of the forces the term puts on the sheet's
+/// position slots (the surface gradients carry no net force), checked on
+/// the evaluation of each shape (1e-9 relative: the sum is the difference
+/// of the sheet's forces with and without the obstacle).
+#[test]
+fn obstacle_wrench_is_the_sum_of_the_pair_forces() {
+    for shape in fd_shapes() {
+        let (mut asm, q) = assembler_with(shape.clone(), 0.5);
+        let v = vec![0.01; q.len()];
+        asm.before_step(&q, &v);
+        let with = eval_at(&asm, &q, &v, None);
+        let w = with.obstacle_wrenches[0];
+        // The sheet's own forces alone: the same assembler without contact.
+        let mesh = grid(0.1, 0.1, 2, 2, &[]);
+        let scene = Scene::with_defaults("fd", mesh.clone());
+        let physics = origami_fmu::assembly::Physics {
+            alpha: 0.0,
+            beta: 0.0,
+            ..origami_fmu::model::physics(&scene)
+        };
+        let bare = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
+        let without = eval_at(&bare, &q, &v, None);
+        let mut sum = Vector3::zeros();
+        for s in 0..q.len() / 3 {
+            if asm.layout.slot_kind[s] == origami_fmu::dofs::SlotKind::Position {
+                for a in 0..3 {
+                    sum[a] += with.force[3 * s + a] - without.force[3 * s + a];
+                }
+            }
+        }
+        let f = Vector3::new(w[0], w[1], w[2]);
+        assert!(f.norm() > 0.0);
+        assert!(
+            (f - sum).norm() <= 1e-9 * f.norm(),
+            "{shape:?}: wrench {f:?}, sum of the slot forces {sum:?}"
+        );
+    }
+}
+
+/// Bad `ancf:obstacles` entries are refused with the key and what is
+/// wrong.
+#[test]
+fn bad_obstacles_are_refused_with_the_key_and_the_fault() {
+    let base = r#"{
+      "frame_unit": "m",
+      "vertices_coords": [[0,0],[0.1,0],[0.1,0.1],[0,0.1]],
+      "edges_vertices": [[0,1],[1,2],[2,3],[3,0]],
+      "edges_assignment": ["B","B","B","B"],
+      "faces_vertices": [[0,1,2,3]],
+      "ancf:obstacles": OBSTACLES
+    }"#;
+    let cases = [
+        (r#"{"name": "g"}"#, "ancf:obstacles", "expected an array"),
+        (r#"[{"name": "g"}]"#, "ancf:obstacles[0].shape", "missing"),
+        (
+            r#"[{"name": "g", "shape": "plane"}]"#,
+            "ancf:obstacles[0].shape",
+            "half_space",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0]}]"#,
+            "ancf:obstacles[0].radius",
+            "missing",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": -1}]"#,
+            "ancf:obstacles[0].radius",
+            "positive",
+        ),
+        (
+            r#"[{"name": "g", "shape": "half_space", "point": [0, 0, 0], "normal": [0, 0, 0]}]"#,
+            "ancf:obstacles[0].normal",
+            "nonzero",
+        ),
+        (
+            r#"[{"name": "g", "shape": "half_space", "point": [0, 0], "normal": [0, 0, 1]}]"#,
+            "ancf:obstacles[0].point",
+            "3 components",
+        ),
+        (
+            r#"[{"name": "g", "shape": "box", "center": [0, 0, 0], "half_extents": [1, 0, 1]}]"#,
+            "ancf:obstacles[0].half_extents[1]",
+            "positive",
+        ),
+        (
+            r#"[{"name": "g", "shape": "capsule", "ends": [[0, 0, 0]], "radius": 1}]"#,
+            "ancf:obstacles[0].ends",
+            "2 end points",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "radius_": 2}]"#,
+            "ancf:obstacles[0]",
+            "unknown field 'radius_'",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "friction": -1}]"#,
+            "ancf:obstacles[0].friction",
+            "",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "moving": true}]"#,
+            "ancf:obstacles[0].moving",
+            "not supported",
+        ),
+        (
+            r#"[{"name": "vertex", "shape": "sphere", "center": [0, 0, 0], "radius": 1}]"#,
+            "ancf:obstacles[0].name",
+            "clashes",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1},
+                {"name": "g", "shape": "sphere", "center": [0, 0, 1], "radius": 1}]"#,
+            "ancf:obstacles[1].name",
+            "already used",
+        ),
+        (
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 1e31], "radius": 1}]"#,
+            "ancf:obstacles[0].center[2]",
+            "too large",
+        ),
+    ];
+    for (obstacles, key, words) in cases {
+        let text = base.replace("OBSTACLES", obstacles);
+        let e = origami_fmu::scene::from_str(&text)
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {obstacles}"))
+            .to_string();
+        assert!(
+            e.contains(key) && e.contains(words),
+            "{obstacles}: {e} (want {key}: ...{words}...)"
+        );
+    }
+}
+
+/// One shape of each kind, placed and turned off the axes.
+fn shapes() -> Vec<Shape> {
+    vec![
+        Shape::HalfSpace {
+            point: [0.1, -0.2, 0.05],
+            normal: [0.3, -0.2, 1.0],
+        },
+        Shape::Sphere {
+            center: [0.1, 0.2, -0.3],
+            radius: 0.25,
+        },
+        Shape::Box {
+            center: [0.1, 0.2, -0.3],
+            half_extents: [0.2, 0.1, 0.3],
+            rotation: [0.4, -0.3, 0.7],
+        },
+        Shape::Capsule {
+            ends: [[0.0, 0.0, 0.0], [0.3, 0.1, -0.2]],
+            radius: 0.05,
+        },
+    ]
+}
+
+/// Each shape's distance gradient and Hessian against central
+/// differences of the distance and of the gradient (step 1e-6 m;
+/// within 1e-6 relative to the larger of 1 and the entry's size), at
+/// random points outside the shape (the box: also near its faces,
+/// edges and corners; the capsule: beside its segment and beyond its
+/// ends), and the distance itself against sampled surface points
+/// (the gradient is unit and the closest point `x - d n` is on the
+/// surface: its distance is zero).
+#[test]
+fn closest_gradients_and_hessians_match_finite_differences() {
+    let mut rng = origami_fmu::rng::XorShift(7);
+    let eps = 1e-6;
+    let mut checked = 0;
+    for shape in shapes() {
+        for _ in 0..200 {
+            let x = Vector3::from_fn(|_, _| rng.range(-0.8, 0.8));
+            let c = shape.closest(&x);
+            if c.distance < 1e-3 {
+                continue;
+            }
+            checked += 1;
+            assert!((c.normal.norm() - 1.0).abs() < 1e-12);
+            let on = shape.closest(&(x - c.distance * c.normal));
+            assert!(on.distance.abs() < 1e-12, "{shape:?}: {}", on.distance);
+            for k in 0..3 {
+                let e = Vector3::ith(k, eps);
+                let (p, m) = (shape.closest(&(x + e)), shape.closest(&(x - e)));
+                let g = (p.distance - m.distance) / (2.0 * eps);
+                assert!(
+                    (g - c.normal[k]).abs() < 1e-6,
+                    "{shape:?} at {x:?}: gradient {k}: {} vs fd {g}",
+                    c.normal[k]
+                );
+                let h = (p.normal - m.normal) / (2.0 * eps);
+                for i in 0..3 {
+                    let want = h[i];
+                    let got = c.hessian[(i, k)];
+                    assert!(
+                        (got - want).abs() < 1e-6 * want.abs().max(1.0),
+                        "{shape:?} at {x:?}: hessian ({i},{k}): {got} vs fd {want}"
+                    );
+                }
+            }
+            assert!(c.hessian.symmetric_eigen().eigenvalues.min() > -1e-9);
+            assert!((c.hessian * c.normal).norm() < 1e-9);
+        }
+    }
+    assert!(checked > 400, "{checked} points checked");
+}
+
+/// Known distances: a sphere's, a box's face, edge and corner, a
+/// capsule's side and end, a plane's (to 1e-14).
+#[test]
+fn known_distances() {
+    let s = &shapes();
+    let d = |k: usize, x: [f64; 3]| s[k].closest(&Vector3::from(x)).distance;
+    let b = Shape::Box {
+        center: [0.0; 3],
+        half_extents: [1.0, 2.0, 3.0],
+        rotation: [0.0; 3],
+    };
+    let db = |x: [f64; 3]| b.closest(&Vector3::from(x)).distance;
+    let cases = [
+        (d(1, [0.1, 0.2, 0.2]), 0.25),
+        (db([1.5, 0.0, 0.0]), 0.5),
+        (db([2.0, 3.0, 0.0]), 2f64.sqrt()),
+        (db([2.0, 3.0, 4.0]), 3f64.sqrt()),
+        (db([0.5, 0.0, 0.0]), -0.5),
+        (d(3, [-0.1, 0.0, 0.0]), 0.05),
+        (d(0, [0.1, -0.2, 1.05]), 1.0 / (0.09f64 + 0.04 + 1.0).sqrt()),
+    ];
+    for (k, (got, want)) in cases.into_iter().enumerate() {
+        assert!((got - want).abs() < 1e-14, "case {k}: {got} vs {want}");
+    }
+    // Beside the capsule's segment: its midpoint moved off the axis.
+    let mid = Vector3::new(0.15, 0.05, -0.1);
+    let off = Vector3::new(0.1, 0.3, 0.0).cross(&Vector3::new(0.3, 0.1, -0.2));
+    let x = mid + 0.2 * off.normalize();
+    assert!((s[3].closest(&x).distance - 0.15).abs() < 1e-14);
+}
+
+#[test]
+fn bad_shapes_are_refused() {
+    let bad = [
+        Shape::Sphere {
+            center: [0.0; 3],
+            radius: 0.0,
+        },
+        Shape::HalfSpace {
+            point: [0.0; 3],
+            normal: [0.0; 3],
+        },
+        Shape::Box {
+            center: [f64::NAN, 0.0, 0.0],
+            half_extents: [1.0; 3],
+            rotation: [0.0; 3],
+        },
+        Shape::Capsule {
+            ends: [[0.0; 3]; 2],
+            radius: -1.0,
+        },
+    ];
+    for s in bad {
+        assert!(s.check().is_err(), "{s:?}");
+    }
+}
