@@ -561,3 +561,43 @@ fn bad_shapes_are_refused() {
         assert!(s.check().is_err(), "{s:?}");
     }
 }
+
+/// A sheet that starts within half its thickness of an obstacle is refused
+/// at initialization, the obstacle named; the model stays in setup.
+#[test]
+fn a_sheet_starting_inside_an_obstacle_is_refused_at_initialization() {
+    let ground = r#"[{"name": "floor", "shape": "half_space", "point": [0, 0, -0.0004], "normal": [0, 0, 1]}]"#;
+    let mut m = Model::new(square([0.0, 0.0, -9.81], ground, "")).unwrap();
+    let e = m.initialize().unwrap_err().to_string();
+    assert!(
+        e.contains("obstacle floor") && e.contains("half the contact thickness"),
+        "{e}"
+    );
+    assert_eq!(m.phase(), origami_fmu::model::Phase::Setup);
+}
+
+/// Obstacles and self-contact together: the sheet dropped on the ground
+/// with `ancf:contact` on rests on it as without (the ground's force is
+/// the weight within 1e-3), the outputs of both are there, and
+/// `energy.contact` is the obstacles' barrier energy (positive).
+#[test]
+fn obstacles_work_with_self_contact_on() {
+    let ground = r#"[{"name": "ground", "shape": "half_space", "point": [0, 0, -0.0025], "normal": [0, 0, 1]}]"#;
+    let mut m = Model::new(square(
+        [0.0, 0.0, -9.81],
+        ground,
+        r#", "ancf:contact": {"enabled": true}"#,
+    ))
+    .unwrap();
+    m.initialize().unwrap();
+    for _ in 0..50 {
+        m.advance(0.01).unwrap();
+        assert!(m.obstacle_gap().unwrap().0 > 0.0);
+    }
+    let weight = m.mass_properties().0 * 9.81;
+    let f = vector(&m, "ground.force");
+    assert!((f.z + weight).abs() < 1e-3 * weight, "{f:?} vs {weight}");
+    let e = m.output(m.output_id("energy.contact").unwrap()).unwrap();
+    assert!(e > 0.0, "energy.contact {e}");
+    assert!(m.output_id("contact.min_gap").is_some());
+}

@@ -173,6 +173,19 @@ fn variable_lines(o: &mut String, scene: &scene::Scene, model: &Model) {
             String::new()
         }
     );
+    if !scene.obstacles.is_empty() {
+        let names: Vec<String> = scene
+            .obstacles
+            .iter()
+            .map(|ob| format!("{}.force/moment", ob.name))
+            .collect();
+        let _ = writeln!(
+            o,
+            "  obstacles ({}): wrench outputs {}",
+            names.len(),
+            list(&names)
+        );
+    }
     let _ = writeln!(o, "  parameters ({})", model.parameters().len());
 }
 

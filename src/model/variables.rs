@@ -162,6 +162,12 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
         for (name, unit, what) in CONTACT_OUTPUTS {
             v.push(spec(name.into(), unit, what.into(), 0.0));
         }
+    } else if !scene.obstacles.is_empty() {
+        // Obstacles without self-contact: the barrier's energy and the
+        // friction work (the search's outputs are self-contact's).
+        for (name, unit, what) in &CONTACT_OUTPUTS[3..] {
+            v.push(spec((*name).into(), unit, (*what).into(), 0.0));
+        }
     }
     let mut wrench = |prefix: &str, what: &str, about: &str, moment: bool| {
         for c in ["x", "y", "z"] {
@@ -647,6 +653,8 @@ impl Model {
                 ev.term_energy,
                 self.state.work.friction,
             ]);
+        } else if !self.scene.obstacles.is_empty() {
+            out.extend([ev.term_energy, self.state.work.friction]);
         }
         let dynm = &self.state.dynamics;
         sys.reactions.values(
