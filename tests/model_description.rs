@@ -194,6 +194,26 @@ fn bridge() -> Scene {
     s
 }
 
+/// A 0.1 m square of 0.5 mm paper (800 kg/m^3) dropped under gravity on
+/// the ground `ground`, a half-space 2.5 mm below it (friction 0.3): the
+/// obstacle's wrench outputs and the obstacles' energies.
+fn ground() -> Scene {
+    let mesh = builders::grid(0.1, 0.1, 1, 1, &[]);
+    let mut s = tag_fold_edges(Scene::with_defaults("ground", mesh));
+    s.material.thickness = 5e-4;
+    s.material.density = 800.0;
+    s.gravity = Some([0.0, 0.0, -9.81]);
+    s.obstacles.push(origami_fmu::contact::Obstacle {
+        name: "ground".into(),
+        shape: origami_fmu::contact::Shape::HalfSpace {
+            point: [0.0, 0.0, -0.0025],
+            normal: [0.0, 0.0, 1.0],
+        },
+        friction: 0.3,
+    });
+    s
+}
+
 fn examples() -> Vec<Scene> {
     vec![
         square(),
@@ -203,6 +223,7 @@ fn examples() -> Vec<Scene> {
         miura(),
         diagonal_contact(),
         bridge(),
+        ground(),
     ]
 }
 
