@@ -37,17 +37,7 @@ fn square(g: [f64; 3], obstacles: &str, extra: &str) -> origami_fmu::Scene {
     origami_fmu::scene::from_str(&text).unwrap().0
 }
 
-/// The outputs `prefix.x/y/z` now.
-fn vector(m: &Model, prefix: &str) -> Vector3<f64> {
-    let at = |c: &str| {
-        let name = format!("{prefix}.{c}");
-        let id = m
-            .output_id(&name)
-            .unwrap_or_else(|| panic!("no output {name}"));
-        m.output(id).unwrap()
-    };
-    Vector3::new(at("x"), at("y"), at("z"))
-}
+use common::output_vector as vector;
 
 fn vertex(m: &Model, i: usize) -> Vector3<f64> {
     vector(m, &format!("vertex[{i}]"))

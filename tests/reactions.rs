@@ -8,6 +8,8 @@
 //! (The finite-difference test against the potential energy is the unit
 //! test `model::attach::tests`.)
 
+mod common;
+
 use nalgebra::Vector3;
 use origami_fmu::Model;
 
@@ -35,17 +37,7 @@ fn wrench(m: &Model) -> (Vector3<f64>, Vector3<f64>) {
     (vector(m, "mount.force"), vector(m, "mount.moment"))
 }
 
-/// The outputs `prefix.x/y/z` now.
-fn vector(m: &Model, prefix: &str) -> Vector3<f64> {
-    let at = |c: &str| {
-        let name = format!("{prefix}.{c}");
-        let id = m
-            .output_id(&name)
-            .unwrap_or_else(|| panic!("no output {name}"));
-        m.output(id).unwrap()
-    };
-    Vector3::new(at("x"), at("y"), at("z"))
-}
+use common::output_vector as vector;
 
 /// The input `mount.NAME`.
 fn input(m: &Model, name: &str) -> origami_fmu::InputId {

@@ -347,6 +347,20 @@ impl ObstacleTerm {
         }
     }
 
+    /// [`ObstacleTerm::apply`] for a lagged pair's dissipative force `f`
+    /// (sample positions `x`), also added to its part of the force.
+    fn apply_lagged(
+        &self,
+        lg: &Lagged,
+        x: &[Vector3<f64>],
+        f: &Vector3<f64>,
+        (force, part): (&mut [f64], &mut [f64]),
+        wrenches: &mut [[f64; 6]],
+    ) {
+        self.apply(lg.obstacle, lg.sample, &x[lg.sample], f, force, wrenches);
+        scatter(&self.surf.maps[lg.sample], f, part);
+    }
+
     /// The barrier's, dashpots' and friction's forces, energy and matrix
     /// at `st` (see [`ForceTerm::add`]).
     fn add_obstacles(
@@ -392,19 +406,8 @@ impl ObstacleTerm {
             let rate = lg.normal.dot(&vi);
             out.contact_damping_power += lg.c * rate * rate;
             let f = (lg.c * rate) * lg.normal;
-            self.apply(
-                lg.obstacle,
-                lg.sample,
-                &x[lg.sample],
-                &f,
-                &mut out.force,
-                &mut wrenches,
-            );
-            scatter(
-                &self.surf.maps[lg.sample],
-                &f,
-                &mut out.dissipative_force.damping,
-            );
+            let part = &mut out.dissipative_force.damping;
+            self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = (co.c * lg.c) * lg.normal * lg.normal.transpose();
                 add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
@@ -423,19 +426,8 @@ impl ObstacleTerm {
             let ut = lg.basis[0] * u.x + lg.basis[1] * u.y;
             let f = (ml * slip.0) * ut;
             out.friction_power += f.dot(&vi);
-            self.apply(
-                lg.obstacle,
-                lg.sample,
-                &x[lg.sample],
-                &f,
-                &mut out.force,
-                &mut wrenches,
-            );
-            scatter(
-                &self.surf.maps[lg.sample],
-                &f,
-                &mut out.dissipative_force.friction,
-            );
+            let part = &mut out.dissipative_force.friction;
+            self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = friction_matrix(co.c * ml, &lg.basis, u, slip);
                 add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);

@@ -193,3 +193,15 @@ pub fn hinge_velocity(model: &mut Model, w: f64, rate: f64) {
     });
 }
 pub mod fmi;
+
+/// The outputs `prefix.x/y/z` now (a wrench's force or moment, a vertex).
+pub fn output_vector(m: &Model, prefix: &str) -> Vector3<f64> {
+    let at = |c: &str| {
+        let name = format!("{prefix}.{c}");
+        let id = m
+            .output_id(&name)
+            .unwrap_or_else(|| panic!("no output {name}"));
+        m.output(id).unwrap()
+    };
+    Vector3::new(at("x"), at("y"), at("z"))
+}
