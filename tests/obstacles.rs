@@ -638,3 +638,60 @@ fn the_energy_balance_closes_with_obstacles() {
         "dissipated {dissipated:e} J of {fall:e} J"
     );
 }
+
+/// The square dropped from 2 mm onto each curved shape under its middle
+/// (a ball of radius 0.5 m, a box turned about the vertical whose top is
+/// a 0.2 x 0.16 m table, a horizontal rod of radius 0.3 m across it) comes
+/// to rest on it: no output with a sample within half the thickness of
+/// it, and after 0.5 s the shape's force is the weight pressing down
+/// (1e-3 relative) and its moment about the shape's origin that of the
+/// weight at the centre of mass (1e-3 of the weight times 0.05 m).
+#[test]
+fn a_sheet_dropped_on_a_ball_a_table_and_a_rod_rests_on_each() {
+    let top = -0.0025;
+    let shapes = [
+        format!(
+            r#"{{"name": "ball", "shape": "sphere", "center": [0.05, 0.05, {}], "radius": 0.5}}"#,
+            top - 0.5
+        ),
+        format!(
+            r#"{{"name": "table", "shape": "box", "center": [0.05, 0.05, {}], "half_extents": [0.1, 0.08, 0.05], "rotation": [0, 0, 0.4]}}"#,
+            top - 0.05
+        ),
+        format!(
+            r#"{{"name": "rod", "shape": "capsule", "ends": [[0.05, -0.2, {z}], [0.05, 0.3, {z}]], "radius": 0.3}}"#,
+            z = top - 0.3
+        ),
+    ];
+    for (shape, name) in shapes.iter().zip(["ball", "table", "rod"]) {
+        let mut m = Model::new(square([0.0, 0.0, -9.81], &format!("[{shape}]"), "")).unwrap();
+        m.initialize().unwrap();
+        let mut steps = 0;
+        for _ in 0..50 {
+            steps += m.advance(0.01).unwrap().steps;
+            let (gap, _) = m.obstacle_gap().unwrap();
+            assert!(gap > 0.0, "{name}: gap {gap:e} at t = {}", m.time());
+        }
+        let (mass, c) = m.mass_properties();
+        let weight = mass * 9.81;
+        let f = vector(&m, &format!("{name}.force"));
+        let mom = vector(&m, &format!("{name}.moment"));
+        let origin = match name {
+            "ball" => Vector3::new(0.05, 0.05, top - 0.5),
+            "table" => Vector3::new(0.05, 0.05, top - 0.05),
+            _ => Vector3::new(0.05, 0.05, top - 0.3),
+        };
+        let want = (Vector3::from(c) - origin).cross(&Vector3::new(0.0, 0.0, -weight));
+        eprintln!(
+            "{name}: {steps} steps; force {f:?} (weight {weight:.6e}); moment {mom:?} (want {want:?})"
+        );
+        assert!(
+            (f - Vector3::new(0.0, 0.0, -weight)).norm() < 1e-3 * weight,
+            "{name}: force {f:?}, weight {weight}"
+        );
+        assert!(
+            (mom - want).norm() < 1e-3 * weight * 0.05,
+            "{name}: moment {mom:?}, want {want:?}"
+        );
+    }
+}
