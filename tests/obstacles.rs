@@ -134,7 +134,10 @@ fn a_sheet_on_a_plane_steeper_than_friction_slides_with_g_sin_minus_mu_cos() {
     }
     let acc = (xs[2] - 2.0 * xs[1] + xs[0]) / (0.1 * 0.1);
     let want = g * (a.sin() - mu * a.cos());
-    eprintln!("steps {steps}; acceleration {acc:.5} m/s^2, g (sin a - mu cos a) = {want:.5}");
+    eprintln!(
+        "steps {steps}; acceleration {acc:.7} m/s^2, g (sin a - mu cos a) = {want:.7} ({:.1e} relative)",
+        (acc - want).abs() / want
+    );
     assert!((acc - want).abs() < 0.02 * want, "{acc} vs {want}");
 }
 
