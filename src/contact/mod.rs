@@ -12,4 +12,4 @@ pub mod scalar;
 pub mod surface;
 pub mod term;
 
-pub use term::{ContactReport, ContactSettings, ContactTerm};
+pub use term::{ContactReport, ContactSettings, ContactTerm, SettingsError};

@@ -30,7 +30,9 @@ use super::ccd;
 use super::distance::{self, V3};
 use super::scalar::{Dual1, Dual2, Real};
 use super::surface::ContactSurface;
-use crate::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, State};
+use crate::assembly::{
+    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
+};
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
@@ -70,6 +72,23 @@ impl Default for ContactSettings {
         }
     }
 }
+
+/// Why [`ContactTerm::new`] refused its settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SettingsError {
+    /// The thickness (given) is not positive.
+    Thickness(f64),
+}
+
+impl std::fmt::Display for SettingsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SettingsError::Thickness(_) => write!(f, "contact needs a positive thickness"),
+        }
+    }
+}
+
+impl std::error::Error for SettingsError {}
 
 /// Which primitives a pair joins (contact vertex indices).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -253,9 +272,9 @@ impl ContactTerm {
         settings: &ContactSettings,
         areal_mass: f64,
         membrane: f64,
-    ) -> Result<ContactTerm, String> {
+    ) -> Result<ContactTerm, SettingsError> {
         if settings.thickness.is_nan() || settings.thickness <= 0.0 {
-            return Err("contact needs a positive thickness".into());
+            return Err(SettingsError::Thickness(settings.thickness));
         }
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
         let nf = mesh.triangles().len().max(1);
@@ -805,16 +824,14 @@ impl ContactTerm {
         self.s_hat * p.xi / self.xi
     }
 
-    /// The pair stiffnesses of [`ForceTerm::memory`]'s list (untrusted: a
+    /// The pair stiffnesses of [`BarrierTerm::memory`]'s list (untrusted: a
     /// restored state's): sixes of edge flag (0 or 1), four contact-vertex
     /// ids and a positive stiffness up to MAX_MAGNITUDE.
-    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<PairKey, f64>, String> {
+    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<PairKey, f64>, MemoryError> {
         if !memory.len().is_multiple_of(6) {
-            return Err(format!(
-                "{} values; the pair stiffnesses come in sixes (kind, four vertices, \
-                 stiffness)",
-                memory.len()
-            ));
+            return Err(MemoryError::PairLength {
+                values: memory.len(),
+            });
         }
         let n = self.surf.n_vertices();
         let max = crate::scene::limits::MAX_MAGNITUDE;
@@ -823,20 +840,25 @@ impl ContactTerm {
             let id = |x: f64| {
                 (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
                     .then_some(x as usize)
-                    .ok_or_else(|| format!("pair {k}: {x} is not a contact vertex (0..{n})"))
+                    .ok_or(MemoryError::PairVertex {
+                        pair: k,
+                        vertex: x,
+                        vertices: n,
+                    })
             };
             if m[0] != 0.0 && m[0] != 1.0 {
-                return Err(format!(
-                    "pair {k}: kind {} is neither 0 (point-triangle) nor 1 (edge-edge)",
-                    m[0]
-                ));
+                return Err(MemoryError::PairKind {
+                    pair: k,
+                    kind: m[0],
+                });
             }
             let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
             if !(m[5] > 0.0 && m[5] <= max) {
-                return Err(format!(
-                    "pair {k}: stiffness {} is not a positive number up to {max:e}",
-                    m[5]
-                ));
+                return Err(MemoryError::PairStiffness {
+                    pair: k,
+                    stiffness: m[5],
+                    max,
+                });
             }
             map.insert((m[0] == 1.0, ids), m[5]);
         }
@@ -862,7 +884,7 @@ impl ContactTerm {
 
     /// The active pairs at positions `x` (gap below the barrier width).
     /// Fails when a pair is already closer than the thickness.
-    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, String> {
+    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, EvalError> {
         let mut out = Vec::new();
         for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
@@ -872,11 +894,12 @@ impl ContactTerm {
             }
             if s <= 0.0 {
                 let ids = p.ids();
-                return Err(format!(
-                    "contact: surfaces at facets {:?} and {:?} are closer than the contact \
-                     thickness {} m (gap {s:.3e} m)",
-                    self.surf.vertex_facets[ids[0]], self.surf.vertex_facets[ids[3]], p.xi
-                ));
+                return Err(EvalError::Penetration {
+                    facets_a: self.surf.vertex_facets[ids[0]].clone(),
+                    facets_b: self.surf.vertex_facets[ids[3]].clone(),
+                    thickness: p.xi,
+                    gap: s,
+                });
             }
             out.push((p, s));
         }
@@ -1189,7 +1212,7 @@ impl ContactTerm {
         out: &mut Evaluation,
         matrix: Option<MatrixCoeffs>,
         batch: &mut MatrixBatch,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let w = self.flat_width;
         for sp in &self.stops {
             let [a, b, t] = sp
@@ -1201,10 +1224,7 @@ impl ContactTerm {
                 continue;
             }
             if g <= 0.0 {
-                return Err(format!(
-                    "contact: the crease on edge {} is folded past flat",
-                    sp.edge
-                ));
+                return Err(EvalError::PastFlat { edge: sp.edge });
             }
             let k = asm.physics.crease_k_per_length * sp.length;
             let d = crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
@@ -1348,34 +1368,9 @@ impl ContactTerm {
     }
 }
 
-impl ForceTerm for ContactTerm {
-    fn name(&self) -> &str {
-        "contact"
-    }
-
+impl BarrierTerm for ContactTerm {
     fn as_contact(&self) -> Option<&ContactTerm> {
         Some(self)
-    }
-
-    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
-        let mut x = Vec::new();
-        let mut vx = Vec::new();
-        self.surf.positions(q, &mut x);
-        self.surf.positions(v, &mut vx);
-        self.cache_at(&x);
-        self.lag_at(&x, &vx);
-        self.creases_near_flat = self.near_flat(q);
-        self.pattern_pairs(asm)
-    }
-
-    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
-        let mut x = Vec::new();
-        let mut vx = Vec::new();
-        self.surf.positions(q, &mut x);
-        self.surf.positions(v, &mut vx);
-        self.cache_at(&x);
-        self.lag_at(&x, &vx);
-        self.creases_near_flat = self.near_flat(q);
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
@@ -1396,11 +1391,11 @@ impl ForceTerm for ContactTerm {
         out
     }
 
-    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+    fn check_memory(&self, memory: &[f64]) -> Result<(), MemoryError> {
         self.parse_memory(memory).map(|_| ())
     }
 
-    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
         self.pair_kappa = self.parse_memory(memory)?;
         Ok(())
     }
@@ -1423,6 +1418,27 @@ impl ForceTerm for ContactTerm {
     fn reports_power(&self) -> bool {
         true
     }
+}
+
+impl ForceTerm for ContactTerm {
+    fn name(&self) -> &str {
+        "contact"
+    }
+
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
+        self.lag(asm, q, v);
+        self.pattern_pairs(asm)
+    }
+
+    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
+        let mut x = Vec::new();
+        let mut vx = Vec::new();
+        self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
+        self.cache_at(&x);
+        self.lag_at(&x, &vx);
+        self.creases_near_flat = self.near_flat(q);
+    }
 
     fn add(
         &self,
@@ -1430,7 +1446,7 @@ impl ForceTerm for ContactTerm {
         st: &State,
         out: &mut Evaluation,
         mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let mut x = Vec::new();
         let mut v = Vec::new();
         self.surf.positions(st.q, &mut x);
