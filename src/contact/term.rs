@@ -213,6 +213,10 @@ pub struct ContactTerm {
     touching: bool,
     /// The step start's candidate pairs.
     cache: CandidateCache,
+    /// A search the contact report made at a step end, with the cache's
+    /// own padding: the next step start takes it instead of searching
+    /// again at the same positions.
+    spare: std::sync::Mutex<Option<CandidateCache>>,
     /// Barrier stiffness of each candidate pair (N/m), set while the pair
     /// is outside the barrier and kept while it is inside (see
     /// [`ContactTerm::pair_stiffness`]).
@@ -310,6 +314,7 @@ impl ContactTerm {
             project: true,
             touching: false,
             cache: CandidateCache::default(),
+            spare: Default::default(),
             pair_kappa: HashMap::new(),
             x_start: Vec::new(),
             v_start: Vec::new(),
@@ -356,14 +361,22 @@ impl ContactTerm {
         // positions; a pair within `xi + reach` now was within that of
         // them while no vertex moved more than `slack`.
         let slack = 0.5 * (self.cache.pad + 2.0 * self.cache_margin - self.xi - reach);
-        let searched;
-        let pairs: &[Pair] = if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
-            &self.cache.pairs
-        } else {
-            searched = self.candidates(&x, None, self.xi + reach);
-            &searched
+        if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
+            return self.report_over(&x, &self.cache.pairs, reach);
+        }
+        // The next step starts here and would search again: search once,
+        // as it would (a wider search than the report needs), and leave it.
+        let pad = self.xi + self.s_hat;
+        let searched = CandidateCache {
+            pairs: self.candidates(&x, None, pad + 2.0 * self.cache_margin),
+            x0: x,
+            pad,
         };
-        self.report_over(&x, pairs, reach)
+        let r = self.report_over(&searched.x0, &searched.pairs, reach);
+        if let Ok(mut spare) = self.spare.lock() {
+            *spare = Some(searched);
+        }
+        r
     }
 
     /// Barrier stiffness kappa in force (N/m).
@@ -479,6 +492,12 @@ impl ContactTerm {
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
         out.retain(|p| self.rest_distance(p) >= p.xi + self.s_hat_of(p));
+        // Boxes overlap where primitives may be within `pad`; without a
+        // sweep, keep the pairs that are (the boxes of tilted facets
+        // overlap far more often than the facets come near).
+        if dx.is_none() {
+            out.retain(|p| distance_sq::<f64>(&p.kind, &lift(&self.points(x, p))) <= pad * pad);
+        }
         // A canonical order: sums over pairs do not depend on the search.
         out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
         out
@@ -566,6 +585,11 @@ impl ContactTerm {
         if self.cache.covers(x, None, pad, 0.5 * margin) {
             return;
         }
+        let spare = self.spare.get_mut().ok().and_then(Option::take);
+        if let Some(c) = spare.filter(|c| c.pad == pad && c.x0 == x) {
+            self.cache = c;
+            return;
+        }
         self.cache = CandidateCache {
             pairs: self.candidates(x, None, pad + 2.0 * margin),
             x0: x.to_vec(),
@@ -603,12 +627,23 @@ impl ContactTerm {
     /// BoxPleatPyramid: 4.0x the matrix entries, 7.2x the factorization's
     /// multiply-adds).
     fn pattern_pairs(&self, asm: &Assembler) -> Vec<(usize, usize)> {
+        // Pairs between the same facets share their slots: each set once.
+        let mut sets: Vec<Vec<usize>> = self
+            .cache
+            .pairs
+            .iter()
+            .map(|p| {
+                let mut slots = Vec::with_capacity(48);
+                self.pair_slots(&p.ids(), &mut slots);
+                slots
+            })
+            .collect();
+        sets.sort_unstable();
+        sets.dedup();
         let mut out = Vec::new();
-        let mut slots: Vec<usize> = Vec::with_capacity(48);
-        for p in &self.cache.pairs {
-            self.pair_slots(&p.ids(), &mut slots);
-            for &a in &slots {
-                for &b in &slots {
+        for slots in &sets {
+            for &a in slots {
+                for &b in slots {
                     if a < b && !asm.has_pair(a, b) {
                         out.push((a, b));
                     }
@@ -1084,6 +1119,24 @@ fn stop_points(
 
 /// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
 /// theta` on the valley side (-1), `theta` on the mountain side (+1).
+/// A bound on how far the angle between the crease normals `a x t` and
+/// `b x t` (the gap to flat of [`flat_gap`]) can change along the move
+/// `(a, b, t) + alpha (da, db, dt)`, `alpha` in [0, 1]: each normal turns by
+/// at most `asin(|change| / |normal|) <= pi/2 |change| / |normal|`.
+fn stop_turn_bound([a, b, t]: [Vector3<f64>; 3], [da, db, dt]: [Vector3<f64>; 3]) -> f64 {
+    let (nt, ndt) = (t.norm(), dt.norm());
+    let turn = |x: &Vector3<f64>, dx: &Vector3<f64>| {
+        let normal = x.cross(&t).norm();
+        let change = dx.norm() * (nt + ndt) + x.norm() * ndt;
+        if change < normal {
+            std::f64::consts::FRAC_PI_2 * change / normal
+        } else {
+            std::f64::consts::PI
+        }
+    };
+    turn(&a, &da) + turn(&b, &db)
+}
+
 fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
     let theta = crate::crease::theta(a, b, t);
     if theta > std::f64::consts::PI {
@@ -1255,7 +1308,15 @@ impl ContactTerm {
             let [a, b, t] = vecs(q);
             let [da, db_, dt] = vecs(dq);
             let raw0 = crate::crease::theta(&a, &b, &t);
-            let keep = (super::ccd::MIN_SEPARATION * flat_gap(&a, &b, &t).0).min(self.flat_width);
+            let gap = if raw0 > std::f64::consts::PI {
+                std::f64::consts::TAU - raw0
+            } else {
+                raw0
+            };
+            let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
+            if stop_turn_bound([a, b, t], [da, db_, dt]) < (gap - keep).min(1.0) {
+                continue;
+            }
             // Passing flat wraps the raw angle across 0 = 2 pi.
             let clear = |alpha: f64| {
                 let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
