@@ -1611,3 +1611,41 @@ impl ForceTerm for ContactTerm {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::XorShift;
+
+    /// The bound on a crease stop's turn holds along the whole move: the
+    /// gap to flat never changes by more than it, at any fraction.
+    #[test]
+    fn stop_turn_bound_holds_along_the_move() {
+        let mut rng = XorShift(11);
+        let mut v = |s: f64| Vector3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+        let mut tight = 0;
+        for i in 0..2000 {
+            let x = [v(1.0), v(1.0), v(1.0)];
+            let scale = [1e-3, 1e-2, 0.1, 0.5][i % 4];
+            let dx = [v(scale), v(scale), v(scale)];
+            let bound = stop_turn_bound(x, dx);
+            let g0 = flat_gap(&x[0], &x[1], &x[2]).0;
+            for k in 1..=50 {
+                let alpha = k as f64 / 50.0;
+                let [a, b, t] = [0, 1, 2].map(|i| x[i] + dx[i] * alpha);
+                let g = flat_gap(&a, &b, &t).0;
+                assert!(
+                    (g - g0).abs() <= bound + 1e-12,
+                    "gap {g0} -> {g} at {alpha}, bound {bound}"
+                );
+            }
+            if bound < 0.5 {
+                tight += 1;
+            }
+        }
+        assert!(
+            tight > 500,
+            "the bound is informative ({tight} of 2000 below 0.5)"
+        );
+    }
+}
