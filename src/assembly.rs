@@ -6,12 +6,14 @@
 //! Forces come from force terms ([`ForceTerm`], in `assembly/terms.rs`):
 //! shell elements and crease springs always; damping (Rayleigh
 //! `alpha M + beta K`, crease dashpots) only when its coefficients are
-//! non-zero; terms from outside (contact, ...) through
-//! [`Assembler::with_terms`]. Gravity is a constant force computed once.
+//! non-zero; terms from outside through [`Assembler::with_terms`], and
+//! barrier terms (contact) through [`Assembler::add_barrier`]. Gravity is a constant force computed once.
 
+mod errors;
 mod terms;
 
-pub use terms::ForceTerm;
+pub use errors::{BuildError, EvalError, MemoryError};
+pub use terms::{BarrierTerm, ForceTerm};
 
 use crate::dofs::{Combo, DofLayout, SlotKind};
 use crate::element::{ElemVec, ElementOptions, ShellElement};
@@ -55,12 +57,9 @@ impl CreaseEnd {
         raw: f64,
         [a, b, t]: &[Vector3<f64>; 3],
         previous: f64,
-    ) -> Result<f64, String> {
+    ) -> Result<f64, EvalError> {
         if !raw.is_finite() || a.cross(t).norm() == 0.0 || b.cross(t).norm() == 0.0 {
-            return Err(format!(
-                "crease on edge {} has an undefined fold angle",
-                self.edge
-            ));
+            return Err(EvalError::UndefinedAngle { edge: self.edge });
         }
         Ok(crate::crease::unwrap(raw, previous))
     }
@@ -225,6 +224,8 @@ pub struct Assembler {
     pub physics: Physics,
     /// The force terms, in evaluation order.
     terms: Vec<Box<dyn ForceTerm>>,
+    /// The barrier terms (contact), evaluated after `terms`.
+    barriers: Vec<Box<dyn BarrierTerm>>,
     /// Whether the iteration matrix takes the shell's membrane geometric
     /// stiffness from the step start ([`Assembler::lag_membrane_stiffness`]).
     lag_membrane: bool,
@@ -238,7 +239,7 @@ impl Assembler {
         physics: Physics,
         element: ElementOptions,
         fixed_slots: &[usize],
-    ) -> Result<Assembler, String> {
+    ) -> Result<Assembler, BuildError> {
         Self::with_terms(mesh, physics, element, fixed_slots, Vec::new())
     }
 
@@ -251,7 +252,7 @@ impl Assembler {
         element: ElementOptions,
         fixed_slots: &[usize],
         extra: Vec<Box<dyn ForceTerm>>,
-    ) -> Result<Assembler, String> {
+    ) -> Result<Assembler, BuildError> {
         let layout = DofLayout::new(mesh);
         let elements = mesh
             .facet_ids()
@@ -263,7 +264,10 @@ impl Assembler {
                     element.rule,
                     element.interpolation,
                 )
-                .map_err(|e| format!("face {f}: {e}"))
+                .map_err(|e| BuildError::Element {
+                    face: f,
+                    reason: e.to_string(),
+                })
             })
             .collect::<Result<Vec<_>, _>>()?;
         let creases = crease_ends(mesh, &layout);
@@ -312,10 +316,11 @@ impl Assembler {
         for t in &extra {
             for (a, b) in t.pattern(&layout) {
                 if a >= n_slots || b >= n_slots {
-                    return Err(format!(
-                        "force term {}: slot pair ({a}, {b}) outside the {n_slots} slots",
-                        t.name()
-                    ));
+                    return Err(BuildError::Pattern {
+                        term: t.name().to_string(),
+                        pair: (a, b),
+                        slots: n_slots,
+                    });
                 }
                 pairs.push((a.min(b), a.max(b)));
             }
@@ -342,6 +347,7 @@ impl Assembler {
             rigid: RigidModes::default(),
             physics,
             terms: terms::built_in().into_iter().chain(extra).collect(),
+            barriers: Vec::new(),
             lag_membrane: false,
         };
         asm.build_pattern();
@@ -616,7 +622,7 @@ impl Assembler {
         st: &State,
         out: &mut Evaluation,
         mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let n = self.n_dofs();
         out.force.clear();
         out.force.resize(n, 0.0);
@@ -635,7 +641,7 @@ impl Assembler {
                 *v = co.m * m;
             }
         }
-        for term in &self.terms {
+        for term in self.all_terms() {
             term.add(
                 self,
                 st,
@@ -647,9 +653,8 @@ impl Assembler {
             || !out.strain_energy.is_finite()
             || !out.term_energy.is_finite()
         {
-            return Err(match self.non_finite_term(st) {
-                Some(name) => format!("internal forces are not finite (those of the {name})"),
-                None => "internal forces are not finite".into(),
+            return Err(EvalError::NotFinite {
+                term: self.non_finite_term(st).map(str::to_string),
             });
         }
         Ok(())
@@ -660,7 +665,7 @@ impl Assembler {
     /// evaluation: which term, hence which parameters, to look at).
     pub fn non_finite_term(&self, st: &State) -> Option<&str> {
         let mut ev = Evaluation::default();
-        for term in &self.terms {
+        for term in self.all_terms() {
             ev.force.clear();
             ev.force.resize(self.n_dofs(), 0.0);
             ev.theta.clear();
@@ -684,8 +689,7 @@ impl Assembler {
     /// [`crate::solver::SparseSolver::set_low_rank`].
     pub fn matrix_low_rank(&self, q: &[f64], co: MatrixCoeffs) -> Option<LowRank> {
         let n = self.n_dofs();
-        self.terms
-            .iter()
+        self.all_terms()
             .filter_map(|t| t.low_rank(self, q, co))
             .map(|lr| {
                 let mut u = vec![0.0; self.n_free * lr.rank()];
@@ -709,7 +713,7 @@ impl Assembler {
         q: &[f64],
         theta_prev: &[f64],
         theta: &mut Vec<f64>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         theta.clear();
         for (ce, &prev) in self.creases.iter().zip(theta_prev) {
             let v = ce.vectors(q);
@@ -718,10 +722,17 @@ impl Assembler {
         Ok(())
     }
 
-    /// Whether a force term reports powers the stepper integrates
-    /// ([`ForceTerm::reports_power`]).
+    /// Every force term in evaluation order: the plain ones, then the
+    /// barriers.
+    fn all_terms(&self) -> impl Iterator<Item = &dyn ForceTerm> {
+        let barriers = self.barriers.iter().map(|b| &**b as &dyn ForceTerm);
+        self.terms.iter().map(|t| &**t).chain(barriers)
+    }
+
+    /// Whether a barrier term reports powers the stepper integrates
+    /// ([`BarrierTerm::reports_power`]).
     pub fn reports_power(&self) -> bool {
-        self.terms.iter().any(|t| t.reports_power())
+        self.barriers.iter().any(|t| t.reports_power())
     }
 
     /// Give every force term the accepted state before a time step (its
@@ -730,11 +741,16 @@ impl Assembler {
     /// must then be redone).
     pub fn before_step(&mut self, q: &[f64], v: &[f64]) -> bool {
         let mut terms = std::mem::take(&mut self.terms);
+        let mut barriers = std::mem::take(&mut self.barriers);
         let mut wanted = Vec::new();
         for t in terms.iter_mut() {
             wanted.extend(t.before_step(self, q, v));
         }
+        for t in barriers.iter_mut() {
+            wanted.extend(t.before_step(self, q, v));
+        }
         self.terms = terms;
+        self.barriers = barriers;
         wanted.retain(|&(a, b)| !(self.has_pair(a, b) || self.is_fixed[a] || self.is_fixed[b]));
         if wanted.is_empty() {
             return false;
@@ -763,47 +779,52 @@ impl Assembler {
     /// (as in [`Assembler::before_step`], without growing the pattern).
     pub fn lag(&mut self, q: &[f64], v: &[f64]) {
         let mut terms = std::mem::take(&mut self.terms);
+        let mut barriers = std::mem::take(&mut self.barriers);
         for t in terms.iter_mut() {
             t.lag(self, q, v);
         }
+        for t in barriers.iter_mut() {
+            t.lag(self, q, v);
+        }
         self.terms = terms;
+        self.barriers = barriers;
     }
 
-    /// The largest fraction in (0, 1] of the move `q -> q + dq` every force
-    /// term admits (contact: free of collisions).
+    /// The largest fraction in (0, 1] of the move `q -> q + dq` every
+    /// barrier term admits (contact: free of collisions).
     pub fn max_step_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
-        self.terms
+        self.barriers
             .iter()
             .map(|t| t.max_step_fraction(self, q, dq))
             .fold(1.0, f64::min)
     }
 
     /// The largest fraction in (0, 1] of a Newton correction `q -> q + dq`
-    /// (velocities moving by `dv_dq dq` from `v`) every force term admits
-    /// by [`ForceTerm::max_correction_fraction`]: where a term's stiffness
+    /// (velocities moving by `dv_dq dq` from `v`) every barrier term admits
+    /// by [`BarrierTerm::max_correction_fraction`]: where a term's stiffness
     /// changes along the correction (the iteration matrix is then formed
     /// anew where it stops).
     pub fn max_correction_fraction(&self, q: &[f64], v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
-        self.terms
+        self.barriers
             .iter()
             .map(|t| t.max_correction_fraction(self, q, v, dq, dv_dq))
             .fold(1.0, f64::min)
     }
 
-    /// Whether a force term limits this step (contact in touch): the
+    /// Whether a barrier term limits this step (contact in touch): the
     /// stepper then backtracks corrections that raise the residual.
     pub fn limits_steps(&self) -> bool {
-        self.terms.iter().any(|t| t.limits_steps())
+        self.barriers.iter().any(|t| t.limits_steps())
     }
 
     /// The rigid obstacles' term, if the assembler has one.
     pub fn obstacles(&self) -> Option<&crate::contact::ObstacleTerm> {
-        self.terms.iter().find_map(|t| t.as_obstacles())
+        self.barriers.iter().find_map(|t| t.as_obstacles())
     }
 
     /// The self-contact term, if the assembler has one.
     pub fn contact(&self) -> Option<&crate::contact::ContactTerm> {
-        self.terms.iter().find_map(|t| t.as_contact())
+        self.barriers.iter().find_map(|t| t.as_contact())
     }
 
     /// The viscous force at `(q, v)` (all DOFs; [`ForceTerm::viscous_force`]
@@ -811,58 +832,79 @@ impl Assembler {
     pub fn viscous_force(&self, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
         out.clear();
         out.resize(self.n_dofs(), 0.0);
-        for t in &self.terms {
+        for t in self.all_terms() {
             t.viscous_force(self, q, v, out);
         }
     }
 
-    /// What each force term carries from step to step ([`ForceTerm::memory`]),
-    /// in evaluation order.
+    /// What each force term carries from step to step, in evaluation
+    /// order: nothing for a plain term, [`BarrierTerm::memory`] for a
+    /// barrier.
     pub fn term_memory(&self) -> Vec<Vec<f64>> {
-        self.terms.iter().map(|t| t.memory()).collect()
+        let plain = self.terms.iter().map(|_| Vec::new());
+        plain
+            .chain(self.barriers.iter().map(|t| t.memory()))
+            .collect()
     }
 
     /// Whether `memory` (untrusted) fits the force terms: one list per
-    /// term, each one the term could have given ([`ForceTerm::check_memory`]);
-    /// empty: every term as built.
-    pub fn check_term_memory(&self, memory: &[Vec<f64>]) -> Result<(), String> {
-        if !memory.is_empty() && memory.len() != self.terms.len() {
-            return Err(format!(
-                "{} force terms' memory for {} terms",
-                memory.len(),
-                self.terms.len()
-            ));
+    /// term, each one the term could have given (empty for a plain term,
+    /// [`BarrierTerm::check_memory`] for a barrier); empty: every term as
+    /// built.
+    pub fn check_term_memory(&self, memory: &[Vec<f64>]) -> Result<(), MemoryError> {
+        let n = self.terms.len() + self.barriers.len();
+        if !memory.is_empty() && memory.len() != n {
+            return Err(MemoryError::Count {
+                lists: memory.len(),
+                terms: n,
+            });
         }
-        for (k, (t, m)) in self.terms.iter().zip(memory).enumerate() {
-            t.check_memory(m)
-                .map_err(|e| format!("term {k} ({}): {e}", t.name()))?;
+        let (plain, barrier) = memory.split_at(memory.len().min(self.terms.len()));
+        let checks = self
+            .terms
+            .iter()
+            .zip(plain)
+            .map(|(t, m)| (t.name(), terms::no_memory(m)));
+        let checks = checks.chain(
+            self.barriers
+                .iter()
+                .zip(barrier)
+                .map(|(t, m)| (t.name(), t.check_memory(m))),
+        );
+        for (index, (name, check)) in checks.enumerate() {
+            check.map_err(|e| MemoryError::Term {
+                index,
+                name: name.to_string(),
+                reason: Box::new(e),
+            })?;
         }
         Ok(())
     }
 
-    /// Hand each force term back its memory (`memory` as from
+    /// Hand each barrier term back its memory (`memory` as from
     /// [`Assembler::term_memory`]; empty: every term as built); checked
     /// first, so that a refused memory changes nothing.
-    pub fn restore_term_memory(&mut self, memory: &[Vec<f64>]) -> Result<(), String> {
+    pub fn restore_term_memory(&mut self, memory: &[Vec<f64>]) -> Result<(), MemoryError> {
         self.check_term_memory(memory)?;
-        for (k, t) in self.terms.iter_mut().enumerate() {
-            t.restore_memory(memory.get(k).map_or(&[][..], |m| &m[..]))?;
+        let offset = self.terms.len();
+        for (k, t) in self.barriers.iter_mut().enumerate() {
+            t.restore_memory(memory.get(offset + k).map_or(&[][..], |m| &m[..]))?;
         }
         Ok(())
     }
 
-    /// Append a force term built after the assembler (it may need the
+    /// Append a barrier term built after the assembler (it needs the
     /// layout and elements, as contact does); its declared pattern joins.
-    pub fn add_term(&mut self, term: Box<dyn ForceTerm>) {
+    pub fn add_barrier(&mut self, term: Box<dyn BarrierTerm>) {
         let mut pairs = self.extra_pairs.clone();
         pairs.extend(term.pattern(&self.layout));
-        self.terms.push(term);
+        self.barriers.push(term);
         self.set_extra_pairs(pairs);
     }
 
     /// Names of the force terms, in evaluation order.
     pub fn term_names(&self) -> Vec<&str> {
-        self.terms.iter().map(|t| t.name()).collect()
+        self.all_terms().map(|t| t.name()).collect()
     }
 
     /// Add the 3x3 block `k` at slots (a, b) of the free-DOF matrix values

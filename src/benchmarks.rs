@@ -243,7 +243,7 @@ impl RollUp {
             interpolation: self.interpolation,
             ..ElementOptions::default()
         };
-        let asm = Assembler::new(&mesh, physics, element, &fixed)?;
+        let asm = Assembler::new(&mesh, physics, element, &fixed).map_err(|e| e.to_string())?;
         // Trapezoidal shares of the end moment along the tip edge.
         let m_top = top * 2.0 * PI * ROLL_UP_EI / ROLL_UP_L;
         let slots = tip
@@ -352,7 +352,7 @@ pub fn static_deflection(
             }
         })
         .collect();
-    let asm = Assembler::new(mesh, physics, element, &fixed)?;
+    let asm = Assembler::new(mesh, physics, element, &fixed).map_err(|e| e.to_string())?;
     let mut q = asm.layout.reference_state(mesh);
     let f = load(&asm);
     let report = statics::solve(&asm, &mut q, &[], &ConstantLoad(f), settings)?;

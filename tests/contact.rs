@@ -99,7 +99,7 @@ fn tilted_pair(settings: &ContactSettings) -> (Assembler, Vec<f64>) {
     let term = ContactTerm::new(&mesh, &asm.layout, &asm.elements, settings, 0.1, 1e-3)
         .unwrap()
         .with_exact_hessian();
-    asm.add_term(Box::new(term));
+    asm.add_barrier(Box::new(term));
     let mut q = asm.layout.reference_state(&mesh);
     let r = rot_y(0.02);
     let rm = nalgebra::Matrix3::from_fn(|i, j| r[i][j]);
@@ -182,7 +182,7 @@ fn crease_stop_and_neighbour_force_and_tangent_match_finite_differences() {
     )
     .unwrap()
     .with_exact_hessian();
-    asm.add_term(Box::new(term));
+    asm.add_barrier(Box::new(term));
     let zeros = vec![0.0; q.len()];
     asm.before_step(&q, &zeros);
     force_and_tangent_match_finite_differences(&asm, &q);
@@ -861,7 +861,7 @@ fn contact_asks_for_matrix_blocks_only_where_pairs_are() {
         m.youngs_modulus * m.thickness,
     )
     .unwrap();
-    asm.add_term(Box::new(term));
+    asm.add_barrier(Box::new(term));
     let q = asm.layout.reference_state(mesh);
     let v = vec![0.0; q.len()];
     let own = asm.nnz();

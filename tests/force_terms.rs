@@ -5,7 +5,9 @@
 //! finite differences through `Assembler::evaluate`.
 
 use nalgebra::{Matrix3, Vector3};
-use origami_fmu::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, Physics, State};
+use origami_fmu::assembly::{
+    Assembler, BuildError, EvalError, Evaluation, ForceTerm, MatrixCoeffs, Physics, State,
+};
 use origami_fmu::dofs::DofLayout;
 use origami_fmu::element::ElementOptions;
 use origami_fmu::ids::VertexId;
@@ -52,7 +54,7 @@ impl ForceTerm for Spring {
         st: &State,
         out: &mut Evaluation,
         matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let (sa, sb) = self.ends(asm);
         let x = |s: usize| Vector3::new(st.q[3 * s], st.q[3 * s + 1], st.q[3 * s + 2]);
         let d = x(sa) - x(sb);
@@ -226,7 +228,7 @@ fn a_term_pattern_outside_the_slots_is_an_error() {
             _: &State,
             _: &mut Evaluation,
             _: Option<(&mut [f64], MatrixCoeffs)>,
-        ) -> Result<(), String> {
+        ) -> Result<(), EvalError> {
             Ok(())
         }
     }
@@ -240,5 +242,6 @@ fn a_term_pattern_outside_the_slots_is_an_error() {
     )
     .err()
     .unwrap();
-    assert!(err.contains("force term bad"), "{err}");
+    assert!(matches!(err, BuildError::Pattern { .. }), "{err}");
+    assert!(err.to_string().contains("force term bad"), "{err}");
 }

@@ -199,7 +199,7 @@ fn assembler_with(shape: Shape, friction: f64) -> (Assembler, Vec<f64>) {
     )
     .unwrap()
     .with_exact_hessian();
-    asm.add_term(Box::new(term));
+    asm.add_barrier(Box::new(term));
     let mut q = asm.layout.reference_state(&mesh);
     let mut rng = origami_fmu::rng::XorShift(11);
     for x in q.iter_mut() {

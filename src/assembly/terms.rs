@@ -2,15 +2,18 @@
 //! `M a + f(q, v) = f_ext(t)` is a [`ForceTerm`] that adds its part of `f`,
 //! its energy and its part of the iteration matrix `k df/dq + c df/dv`. The
 //! built-in terms (shell elements, crease springs with their moments and
-//! dashpots, mass damping) are the first clients; contact and friction plug
-//! in the same way through [`super::Assembler::with_terms`], declaring the
-//! slot pairs they couple ([`ForceTerm::pattern`]) and using
-//! [`ForceTerm::before_step`] for per-step work such as a broad phase.
+//! dashpots, mass damping) are the first clients; more plug in through
+//! [`super::Assembler::with_terms`], declaring the slot pairs they couple
+//! ([`ForceTerm::pattern`]) and using [`ForceTerm::before_step`] for
+//! per-step work such as a broad phase. Terms that keep surfaces apart
+//! (contact) are [`BarrierTerm`]s as well: they also limit the stepper's
+//! moves, carry memory in saved states and report powers.
 //!
 //! External loads that depend only on time (gravity, vertex-force inputs)
 //! stay in the stepper's `f_ext`: it evaluates them at the integrator's own
 //! time points, which is where held and interpolated inputs are defined.
 
+use super::errors::{EvalError, MemoryError};
 use super::{
     Assembler, Evaluation, MatrixCoeffs, State, local_vector, scatter_force, scatter_matrix,
 };
@@ -50,39 +53,56 @@ pub trait ForceTerm: Send + Sync {
     /// [`Evaluation::dissipative_force`]).
     fn viscous_force(&self, _asm: &Assembler, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}
 
+    /// A dense low-rank part of `k df/dq + c df/dv` that the sparse
+    /// pattern cannot hold (all DOFs; mass damping's rigid-body projection
+    /// couples every DOF): [`Assembler::matrix_low_rank`] gathers them for
+    /// the solver.
+    fn low_rank(&self, _asm: &Assembler, _q: &[f64], _co: MatrixCoeffs) -> Option<LowRank> {
+        None
+    }
+
+    /// Add this term's force to `out.force` (all DOFs, internal-force sign:
+    /// it opposes the motion it resists) and its energy to `out`; with a
+    /// matrix, add `k df/dq + c df/dv` (free DOFs, pattern order).
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), EvalError>;
+}
+
+/// A force term that keeps surfaces apart (self-contact, obstacles): beyond
+/// what every term does, it limits the stepper's moves to collision-free
+/// ones, carries memory from step to step, and reports powers. The
+/// assembler keeps these terms apart from the plain ones and evaluates
+/// them after them ([`Assembler::add_barrier`]).
+pub trait BarrierTerm: ForceTerm {
     /// What the term carries from step to step beyond the state `(q, v)`
     /// (contact: each pair's barrier stiffness), for saved model states; a
-    /// restore hands it back through [`ForceTerm::restore_memory`].
+    /// restore hands it back through [`BarrierTerm::restore_memory`].
     fn memory(&self) -> Vec<f64> {
         Vec::new()
     }
 
     /// Whether `memory` (untrusted: a restored state's) is what
-    /// [`ForceTerm::memory`] could have given; a term that carries nothing
+    /// [`BarrierTerm::memory`] could have given; a term that carries nothing
     /// takes only the empty list.
-    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
-        if memory.is_empty() {
-            Ok(())
-        } else {
-            Err(format!(
-                "{} values for a term that carries nothing from step to step",
-                memory.len()
-            ))
-        }
+    fn check_memory(&self, memory: &[f64]) -> Result<(), MemoryError> {
+        no_memory(memory)
     }
 
-    /// Take back what [`ForceTerm::memory`] gave (empty: as built), checked
-    /// by [`ForceTerm::check_memory`].
-    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+    /// Take back what [`BarrierTerm::memory`] gave (empty: as built), checked
+    /// by [`BarrierTerm::check_memory`].
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
         self.check_memory(memory)
     }
 
     /// Largest fraction in (0, 1] of the move `q -> q + dq` (all DOFs) the
     /// term admits (contact: free of collisions); the stepper limits its
     /// Newton steps and predictors to it.
-    fn max_step_fraction(&self, _asm: &Assembler, _q: &[f64], _dq: &[f64]) -> f64 {
-        1.0
-    }
+    fn max_step_fraction(&self, asm: &Assembler, q: &[f64], dq: &[f64]) -> f64;
 
     /// Largest fraction in (0, 1] of a Newton correction `q -> q + dq`,
     /// with the velocities moving by `dv_dq dq` alongside from `v`, up to
@@ -104,23 +124,13 @@ pub trait ForceTerm: Send + Sync {
 
     /// Whether the term limits this step's Newton corrections (contact:
     /// pairs within the barrier at the step start); Newton then backtracks.
-    fn limits_steps(&self) -> bool {
-        false
-    }
+    fn limits_steps(&self) -> bool;
 
     /// Whether the term reports powers in [`Evaluation`] (contact:
     /// friction, dashpots) that the stepper integrates over each step: the
     /// stepper then evaluates every accepted state in full.
     fn reports_power(&self) -> bool {
         false
-    }
-
-    /// A dense low-rank part of `k df/dq + c df/dv` that the sparse
-    /// pattern cannot hold (all DOFs; mass damping's rigid-body projection
-    /// couples every DOF): [`Assembler::matrix_low_rank`] gathers them for
-    /// the solver.
-    fn low_rank(&self, _asm: &Assembler, _q: &[f64], _co: MatrixCoeffs) -> Option<LowRank> {
-        None
     }
 
     /// The term as self-contact, for the contact reports (typed access,
@@ -134,17 +144,17 @@ pub trait ForceTerm: Send + Sync {
     fn as_obstacles(&self) -> Option<&crate::contact::ObstacleTerm> {
         None
     }
+}
 
-    /// Add this term's force to `out.force` (all DOFs, internal-force sign:
-    /// it opposes the motion it resists) and its energy to `out`; with a
-    /// matrix, add `k df/dq + c df/dv` (free DOFs, pattern order).
-    fn add(
-        &self,
-        asm: &Assembler,
-        st: &State,
-        out: &mut Evaluation,
-        matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String>;
+/// A memory check for what carries nothing: only the empty list.
+pub(super) fn no_memory(memory: &[f64]) -> Result<(), MemoryError> {
+    if memory.is_empty() {
+        Ok(())
+    } else {
+        Err(MemoryError::CarriesNothing {
+            values: memory.len(),
+        })
+    }
 }
 
 /// The built-in terms in evaluation order. (Each implementation repeats the
@@ -223,7 +233,7 @@ impl ForceTerm for Shell {
         st: &State,
         out: &mut Evaluation,
         mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let p = asm.physics;
         // Stiffness weight in the matrix, and whether element tangents are needed.
         let kw = matrix
@@ -280,7 +290,7 @@ impl ForceTerm for CreaseSprings {
         st: &State,
         out: &mut Evaluation,
         mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let p = asm.physics;
         let damping = asm.has_damping();
         let mut f9 = SVector::<f64, 9>::zeros();
@@ -418,7 +428,7 @@ impl ForceTerm for MassDamping {
         st: &State,
         out: &mut Evaluation,
         matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let alpha = asm.physics.alpha;
         if alpha == 0.0 {
             return Ok(());

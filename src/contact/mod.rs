@@ -17,4 +17,4 @@ pub mod term;
 
 pub use obstacles::ObstacleTerm;
 pub use shapes::{Obstacle, Shape};
-pub use term::{ContactReport, ContactSettings, ContactTerm};
+pub use term::{ContactReport, ContactSettings, ContactTerm, SettingsError};

@@ -29,7 +29,9 @@ use super::term::{
     ContactSettings, barrier, db, ddb, friction_matrix, reversal_fraction, slip_factor,
     speed_stiffness, tangent_basis,
 };
-use crate::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, State};
+use crate::assembly::{
+    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
+};
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use std::collections::HashMap;
@@ -180,7 +182,7 @@ impl ObstacleTerm {
 
     /// The pairs within the barrier at positions `x`; fails where a sample
     /// is already within the clearance.
-    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<Active>, String> {
+    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<Active>, EvalError> {
         let mut out = Vec::new();
         for (k, o) in self.obstacles.iter().enumerate() {
             for (i, p) in x.iter().enumerate() {
@@ -190,11 +192,14 @@ impl ObstacleTerm {
                     continue;
                 }
                 if gap <= 0.0 {
-                    return Err(format!(
-                        "obstacle {}: the sheet (facets {:?}) is closer than half the contact \
-                         thickness {} m (gap {gap:.3e} m)",
-                        o.name, self.surf.vertex_facets[i], self.xi
-                    ));
+                    return Err(EvalError::Term {
+                        term: format!("obstacle {}", o.name),
+                        reason: format!(
+                            "the sheet (facets {:?}) is closer than half the contact thickness \
+                             {} m (gap {gap:.3e} m)",
+                            self.surf.vertex_facets[i], self.xi
+                        ),
+                    });
                 }
                 out.push(Active {
                     obstacle: k,
@@ -369,7 +374,7 @@ impl ObstacleTerm {
         st: &State,
         out: &mut Evaluation,
         matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let mut x = Vec::new();
         let mut v = Vec::new();
         self.surf.positions(st.q, &mut x);
@@ -452,29 +457,33 @@ impl ObstacleTerm {
     /// The pair stiffnesses of a memory list (untrusted: a restored
     /// state's): triples of an obstacle index, a sample index and a
     /// positive stiffness up to MAX_MAGNITUDE.
-    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<(usize, usize), f64>, String> {
+    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<(usize, usize), f64>, MemoryError> {
         if !memory.len().is_multiple_of(3) {
-            return Err(format!(
-                "{} values; the obstacle pairs' stiffnesses come in threes (obstacle, sample, \
-                 stiffness)",
-                memory.len()
-            ));
+            return Err(MemoryError::ObstaclePairLength {
+                values: memory.len(),
+            });
         }
         let max = crate::scene::limits::MAX_MAGNITUDE;
-        let index = |x: f64, n: usize, what: &str, k: usize| {
+        let index = |x: f64, n: usize, what: &'static str, k: usize| {
             (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
                 .then_some(x as usize)
-                .ok_or_else(|| format!("pair {k}: {x} is not a {what} (0..{n})"))
+                .ok_or(MemoryError::ObstaclePairIndex {
+                    pair: k,
+                    what,
+                    value: x,
+                    count: n,
+                })
         };
         let mut map = HashMap::with_capacity(memory.len() / 3);
         for (k, m) in memory.chunks_exact(3).enumerate() {
             let o = index(m[0], self.obstacles.len(), "obstacle", k)?;
             let i = index(m[1], self.surf.n_vertices(), "contact sample", k)?;
             if !(m[2] > 0.0 && m[2] <= max) {
-                return Err(format!(
-                    "pair {k}: stiffness {} is not a positive number up to {max:e}",
-                    m[2]
-                ));
+                return Err(MemoryError::PairStiffness {
+                    pair: k,
+                    stiffness: m[2],
+                    max,
+                });
             }
             map.insert((o, i), m[2]);
         }
@@ -525,10 +534,6 @@ impl ForceTerm for ObstacleTerm {
         "obstacles"
     }
 
-    fn as_obstacles(&self) -> Option<&ObstacleTerm> {
-        Some(self)
-    }
-
     fn before_step(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
         let (x, vx) = self.samples(q, v);
         self.lag_at(&x, &vx);
@@ -540,15 +545,31 @@ impl ForceTerm for ObstacleTerm {
         self.lag_at(&x, &vx);
     }
 
+    fn add(
+        &self,
+        asm: &Assembler,
+        st: &State,
+        out: &mut Evaluation,
+        matrix: Option<(&mut [f64], MatrixCoeffs)>,
+    ) -> Result<(), EvalError> {
+        self.add_obstacles(asm, st, out, matrix)
+    }
+}
+
+impl BarrierTerm for ObstacleTerm {
+    fn as_obstacles(&self) -> Option<&ObstacleTerm> {
+        Some(self)
+    }
+
     fn memory(&self) -> Vec<f64> {
         self.memory_list()
     }
 
-    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+    fn check_memory(&self, memory: &[f64]) -> Result<(), MemoryError> {
         self.parse_memory(memory).map(|_| ())
     }
 
-    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
         self.pair_kappa = self.parse_memory(memory)?;
         Ok(())
     }
@@ -574,15 +595,5 @@ impl ForceTerm for ObstacleTerm {
 
     fn reports_power(&self) -> bool {
         true
-    }
-
-    fn add(
-        &self,
-        asm: &Assembler,
-        st: &State,
-        out: &mut Evaluation,
-        matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
-        self.add_obstacles(asm, st, out, matrix)
     }
 }

@@ -30,7 +30,9 @@ use super::ccd;
 use super::distance::{self, V3};
 use super::scalar::{Dual1, Dual2, Real};
 use super::surface::ContactSurface;
-use crate::assembly::{Assembler, Evaluation, ForceTerm, MatrixCoeffs, State};
+use crate::assembly::{
+    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
+};
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
@@ -70,6 +72,23 @@ impl Default for ContactSettings {
         }
     }
 }
+
+/// Why [`ContactTerm::new`] refused its settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SettingsError {
+    /// The thickness (given) is not positive.
+    Thickness(f64),
+}
+
+impl std::fmt::Display for SettingsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SettingsError::Thickness(_) => write!(f, "contact needs a positive thickness"),
+        }
+    }
+}
+
+impl std::error::Error for SettingsError {}
 
 /// Which primitives a pair joins (contact vertex indices).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -194,6 +213,10 @@ pub struct ContactTerm {
     touching: bool,
     /// The step start's candidate pairs.
     cache: CandidateCache,
+    /// A search the contact report made at a step end, with the cache's
+    /// own padding: the next step start takes it instead of searching
+    /// again at the same positions.
+    spare: std::sync::Mutex<Option<CandidateCache>>,
     /// Barrier stiffness of each candidate pair (N/m), set while the pair
     /// is outside the barrier and kept while it is inside (see
     /// [`ContactTerm::pair_stiffness`]).
@@ -253,9 +276,9 @@ impl ContactTerm {
         settings: &ContactSettings,
         areal_mass: f64,
         membrane: f64,
-    ) -> Result<ContactTerm, String> {
+    ) -> Result<ContactTerm, SettingsError> {
         if settings.thickness.is_nan() || settings.thickness <= 0.0 {
-            return Err("contact needs a positive thickness".into());
+            return Err(SettingsError::Thickness(settings.thickness));
         }
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
         let nf = mesh.triangles().len().max(1);
@@ -291,6 +314,7 @@ impl ContactTerm {
             project: true,
             touching: false,
             cache: CandidateCache::default(),
+            spare: Default::default(),
             pair_kappa: HashMap::new(),
             x_start: Vec::new(),
             v_start: Vec::new(),
@@ -337,14 +361,22 @@ impl ContactTerm {
         // positions; a pair within `xi + reach` now was within that of
         // them while no vertex moved more than `slack`.
         let slack = 0.5 * (self.cache.pad + 2.0 * self.cache_margin - self.xi - reach);
-        let searched;
-        let pairs: &[Pair] = if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
-            &self.cache.pairs
-        } else {
-            searched = self.candidates(&x, None, self.xi + reach);
-            &searched
+        if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
+            return self.report_over(&x, &self.cache.pairs, reach);
+        }
+        // The next step starts here and would search again: search once,
+        // as it would (a wider search than the report needs), and leave it.
+        let pad = self.xi + self.s_hat;
+        let searched = CandidateCache {
+            pairs: self.candidates(&x, None, pad + 2.0 * self.cache_margin),
+            x0: x,
+            pad,
         };
-        self.report_over(&x, pairs, reach)
+        let r = self.report_over(&searched.x0, &searched.pairs, reach);
+        if let Ok(mut spare) = self.spare.lock() {
+            *spare = Some(searched);
+        }
+        r
     }
 
     /// Barrier stiffness kappa in force (N/m).
@@ -460,6 +492,12 @@ impl ContactTerm {
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
         out.retain(|p| self.rest_distance(p) >= p.xi + self.s_hat_of(p));
+        // Boxes overlap where primitives may be within `pad`; without a
+        // sweep, keep the pairs that are (the boxes of tilted facets
+        // overlap far more often than the facets come near).
+        if dx.is_none() {
+            out.retain(|p| distance_sq::<f64>(&p.kind, &lift(&self.points(x, p))) <= pad * pad);
+        }
         // A canonical order: sums over pairs do not depend on the search.
         out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
         out
@@ -547,6 +585,11 @@ impl ContactTerm {
         if self.cache.covers(x, None, pad, 0.5 * margin) {
             return;
         }
+        let spare = self.spare.get_mut().ok().and_then(Option::take);
+        if let Some(c) = spare.filter(|c| c.pad == pad && c.x0 == x) {
+            self.cache = c;
+            return;
+        }
         self.cache = CandidateCache {
             pairs: self.candidates(x, None, pad + 2.0 * margin),
             x0: x.to_vec(),
@@ -584,12 +627,23 @@ impl ContactTerm {
     /// BoxPleatPyramid: 4.0x the matrix entries, 7.2x the factorization's
     /// multiply-adds).
     fn pattern_pairs(&self, asm: &Assembler) -> Vec<(usize, usize)> {
+        // Pairs between the same facets share their slots: each set once.
+        let mut sets: Vec<Vec<usize>> = self
+            .cache
+            .pairs
+            .iter()
+            .map(|p| {
+                let mut slots = Vec::with_capacity(48);
+                self.pair_slots(&p.ids(), &mut slots);
+                slots
+            })
+            .collect();
+        sets.sort_unstable();
+        sets.dedup();
         let mut out = Vec::new();
-        let mut slots: Vec<usize> = Vec::with_capacity(48);
-        for p in &self.cache.pairs {
-            self.pair_slots(&p.ids(), &mut slots);
-            for &a in &slots {
-                for &b in &slots {
+        for slots in &sets {
+            for &a in slots {
+                for &b in slots {
                     if a < b && !asm.has_pair(a, b) {
                         out.push((a, b));
                     }
@@ -788,16 +842,14 @@ impl ContactTerm {
         self.s_hat * p.xi / self.xi
     }
 
-    /// The pair stiffnesses of [`ForceTerm::memory`]'s list (untrusted: a
+    /// The pair stiffnesses of [`BarrierTerm::memory`]'s list (untrusted: a
     /// restored state's): sixes of edge flag (0 or 1), four contact-vertex
     /// ids and a positive stiffness up to MAX_MAGNITUDE.
-    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<PairKey, f64>, String> {
+    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<PairKey, f64>, MemoryError> {
         if !memory.len().is_multiple_of(6) {
-            return Err(format!(
-                "{} values; the pair stiffnesses come in sixes (kind, four vertices, \
-                 stiffness)",
-                memory.len()
-            ));
+            return Err(MemoryError::PairLength {
+                values: memory.len(),
+            });
         }
         let n = self.surf.n_vertices();
         let max = crate::scene::limits::MAX_MAGNITUDE;
@@ -806,20 +858,25 @@ impl ContactTerm {
             let id = |x: f64| {
                 (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
                     .then_some(x as usize)
-                    .ok_or_else(|| format!("pair {k}: {x} is not a contact vertex (0..{n})"))
+                    .ok_or(MemoryError::PairVertex {
+                        pair: k,
+                        vertex: x,
+                        vertices: n,
+                    })
             };
             if m[0] != 0.0 && m[0] != 1.0 {
-                return Err(format!(
-                    "pair {k}: kind {} is neither 0 (point-triangle) nor 1 (edge-edge)",
-                    m[0]
-                ));
+                return Err(MemoryError::PairKind {
+                    pair: k,
+                    kind: m[0],
+                });
             }
             let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
             if !(m[5] > 0.0 && m[5] <= max) {
-                return Err(format!(
-                    "pair {k}: stiffness {} is not a positive number up to {max:e}",
-                    m[5]
-                ));
+                return Err(MemoryError::PairStiffness {
+                    pair: k,
+                    stiffness: m[5],
+                    max,
+                });
             }
             map.insert((m[0] == 1.0, ids), m[5]);
         }
@@ -845,7 +902,7 @@ impl ContactTerm {
 
     /// The active pairs at positions `x` (gap below the barrier width).
     /// Fails when a pair is already closer than the thickness.
-    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, String> {
+    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, EvalError> {
         let mut out = Vec::new();
         for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
@@ -855,11 +912,12 @@ impl ContactTerm {
             }
             if s <= 0.0 {
                 let ids = p.ids();
-                return Err(format!(
-                    "contact: surfaces at facets {:?} and {:?} are closer than the contact \
-                     thickness {} m (gap {s:.3e} m)",
-                    self.surf.vertex_facets[ids[0]], self.surf.vertex_facets[ids[3]], p.xi
-                ));
+                return Err(EvalError::Penetration {
+                    facets_a: self.surf.vertex_facets[ids[0]].clone(),
+                    facets_b: self.surf.vertex_facets[ids[3]].clone(),
+                    thickness: p.xi,
+                    gap: s,
+                });
             }
             out.push((p, s));
         }
@@ -1044,6 +1102,24 @@ fn stop_points(
 
 /// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
 /// theta` on the valley side (-1), `theta` on the mountain side (+1).
+/// A bound on how far the angle between the crease normals `a x t` and
+/// `b x t` (the gap to flat of [`flat_gap`]) can change along the move
+/// `(a, b, t) + alpha (da, db, dt)`, `alpha` in [0, 1]: each normal turns by
+/// at most `asin(|change| / |normal|) <= pi/2 |change| / |normal|`.
+fn stop_turn_bound([a, b, t]: [Vector3<f64>; 3], [da, db, dt]: [Vector3<f64>; 3]) -> f64 {
+    let (nt, ndt) = (t.norm(), dt.norm());
+    let turn = |x: &Vector3<f64>, dx: &Vector3<f64>| {
+        let normal = x.cross(&t).norm();
+        let change = dx.norm() * (nt + ndt) + x.norm() * ndt;
+        if change < normal {
+            std::f64::consts::FRAC_PI_2 * change / normal
+        } else {
+            std::f64::consts::PI
+        }
+    };
+    turn(&a, &da) + turn(&b, &db)
+}
+
 fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
     let theta = crate::crease::theta(a, b, t);
     if theta > std::f64::consts::PI {
@@ -1233,7 +1309,7 @@ impl ContactTerm {
         out: &mut Evaluation,
         matrix: Option<MatrixCoeffs>,
         batch: &mut MatrixBatch,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let w = self.flat_width;
         for sp in &self.stops {
             let [a, b, t] = sp
@@ -1245,10 +1321,7 @@ impl ContactTerm {
                 continue;
             }
             if g <= 0.0 {
-                return Err(format!(
-                    "contact: the crease on edge {} is folded past flat",
-                    sp.edge
-                ));
+                return Err(EvalError::PastFlat { edge: sp.edge });
             }
             let k = asm.physics.crease_k_per_length * sp.length;
             let d = crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
@@ -1279,7 +1352,15 @@ impl ContactTerm {
             let [a, b, t] = vecs(q);
             let [da, db_, dt] = vecs(dq);
             let raw0 = crate::crease::theta(&a, &b, &t);
-            let keep = (super::ccd::MIN_SEPARATION * flat_gap(&a, &b, &t).0).min(self.flat_width);
+            let gap = if raw0 > std::f64::consts::PI {
+                std::f64::consts::TAU - raw0
+            } else {
+                raw0
+            };
+            let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
+            if stop_turn_bound([a, b, t], [da, db_, dt]) < (gap - keep).min(1.0) {
+                continue;
+            }
             // Passing flat wraps the raw angle across 0 = 2 pi.
             let clear = |alpha: f64| {
                 let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
@@ -1392,34 +1473,9 @@ impl ContactTerm {
     }
 }
 
-impl ForceTerm for ContactTerm {
-    fn name(&self) -> &str {
-        "contact"
-    }
-
+impl BarrierTerm for ContactTerm {
     fn as_contact(&self) -> Option<&ContactTerm> {
         Some(self)
-    }
-
-    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
-        let mut x = Vec::new();
-        let mut vx = Vec::new();
-        self.surf.positions(q, &mut x);
-        self.surf.positions(v, &mut vx);
-        self.cache_at(&x);
-        self.lag_at(&x, &vx);
-        self.creases_near_flat = self.near_flat(q);
-        self.pattern_pairs(asm)
-    }
-
-    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
-        let mut x = Vec::new();
-        let mut vx = Vec::new();
-        self.surf.positions(q, &mut x);
-        self.surf.positions(v, &mut vx);
-        self.cache_at(&x);
-        self.lag_at(&x, &vx);
-        self.creases_near_flat = self.near_flat(q);
     }
 
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
@@ -1440,11 +1496,11 @@ impl ForceTerm for ContactTerm {
         out
     }
 
-    fn check_memory(&self, memory: &[f64]) -> Result<(), String> {
+    fn check_memory(&self, memory: &[f64]) -> Result<(), MemoryError> {
         self.parse_memory(memory).map(|_| ())
     }
 
-    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), String> {
+    fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
         self.pair_kappa = self.parse_memory(memory)?;
         Ok(())
     }
@@ -1467,6 +1523,27 @@ impl ForceTerm for ContactTerm {
     fn reports_power(&self) -> bool {
         true
     }
+}
+
+impl ForceTerm for ContactTerm {
+    fn name(&self) -> &str {
+        "contact"
+    }
+
+    fn before_step(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> Vec<(usize, usize)> {
+        self.lag(asm, q, v);
+        self.pattern_pairs(asm)
+    }
+
+    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
+        let mut x = Vec::new();
+        let mut vx = Vec::new();
+        self.surf.positions(q, &mut x);
+        self.surf.positions(v, &mut vx);
+        self.cache_at(&x);
+        self.lag_at(&x, &vx);
+        self.creases_near_flat = self.near_flat(q);
+    }
 
     fn add(
         &self,
@@ -1474,7 +1551,7 @@ impl ForceTerm for ContactTerm {
         st: &State,
         out: &mut Evaluation,
         mut matrix: Option<(&mut [f64], MatrixCoeffs)>,
-    ) -> Result<(), String> {
+    ) -> Result<(), EvalError> {
         let mut x = Vec::new();
         let mut v = Vec::new();
         self.surf.positions(st.q, &mut x);
@@ -1565,5 +1642,43 @@ impl ForceTerm for ContactTerm {
             batch.flush(asm, vals);
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::XorShift;
+
+    /// The bound on a crease stop's turn holds along the whole move: the
+    /// gap to flat never changes by more than it, at any fraction.
+    #[test]
+    fn stop_turn_bound_holds_along_the_move() {
+        let mut rng = XorShift(11);
+        let mut v = |s: f64| Vector3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+        let mut tight = 0;
+        for i in 0..2000 {
+            let x = [v(1.0), v(1.0), v(1.0)];
+            let scale = [1e-3, 1e-2, 0.1, 0.5][i % 4];
+            let dx = [v(scale), v(scale), v(scale)];
+            let bound = stop_turn_bound(x, dx);
+            let g0 = flat_gap(&x[0], &x[1], &x[2]).0;
+            for k in 1..=50 {
+                let alpha = k as f64 / 50.0;
+                let [a, b, t] = [0, 1, 2].map(|i| x[i] + dx[i] * alpha);
+                let g = flat_gap(&a, &b, &t).0;
+                assert!(
+                    (g - g0).abs() <= bound + 1e-12,
+                    "gap {g0} -> {g} at {alpha}, bound {bound}"
+                );
+            }
+            if bound < 0.5 {
+                tight += 1;
+            }
+        }
+        assert!(
+            tight > 500,
+            "the bound is informative ({tight} of 2000 below 0.5)"
+        );
     }
 }

@@ -176,7 +176,7 @@ impl Model {
         if let Some(sys) = self.sys.as_mut() {
             sys.asm
                 .restore_term_memory(&s.term_memory)
-                .map_err(Error::State)?;
+                .map_err(|e| Error::State(e.to_string()))?;
         }
         self.state = s;
         self.read_cache = Default::default();
@@ -426,7 +426,7 @@ impl Model {
         };
         if let Err(e) = sys.asm.evaluate(&st, &mut ev, None) {
             let term = sys.asm.non_finite_term(&st).unwrap_or("").to_string();
-            return Err(self.not_finite(&e, &term));
+            return Err(self.not_finite(&e.to_string(), &term));
         }
         // The fixed DOFs' accelerations (a moving frame's) push the free ones.
         let mut m_fixed = vec![0.0; n];

@@ -98,7 +98,9 @@ impl System {
             moment: &drive.moment,
             theta_prev,
         };
-        self.asm.evaluate(&st, &mut ev, None)?;
+        self.asm
+            .evaluate(&st, &mut ev, None)
+            .map_err(|e| e.to_string())?;
         Ok(ev)
     }
 
@@ -172,7 +174,8 @@ impl System {
             rule: sc.solver.quadrature,
             ..ElementOptions::default()
         };
-        let mut asm = Assembler::new(mesh, physics, element, &fixed).map_err(Error::Scene)?;
+        let mut asm = Assembler::new(mesh, physics, element, &fixed)
+            .map_err(|e| Error::Scene(e.to_string()))?;
         // Modified Newton's matrix takes the membrane geometric stiffness
         // from each step start (full Newton keeps the exact tangent).
         asm.lag_membrane_stiffness(
@@ -264,8 +267,8 @@ fn add_contact(
         m.density * m.thickness,
         m.youngs_modulus * m.thickness,
     )
-    .map_err(Error::Scene)?;
-    asm.add_term(Box::new(term));
+    .map_err(|e| Error::Scene(e.to_string()))?;
+    asm.add_barrier(Box::new(term));
     Ok(())
 }
 
@@ -299,7 +302,7 @@ fn add_obstacles(sc: &Scene, asm: &mut Assembler) -> Result<(), Error> {
         m.youngs_modulus * m.thickness,
     )
     .map_err(Error::Scene)?;
-    asm.add_term(Box::new(term));
+    asm.add_barrier(Box::new(term));
     Ok(())
 }
 

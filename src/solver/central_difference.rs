@@ -70,7 +70,8 @@ impl CentralDifference {
                     c: 0.0,
                 },
             )),
-        )?;
+        )
+        .map_err(|e| e.to_string())?;
         let lambda = power_iteration(asm, &k, &mut mass)?;
         let omega = lambda.max(0.0).sqrt();
         // Rayleigh damping alpha M + beta K shrinks the limit to
@@ -131,7 +132,7 @@ impl CentralDifference {
         }
         let t0 = Instant::now();
         asm.evaluate(&drive.at(s), &mut self.eval, None)
-            .map_err(StepError::Assembly)?;
+            .map_err(StepError::from)?;
         let assembly_time = t0.elapsed();
         if coupled {
             asm.mass_mul(&self.accel_p, &mut self.m_accel_p);

@@ -279,11 +279,14 @@ impl<'a> Newton<'a> {
                 c: 0.0,
             };
             self.asm
-                .evaluate(&st, &mut self.ev, Some((&mut self.mat, co)))?;
+                .evaluate(&st, &mut self.ev, Some((&mut self.mat, co)))
+                .map_err(|e| e.to_string())?;
             self.load
                 .apply(self.asm, q, lambda, &mut self.fext, Some(&mut self.mat));
         } else {
-            self.asm.evaluate(&st, &mut self.ev, None)?;
+            self.asm
+                .evaluate(&st, &mut self.ev, None)
+                .map_err(|e| e.to_string())?;
             self.load.apply(self.asm, q, lambda, &mut self.fext, None);
         }
         let r2: f64 = (0..q.len())

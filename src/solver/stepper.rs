@@ -121,9 +121,15 @@ pub enum StepError {
     /// An explicit step left non-finite values (beyond its stability limit).
     Unstable,
     /// Forces could not be evaluated (an undefined crease angle, non-finite forces).
-    Assembly(String),
+    Assembly(Box<crate::assembly::EvalError>),
     /// The sparse solver failed.
     Linear(crate::solver::linear::LinearError),
+}
+
+impl From<crate::assembly::EvalError> for StepError {
+    fn from(e: crate::assembly::EvalError) -> Self {
+        StepError::Assembly(Box::new(e))
+    }
 }
 
 impl fmt::Display for StepError {

@@ -111,7 +111,7 @@ pub(super) fn restore(
     let mut scratch = Evaluation::default();
     let coeffs = co.matrix(p.h);
     asm.evaluate(&st, &mut scratch, Some((&mut ws.matrix[..], coeffs)))
-        .map_err(StepError::Assembly)?;
+        .map_err(StepError::from)?;
     factor(asm, solver, &ws.matrix, &p.q, coeffs)?;
     ws.jacobian = Some(p.clone());
     Ok(())

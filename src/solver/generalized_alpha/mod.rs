@@ -326,7 +326,7 @@ impl StepContext<'_> {
             &mut ws.eval,
             matrix.map(|co| (&mut ws.matrix[..], co)),
         )
-        .map_err(StepError::Assembly)?;
+        .map_err(StepError::from)?;
         asm.mass_mul(&d.qdd, &mut ws.mqdd);
         for i in 0..d.q.len() {
             let fi = asm.free[i];

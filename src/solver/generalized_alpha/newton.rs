@@ -399,10 +399,10 @@ fn finish(
     ws.evaluated = asm.reports_power();
     if ws.evaluated {
         asm.evaluate(&ctx.drive.at(next), &mut ws.eval, None)
-            .map_err(StepError::Assembly)?;
+            .map_err(StepError::from)?;
     } else {
         asm.crease_angles(&next.q, ctx.drive.theta_prev, &mut ws.eval.theta)
-            .map_err(StepError::Assembly)?;
+            .map_err(StepError::from)?;
     }
     out.assembly_time += t0.elapsed();
     Ok(())
