@@ -736,3 +736,61 @@ fn a_state_on_the_ground_restores_bit_for_bit() {
     assert_eq!(bits(&first), bits(&again), "same model");
     assert_eq!(bits(&first), bits(&fresh), "fresh model");
 }
+
+/// Friction stops a Newton correction where it would carry a sample
+/// sliding on an obstacle through sticking to sliding the other way, at
+/// the fraction where it comes to rest: the square sliding at +2 cm/s on
+/// the plane, a correction to -2 cm/s is stopped half-way (within 1e-9), a
+/// correction to +1 cm/s is taken whole.
+#[test]
+fn friction_stops_a_correction_that_would_reverse_a_slide_on_an_obstacle() {
+    let plane = Shape::HalfSpace {
+        point: [0.0, 0.0, -0.0007],
+        normal: [0.0, 0.0, 1.0],
+    };
+    let (mut asm, q) = assembler_with(plane, 0.5);
+    let positions: Vec<usize> = (0..q.len() / 3)
+        .filter(|&s| asm.layout.slot_kind[s] == origami_fmu::dofs::SlotKind::Position)
+        .collect();
+    let along_x = |x: f64| {
+        let mut v = vec![0.0; q.len()];
+        for &s in &positions {
+            v[3 * s] = x;
+        }
+        v
+    };
+    let v = along_x(0.02);
+    asm.before_step(&q, &v);
+    assert!(asm.limits_steps(), "the square is on the plane");
+    let back = asm.max_correction_fraction(&q, &v, &along_x(-0.04), 1.0);
+    assert!((back - 0.5).abs() < 1e-9, "stopped at {back}");
+    let slower = asm.max_correction_fraction(&q, &v, &along_x(-0.01), 1.0);
+    assert_eq!(slower, 1.0);
+}
+
+/// The collision check: a Newton step that would carry the square 2 mm
+/// down into each shape is cut to a fraction at which every contact sample
+/// still keeps more than half the thickness from it (the forces evaluate:
+/// a sample within it is an error), and a step of 1 um up is taken whole.
+#[test]
+fn a_step_into_an_obstacle_is_cut_before_the_sheet_reaches_it() {
+    for shape in fd_shapes() {
+        let (mut asm, q) = assembler_with(shape.clone(), 0.5);
+        let zeros = vec![0.0; q.len()];
+        asm.before_step(&q, &zeros);
+        let mut down = vec![0.0; q.len()];
+        let mut up = vec![0.0; q.len()];
+        for s in 0..q.len() / 3 {
+            if asm.layout.slot_kind[s] == origami_fmu::dofs::SlotKind::Position {
+                down[3 * s + 2] = -0.002;
+                up[3 * s + 2] = 1e-6;
+            }
+        }
+        let t = asm.max_step_fraction(&q, &down);
+        assert!(t > 0.0 && t < 0.5, "{shape:?}: fraction {t}");
+        let moved: Vec<f64> = q.iter().zip(&down).map(|(x, d)| x + t * d).collect();
+        let ev = eval_at(&asm, &moved, &zeros, None);
+        assert!(ev.barrier_pairs > 0, "{shape:?}");
+        assert_eq!(asm.max_step_fraction(&q, &up), 1.0, "{shape:?}");
+    }
+}
