@@ -794,3 +794,56 @@ fn a_step_into_an_obstacle_is_cut_before_the_sheet_reaches_it() {
         assert_eq!(asm.max_step_fraction(&q, &up), 1.0, "{shape:?}");
     }
 }
+
+/// A gripper pressing a sheet onto a ball: two 50 mm panels (1 mm
+/// plastic) clamped along one edge to the attachment `mount`, a ball of
+/// radius 20 mm under the free panel, 2 mm below the sheet. The master
+/// lowers the mount by 6 mm over 0.3 s (position with its slope), then
+/// holds it: the free panel lands on the ball and bends over it; no output
+/// has the sheet within half its thickness of the ball, and at rest the
+/// forces the sheet exerts on the mount and on the ball add up to its
+/// weight (1e-3 relative), the ball carrying part of it.
+#[test]
+fn a_mount_presses_the_sheet_onto_a_ball() {
+    let text = r#"{
+      "frame_unit": "m",
+      "vertices_coords": [[0,0],[0.05,0],[0.1,0],[0.1,0.05],[0.05,0.05],[0,0.05]],
+      "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4]],
+      "edges_assignment": ["B","B","B","B","B","B","V"],
+      "edges_foldAngle": [null,null,null,null,null,null,90],
+      "faces_vertices": [[0,1,4,5],[1,2,3,4]],
+      "ancf:material": {"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200},
+      "ancf:loads": {"gravity": [0, 0, -9.81]},
+      "ancf:attachments": [{"name": "mount", "vertices": [0, 5]}],
+      "ancf:obstacles": [{"name": "ball", "shape": "sphere", "center": [0.075, 0.025, -0.0225], "radius": 0.02}]
+    }"#;
+    let mut m = Model::new(origami_fmu::scene::from_str(text).unwrap().0).unwrap();
+    m.initialize().unwrap();
+    let z = m.input_id("mount.z").unwrap();
+    let (speed, h) = (-0.02, 0.01);
+    for k in 0..60 {
+        let t = k as f64 * h;
+        if t < 0.3 {
+            m.set_input(z, speed * t).unwrap();
+            m.set_input_derivative(z, 1, speed).unwrap();
+        } else {
+            m.set_input(z, speed * 0.3).unwrap();
+        }
+        m.advance(h).unwrap();
+        let (gap, _) = m.obstacle_gap().unwrap();
+        assert!(gap > 0.0, "gap {gap:e} at t = {}", m.time());
+    }
+    let weight = m.mass_properties().0 * 9.81;
+    let mount = vector(&m, "mount.force");
+    let ball = vector(&m, "ball.force");
+    let total = mount + ball;
+    eprintln!("mount {mount:?}, ball {ball:?}, weight {weight:e}");
+    assert!(
+        ball.z < -0.1 * weight,
+        "the ball carries part of it: {ball:?}"
+    );
+    assert!(
+        (total - Vector3::new(0.0, 0.0, -weight)).norm() < 1e-3 * weight,
+        "mount {mount:?} + ball {ball:?} vs weight {weight}"
+    );
+}
