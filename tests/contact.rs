@@ -581,9 +581,10 @@ fn waterbomb_base_collapses_without_intersection() {
 /// free panel swings through flat to 294 deg by 0.03 s) stops at flat: no
 /// crossing at any output, the crease never past 180 deg.
 #[test]
-#[ignore = "fails (issue 40, open): Newton stalls at t = 0.023 s, the collision check cutting \
-            every correction to 1e-4 at steps of 3e-9 s with 7 pairs beside the crease in the \
-            barrier; at 0.08 N m/m facets 1 and 3 across the crease cross at t = 0.08 s"]
+#[ignore = "fails (issue 40, open): Newton does not converge at t = 0.0246 s (it stalled at \
+            0.023 s before the candidate list kept only pairs within reach: the collision check \
+            cut every correction to 1e-4 at steps of 3e-9 s with 7 pairs beside the crease in the \
+            barrier); at 0.08 N m/m facets 1 and 3 across the crease crossed at t = 0.08 s"]
 fn a_crease_pressed_past_flat_by_a_moment_stops_at_flat() {
     let (mut scene, _) = origami_fmu::scene::load("scenes/controlled_crease.fold").unwrap();
     contact_on(&mut scene, 0.0);
