@@ -166,18 +166,22 @@ impl ObstacleTerm {
         self.s_hat
     }
 
-    /// The smallest gap `d - xi` (m) of any sample to any obstacle at slot
-    /// vector `q` (infinity without obstacles).
-    pub fn min_gap(&self, q: &[f64]) -> f64 {
+    /// The gaps `d - xi` (m) of the samples at slot vector `q`, each to
+    /// its nearest obstacle: the smallest and the largest (infinities
+    /// without obstacles).
+    pub fn gap_range(&self, q: &[f64]) -> (f64, f64) {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
-        let mut gap = f64::INFINITY;
-        for o in &self.obstacles {
-            for xi in &x {
-                gap = gap.min(o.shape.closest(xi).distance - self.xi);
-            }
+        let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in &x {
+            let nearest = self
+                .obstacles
+                .iter()
+                .map(|o| o.shape.closest(p).distance - self.xi)
+                .fold(f64::INFINITY, f64::min);
+            range = (range.0.min(nearest), range.1.max(nearest));
         }
-        gap
+        range
     }
 
     /// The pairs within the barrier at positions `x`; fails where a sample

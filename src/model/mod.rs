@@ -287,16 +287,17 @@ impl Model {
     }
 
     #[doc(hidden)]
-    /// The smallest gap (m) of any contact sample of the sheet to any
-    /// rigid obstacle now, beyond the clearance it keeps (half the contact
-    /// thickness), with that clearance; None without obstacles or before
-    /// [`Model::initialize`].
-    pub fn obstacle_gap(&self) -> Option<(f64, f64)> {
+    /// The gaps (m) of the sheet's contact samples now, each to its
+    /// nearest rigid obstacle beyond the clearance it keeps (half the
+    /// contact thickness): the smallest, the largest, and that clearance;
+    /// None without obstacles or before [`Model::initialize`].
+    pub fn obstacle_gap(&self) -> Option<(f64, f64, f64)> {
         if self.state.phase != Phase::Running {
             return None;
         }
         let t = self.sys.as_ref()?.asm.obstacles()?;
-        Some((t.min_gap(&self.state.dynamics.q), t.clearance()))
+        let (min, max) = t.gap_range(&self.state.dynamics.q);
+        Some((min, max, t.clearance()))
     }
 
     #[doc(hidden)]
