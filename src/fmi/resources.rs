@@ -142,7 +142,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
             })?;
         }
     }
-    crate::scene::limits::check_scene(s)?;
+    crate::scene::limits::check_scene(s).map_err(|e| e.to_string())?;
     for (i, a) in s.actuators.iter().enumerate() {
         check(a.start.is_finite(), || {
             format!("actuators[{i}].start: not a finite number")

@@ -349,7 +349,7 @@ impl Model {
             return Err(Error::BadValue {
                 name: spec.name.clone(),
                 value,
-                reason,
+                reason: reason.to_string(),
             });
         }
         if self.is_ramped(i) {
@@ -413,7 +413,7 @@ impl Model {
             ));
         }
         if let Err(reason) = crate::scene::limits::check_number(value) {
-            return Err(bad(&reason));
+            return Err(bad(&reason.to_string()));
         }
         if !self.is_ramped(i) {
             if order == 1 {

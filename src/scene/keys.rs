@@ -208,7 +208,8 @@ impl<'a> Obj<'a> {
     fn num_limited(&self, f: &str, name: &str) -> Result<Option<f64>, SceneError> {
         let x = self.num(f)?;
         if let Some(x) = x {
-            super::limits::check(name, x).map_err(|e| SceneError::invalid(self.path(f), e))?;
+            super::limits::check(name, x)
+                .map_err(|e| SceneError::invalid(self.path(f), e.to_string()))?;
         }
         Ok(x)
     }
@@ -795,8 +796,8 @@ fn key_solver(
     if let Some(x) = o.num_limited("min_step", "solver.min_step")? {
         s.min_step = x;
     }
-    if let Err((_, why)) = super::limits::check_solver_relations(s) {
-        return Err(SceneError::invalid(o.path("min_step"), why));
+    if let Err(why) = super::limits::check_solver_relations(s) {
+        return Err(SceneError::invalid(o.path("min_step"), why.to_string()));
     }
     if let Some(x) = o.num_limited("tolerance", "solver.tolerance")? {
         s.tolerance = x;
