@@ -381,7 +381,7 @@ fn stepper(
     Ok(match s.integrator {
         SceneIntegrator::CentralDifference => Box::new(
             CentralDifference::new(asm, q_ref, &vec![std::f64::consts::PI; asm.creases.len()])
-                .map_err(Error::Scene)?,
+                .map_err(|e| Error::Scene(e.to_string()))?,
         ),
         SceneIntegrator::GeneralizedAlpha => {
             let params = s.integration;
