@@ -224,7 +224,8 @@ impl Pictures {
         };
         if let Some(p) = &args.gif {
             let frames = pick(&self.gif_rows);
-            crate::pictures::write_gif(p, &self.sheet, &frames, title)?;
+            crate::pictures::write_gif(p, &self.sheet, &frames, title)
+                .map_err(|e| e.to_string())?;
             super::err(&format!(
                 "animation: {} frames -> {}\n",
                 frames.len(),
@@ -233,12 +234,8 @@ impl Pictures {
         }
         if let Some(p) = &args.snapshots {
             let frames = pick(&self.snapshot_rows);
-            crate::pictures::write_snapshots(
-                p,
-                &self.sheet,
-                &frames,
-                &format!("{title}: folding"),
-            )?;
+            crate::pictures::write_snapshots(p, &self.sheet, &frames, &format!("{title}: folding"))
+                .map_err(|e| e.to_string())?;
             super::err(&format!(
                 "snapshots: {} views -> {}\n",
                 frames.len(),
@@ -246,7 +243,8 @@ impl Pictures {
             ));
         }
         if let Some(p) = &args.plot {
-            crate::pictures::write_plot(p, &self.sheet, &self.series, title)?;
+            crate::pictures::write_plot(p, &self.sheet, &self.series, title)
+                .map_err(|e| e.to_string())?;
             super::err(&format!("plot -> {}\n", p.display()));
         }
         Ok(())
