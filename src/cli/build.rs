@@ -69,7 +69,7 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
         crate::scene::limits::check("ramp.time", t).map_err(|e| format!("--ramp: {e}"))?;
         scene.ramp.time = t;
     }
-    let contents = fmi::fmu_contents(&scene)?;
+    let contents = fmi::fmu_contents(&scene).map_err(|e| e.to_string())?;
     let library = match &args.library {
         Some(l) => l.clone(),
         None => default_library()?,

@@ -158,7 +158,7 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, String>
                 path.display()
             ));
         }
-        let mut scene = crate::fmi::resources::load_scene_file(path)?;
+        let mut scene = crate::fmi::resources::load_scene_file(path).map_err(|e| e.to_string())?;
         options.apply(&mut scene)?;
         return Ok(Loaded {
             scene,

@@ -365,7 +365,7 @@ impl Instance {
         }
         let guid = guid.ok_or("fmuGUID is NULL")?;
         let uri = resource_location.ok_or("fmuResourceLocation is NULL")?;
-        let dir = resources::resource_dir_from_uri(uri)?;
+        let dir = resources::resource_dir_from_uri(uri).map_err(|e| e.to_string())?;
         let path = dir.join(SCENE_FILE);
         let bytes = std::fs::read(&path)
             .map_err(|e| format!("cannot read the scene {}: {e}", path.display()))?;
@@ -910,7 +910,7 @@ impl Instance {
     /// ([`Model::check_state`]).
     fn check_saved(&self, s: &SavedState) -> Result<(), String> {
         if s.guid != self.guid {
-            return Err(container::foreign(&s.guid, &self.guid));
+            return Err(container::foreign(&s.guid, &self.guid).to_string());
         }
         let limit = |what: &str, x: f64| {
             crate::scene::limits::check_number(x).map_err(|e| format!("{what} = {e}"))
