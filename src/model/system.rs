@@ -4,7 +4,7 @@
 use super::attach::{self, About, FrameInput, Reaction, Reactions};
 use super::drive::{DriveValues, InputMap};
 use super::{Error, Model, fold_edges, physics};
-use crate::assembly::{Assembler, Evaluation, State};
+use crate::assembly::{Assembler, EvalError, Evaluation, State};
 use crate::contact::ContactTerm;
 use crate::dofs::{DofLayout, SlotKind};
 use crate::element::ElementOptions;
@@ -89,7 +89,7 @@ impl System {
         d: &Dynamics,
         drive: &DriveValues,
         theta_prev: &[f64],
-    ) -> Result<Evaluation, String> {
+    ) -> Result<Evaluation, EvalError> {
         let mut ev = Evaluation::default();
         let st = State {
             q: &d.q,
@@ -98,9 +98,7 @@ impl System {
             moment: &drive.moment,
             theta_prev,
         };
-        self.asm
-            .evaluate(&st, &mut ev, None)
-            .map_err(|e| e.to_string())?;
+        self.asm.evaluate(&st, &mut ev, None)?;
         Ok(ev)
     }
 
