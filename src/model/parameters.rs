@@ -268,17 +268,16 @@ impl Model {
                 spec.name
             )));
         }
-        let bad = |reason: String| Error::BadValue {
+        let bad = |source| Error::OutOfLimits {
             name: spec.name.clone(),
             value,
-            reason,
+            source,
         };
-        crate::scene::limits::check(kind.name(), value).map_err(|e| bad(e.to_string()))?;
+        crate::scene::limits::check(kind.name(), value).map_err(bad)?;
         if kind == MaxStep {
             let mut so = self.scene.solver;
             so.max_step = value;
-            crate::scene::limits::check_solver_relations(&so)
-                .map_err(|why| bad(why.to_string()))?;
+            crate::scene::limits::check_solver_relations(&so).map_err(bad)?;
         }
         if kind.is_damping() {
             self.state.damping_set = true;

@@ -209,7 +209,7 @@ impl System {
             3,
             Some(&block_coords),
         )
-        .map_err(|e| Error::Scene(e.to_string()))?;
+        .map_err(Error::Solver)?;
         let (rest, torque) = crease_actuators(sc, &asm);
         let gravity = sc.gravity.map(|g| gravity_force(mesh, &asm, g));
         let angle_ends = angle_ends(sc, &asm);
@@ -379,7 +379,7 @@ fn stepper(
     Ok(match s.integrator {
         SceneIntegrator::CentralDifference => Box::new(
             CentralDifference::new(asm, q_ref, &vec![std::f64::consts::PI; asm.creases.len()])
-                .map_err(|e| Error::Scene(e.to_string()))?,
+                .map_err(Error::ExplicitSetup)?,
         ),
         SceneIntegrator::GeneralizedAlpha => {
             let params = s.integration;

@@ -345,11 +345,11 @@ impl Model {
     pub fn set_input(&mut self, id: InputId, value: f64) -> Result<(), Error> {
         let i = id.0;
         let spec = self.input_spec(i)?;
-        if let Err(reason) = crate::scene::limits::check_number(value) {
-            return Err(Error::BadValue {
+        if let Err(source) = crate::scene::limits::check_number(value) {
+            return Err(Error::OutOfLimits {
                 name: spec.name.clone(),
                 value,
-                reason: reason.to_string(),
+                source,
             });
         }
         if self.is_ramped(i) {
@@ -412,8 +412,12 @@ impl Model {
                 "the scene ramps its inputs (solver input_timing \"ramp\"); derivatives need held inputs",
             ));
         }
-        if let Err(reason) = crate::scene::limits::check_number(value) {
-            return Err(bad(&reason.to_string()));
+        if let Err(source) = crate::scene::limits::check_number(value) {
+            return Err(Error::OutOfLimits {
+                name: format!("derivative of order {order} of {}", spec.name),
+                value,
+                source,
+            });
         }
         if !self.is_ramped(i) {
             if order == 1 {
