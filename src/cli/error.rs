@@ -297,3 +297,49 @@ pub(crate) fn io(
         source,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::error::Error as _;
+
+    /// A FOLD scene's error names the file, unless the reader's I/O message
+    /// names it already; the reader's error stays the source.
+    #[test]
+    fn scene_errors_name_the_file_once() {
+        let path = PathBuf::from("a/b.fold");
+        let io = CliError::Scene {
+            path: path.clone(),
+            source: SceneError::Io {
+                path: "a/b.fold".into(),
+                message: "No such file or directory".into(),
+            },
+        };
+        assert_eq!(
+            io.to_string(),
+            "cannot read a/b.fold: No such file or directory"
+        );
+        let invalid = CliError::Scene {
+            path,
+            source: SceneError::invalid("edges_vertices[3]", "vertex 9 out of range"),
+        };
+        assert_eq!(
+            invalid.to_string(),
+            "a/b.fold: edges_vertices[3]: vertex 9 out of range"
+        );
+        let source = invalid.source().expect("the reader's error");
+        assert_eq!(
+            source
+                .downcast_ref::<SceneError>()
+                .and_then(SceneError::key),
+            Some("edges_vertices[3]")
+        );
+    }
+
+    #[test]
+    fn input_csv_messages() {
+        let e: CliError = InputCsvError::NotANumber { line: 3, column: 2 }.into();
+        assert_eq!(e.to_string(), "input CSV line 3: column 2 is not a number");
+        assert!(e.source().is_some());
+    }
+}

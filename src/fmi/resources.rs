@@ -445,6 +445,34 @@ mod tests {
         assert!(p("file:///tmp/%4").is_err());
     }
 
+    /// Scene resources fail with typed errors that keep their cause.
+    #[test]
+    fn scene_errors_are_typed() {
+        use std::error::Error as _;
+        let missing = Path::new("/nonexistent/origami-fmu/scene.json");
+        let e = load_scene_file(missing).unwrap_err();
+        match &e {
+            ResourceError::Read { path, source } => {
+                assert_eq!(path, missing);
+                assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(
+            e.to_string().starts_with("cannot read scene /nonexistent"),
+            "{e}"
+        );
+        let e = parse_scene(b"{").unwrap_err();
+        assert!(matches!(e, ResourceError::Json(_)), "{e:?}");
+        assert!(e.to_string().starts_with("not a valid scene JSON: "), "{e}");
+        assert!(e.source().is_some());
+        let e = resource_dir_from_uri("file://server/x").unwrap_err();
+        assert!(
+            matches!(&e, ResourceError::RemoteHost { host, .. } if host == "server"),
+            "{e:?}"
+        );
+    }
+
     #[test]
     fn names() {
         for ok in [

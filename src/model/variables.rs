@@ -730,4 +730,35 @@ mod tests {
         }
         assert!(energy_seen, "the fold has strain or crease energy");
     }
+
+    /// A value refused by the limits is a typed error holding the limit's
+    /// reason as its source; the message names the input and the value.
+    #[test]
+    fn refused_inputs_keep_the_limit_error() {
+        use crate::scene::limits::LimitError;
+        let mut m = Model::new(crate::benchmarks::miura_scene(1)).unwrap();
+        let fold = m.input_id("fold").unwrap();
+        let e = m.set_input(fold, f64::NAN).unwrap_err();
+        assert!(
+            matches!(&e, Error::OutOfLimits { name, source: LimitError::NotFinite(_), .. } if name == "fold"),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            "fold = NaN: NaN is not a finite number; value not applied"
+        );
+        let source = std::error::Error::source(&e).expect("the limit's reason");
+        assert_eq!(source.to_string(), "NaN is not a finite number");
+        let e = m.set_input(fold, 1e31).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::OutOfLimits {
+                    source: LimitError::TooLarge(_),
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+    }
 }
