@@ -78,6 +78,10 @@ pub enum Error {
     },
     /// The scene is over the size budget.
     Budget(crate::scene::SceneError),
+    /// The scene's assembler could not be built (a degenerate facet).
+    Build(crate::assembly::BuildError),
+    /// The scene's contact settings are refused.
+    Contact(crate::contact::SettingsError),
     /// The scene's sparse solver could not be set up.
     Solver(crate::solver::LinearError),
     /// The explicit integrator could not be set up.
@@ -113,6 +117,8 @@ impl fmt::Display for Error {
                 write!(f, "{name} = {}: {source}; value not applied", num(*value))
             }
             Error::Budget(e) => write!(f, "invalid scene: {e}"),
+            Error::Build(e) => write!(f, "invalid scene: {e}"),
+            Error::Contact(e) => write!(f, "invalid scene: {e}"),
             Error::Solver(e) => write!(f, "invalid scene: {e}"),
             Error::ExplicitSetup(e) => write!(f, "invalid scene: {e}"),
             Error::Phase(m) => write!(f, "{m}"),
@@ -134,6 +140,8 @@ impl std::error::Error for Error {
         match self {
             Error::OutOfLimits { source, .. } => Some(source),
             Error::Budget(e) => Some(e),
+            Error::Build(e) => Some(e),
+            Error::Contact(e) => Some(e),
             Error::Solver(e) => Some(e),
             Error::ExplicitSetup(e) => Some(e),
             _ => None,

@@ -172,8 +172,7 @@ impl System {
             rule: sc.solver.quadrature,
             ..ElementOptions::default()
         };
-        let mut asm = Assembler::new(mesh, physics, element, &fixed)
-            .map_err(|e| Error::Scene(e.to_string()))?;
+        let mut asm = Assembler::new(mesh, physics, element, &fixed).map_err(Error::Build)?;
         // Modified Newton's matrix takes the membrane geometric stiffness
         // from each step start (full Newton keeps the exact tangent).
         asm.lag_membrane_stiffness(
@@ -262,7 +261,7 @@ fn add_contact(
         m.density * m.thickness,
         m.youngs_modulus * m.thickness,
     )
-    .map_err(|e| Error::Scene(e.to_string()))?;
+    .map_err(Error::Contact)?;
     asm.add_barrier(Box::new(term));
     Ok(())
 }
