@@ -7,7 +7,7 @@
 //! Run with `cargo bench --bench element_families`.
 
 use nalgebra::{SMatrix, SVector, Vector3};
-use origami_fmu::benchmarks::{FamilyStudy, MeshFamily, plate_physics};
+use origami_fmu::benchmarks::{BenchmarkError, FamilyStudy, MeshFamily, plate_physics};
 use origami_fmu::element::{ElemVec, Interpolation, Rule, ShellElement, reference_vector};
 // Times are CPU time (this thread's clock; the benches run on one thread).
 use origami_fmu::cpu_time::CpuInstant as Instant;
@@ -103,7 +103,7 @@ fn main() {
         println!("|---|---|{}---|", "---|".repeat(meshes.len()));
         for family in MeshFamily::ALL {
             for interp in [Interpolation::Specht, Interpolation::Bciz] {
-                let errs: Vec<Result<f64, String>> = meshes
+                let errs: Vec<Result<f64, BenchmarkError>> = meshes
                     .iter()
                     .map(|&n| study.error(family, interp, n))
                     .collect();

@@ -5,16 +5,83 @@
 //! E = 1.2e6, nu = 0 (EI = 100), clamped at x = 0 and rolled up by an end
 //! moment M; M_max = 2 pi EI / L closes it into a full circle.
 
-use crate::assembly::{Assembler, Physics};
+use crate::assembly::{Assembler, BuildError, Physics};
 use crate::dofs::DofLayout;
 use crate::element::{ElementOptions, Interpolation};
 use crate::ids::VertexId;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::mesh::builders::{Diagonals, grid_family};
-use crate::solver::statics::{self, Load, StaticReport, StaticSettings};
+use crate::solver::statics::{self, Load, StaticReport, StaticSettings, StaticsError};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
+
+/// Why a benchmark case could not be solved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BenchmarkError {
+    /// The roll-up mesh is empty or too large.
+    BadMesh {
+        /// Cells along the strip.
+        nx: usize,
+        /// Cells across.
+        ny: usize,
+    },
+    /// The roll-up's moment ratios are not positive and increasing.
+    BadRatios,
+    /// A roll-up vertex has no plain gradient slot to load or hold.
+    NoGradientSlot(VertexId),
+    /// The plate's cells per side are odd (no centre vertex) or too many.
+    PlateCells(usize),
+    /// The assembler could not be built.
+    Assembly(BuildError),
+    /// The static solve failed.
+    Statics(StaticsError),
+}
+
+impl std::fmt::Display for BenchmarkError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BenchmarkError::BadMesh { nx, ny } => write!(f, "roll-up: bad mesh {nx} x {ny}"),
+            BenchmarkError::BadRatios => {
+                write!(f, "roll-up: ratios must be positive and increasing")
+            }
+            BenchmarkError::NoGradientSlot(v) => {
+                write!(f, "roll-up: vertex {v} has no plain gradient slot")
+            }
+            BenchmarkError::PlateCells(n) => {
+                write!(f, "plate: cells per side must be even, got {n}")
+            }
+            BenchmarkError::Assembly(m) => write!(f, "{m}"),
+            BenchmarkError::Statics(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for BenchmarkError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            BenchmarkError::Statics(e) => Some(e),
+            BenchmarkError::Assembly(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl From<StaticsError> for BenchmarkError {
+    fn from(e: StaticsError) -> Self {
+        BenchmarkError::Statics(e)
+    }
+}
+
+/// The assembler of a benchmark.
+fn assembler(
+    mesh: &Mesh,
+    physics: Physics,
+    element: ElementOptions,
+    fixed: &[usize],
+) -> Result<Assembler, BenchmarkError> {
+    Assembler::new(mesh, physics, element, fixed).map_err(BenchmarkError::Assembly)
+}
 
 /// Triangulations of a structured grid for element convergence studies: a
 /// shell element should converge on all of them.
@@ -202,13 +269,16 @@ impl RollUp {
 
     /// Follow one load path up to the largest of `ratios` (increasing, > 0)
     /// and measure the tip at each.
-    pub fn solve(&self, ratios: &[f64]) -> Result<RollUpResult, String> {
+    pub fn solve(&self, ratios: &[f64]) -> Result<RollUpResult, BenchmarkError> {
         let top = ratios.last().copied().unwrap_or(0.0);
         if self.nx == 0 || self.ny == 0 || self.nx > 100_000 || self.ny > 1000 {
-            return Err(format!("roll-up: bad mesh {} x {}", self.nx, self.ny));
+            return Err(BenchmarkError::BadMesh {
+                nx: self.nx,
+                ny: self.ny,
+            });
         }
         if !(top > 0.0 && top.is_finite()) || ratios.windows(2).any(|w| w[1] <= w[0]) {
-            return Err("roll-up: ratios must be positive and increasing".into());
+            return Err(BenchmarkError::BadRatios);
         }
         let mesh = self.family.grid(ROLL_UP_L, 1.0, self.nx, self.ny);
         let physics = roll_up_physics();
@@ -228,7 +298,7 @@ impl RollUp {
             });
             match (sec.len(), found) {
                 (1, Some(&(slot, _))) => Ok(slot),
-                _ => Err(format!("roll-up: vertex {v} has no plain gradient slot")),
+                _ => Err(BenchmarkError::NoGradientSlot(v)),
             }
         };
         let mut fixed = Vec::new();
@@ -243,7 +313,7 @@ impl RollUp {
             interpolation: self.interpolation,
             ..ElementOptions::default()
         };
-        let asm = Assembler::new(&mesh, physics, element, &fixed).map_err(|e| e.to_string())?;
+        let asm = assembler(&mesh, physics, element, &fixed)?;
         // Trapezoidal shares of the end moment along the tip edge.
         let m_top = top * 2.0 * PI * ROLL_UP_EI / ROLL_UP_L;
         let slots = tip
@@ -253,7 +323,7 @@ impl RollUp {
                 let share = if y == 0.0 || y == 1.0 { 0.5 } else { 1.0 };
                 Ok((gradient_slot(v, 0)?, m_top * share / self.ny as f64))
             })
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, BenchmarkError>>()?;
         let load = EndMoment { slots };
         let stops: Vec<f64> = ratios.iter().map(|r| r / top).collect();
         let mut q = asm.layout.reference_state(&mesh);
@@ -339,7 +409,7 @@ pub fn static_deflection(
     load: impl Fn(&Assembler) -> Vec<f64>,
     probes: &[VertexId],
     settings: StaticSettings,
-) -> Result<(f64, StaticReport), String> {
+) -> Result<(f64, StaticReport), BenchmarkError> {
     let layout = DofLayout::new(mesh);
     let fixed: Vec<usize> = supports
         .vertices
@@ -352,7 +422,7 @@ pub fn static_deflection(
             }
         })
         .collect();
-    let asm = Assembler::new(mesh, physics, element, &fixed).map_err(|e| e.to_string())?;
+    let asm = assembler(mesh, physics, element, &fixed)?;
     let mut q = asm.layout.reference_state(mesh);
     let f = load(&asm);
     let report = statics::solve(&asm, &mut q, &[], &ConstantLoad(f), settings)?;
@@ -418,12 +488,12 @@ impl PlateCase {
     }
 
     /// Centre deflection, exact value and the solver's report.
-    pub fn solve(&self) -> Result<(f64, f64, StaticReport), String> {
+    pub fn solve(&self) -> Result<(f64, f64, StaticReport), BenchmarkError> {
         let (a, e, nu) = (1.0, 1.0e7, 0.3);
         let h = a / self.slenderness;
         let n = self.n;
         if n < 2 || !n.is_multiple_of(2) || n > 1000 {
-            return Err(format!("plate: cells per side must be even, got {n}"));
+            return Err(BenchmarkError::PlateCells(n));
         }
         let d = e * h * h * h / (12.0 * (1.0 - nu * nu));
         let mesh = self.family.grid(a, a, n, n);
@@ -496,7 +566,7 @@ impl TipForce {
     }
 
     /// Tip deflection (mean of the tip vertices) and the exact value.
-    pub fn solve(&self) -> Result<(f64, f64), String> {
+    pub fn solve(&self) -> Result<(f64, f64), BenchmarkError> {
         let (l, b, h, e) = (1.0, 0.1, 0.01, 1.0e7);
         let ei = e * b * h * h * h / 12.0;
         let mesh = self.family.grid(l, b, self.nx, self.ny);
@@ -579,8 +649,8 @@ impl FamilyStudy {
         family: MeshFamily,
         interpolation: Interpolation,
         n: usize,
-    ) -> Result<f64, String> {
-        let roll_up = |ratio: f64| -> Result<f64, String> {
+    ) -> Result<f64, BenchmarkError> {
+        let roll_up = |ratio: f64| -> Result<f64, BenchmarkError> {
             let case = RollUp {
                 ny: 2,
                 family,

@@ -85,7 +85,7 @@ impl std::fmt::Display for Exp {
 #[doc(hidden)]
 /// The text of one `.vtu` file. Fails when the frame's arrays disagree in
 /// length or hold a non-finite value (VTK's ASCII reader cannot read NaN).
-pub fn vtu_text(fr: &Frame) -> Result<String, String> {
+pub fn vtu_text(fr: &Frame) -> Result<String, FrameError> {
     check_frame(fr)?;
     let (np, nt, nl) = (fr.points.len(), fr.triangles.len(), fr.lines.len());
     let mut s = String::with_capacity(64 * (np + nt + nl) + 1024);
@@ -106,8 +106,41 @@ pub fn vtu_text(fr: &Frame) -> Result<String, String> {
     Ok(s)
 }
 
+/// Why a [`Frame`] cannot be written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameError {
+    /// The arrays' lengths do not match the mesh.
+    Lengths,
+    /// A position, energy or angle is not finite.
+    NonFinite,
+    /// A cell names a vertex beyond the points.
+    VertexOutOfRange {
+        /// The vertex.
+        vertex: usize,
+        /// Points of the frame.
+        points: usize,
+    },
+}
+
+impl std::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameError::Lengths => write!(f, "ParaView frame: array lengths do not match the mesh"),
+            FrameError::NonFinite => {
+                write!(f, "ParaView frame: non-finite position, energy or angle")
+            }
+            FrameError::VertexOutOfRange { vertex, points } => write!(
+                f,
+                "ParaView frame: vertex {vertex} out of range ({points} points)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for FrameError {}
+
 /// The frame's arrays agree in length, hold finite values and index its points.
-fn check_frame(fr: &Frame) -> Result<(), String> {
+fn check_frame(fr: &Frame) -> Result<(), FrameError> {
     let np = fr.points.len();
     let nt = fr.triangles.len();
     let nl = fr.lines.len();
@@ -117,13 +150,13 @@ fn check_frame(fr: &Frame) -> Result<(), String> {
         || fr.line_angle.len() != nl
         || fr.fold_vertex_count > np
     {
-        return Err("ParaView frame: array lengths do not match the mesh".into());
+        return Err(FrameError::Lengths);
     }
     let finite = fr.points.iter().flatten().all(|x| x.is_finite())
         && fr.facet_energy.iter().all(|x| x.is_finite())
         && fr.line_angle.iter().all(|x| x.is_finite());
     if !finite {
-        return Err("ParaView frame: non-finite position, energy or angle".into());
+        return Err(FrameError::NonFinite);
     }
     if let Some(v) = fr
         .triangles
@@ -132,9 +165,10 @@ fn check_frame(fr: &Frame) -> Result<(), String> {
         .chain(fr.lines.iter().flat_map(|(l, _)| l))
         .find(|&&v| v >= np)
     {
-        return Err(format!(
-            "ParaView frame: vertex {v} out of range ({np} points)"
-        ));
+        return Err(FrameError::VertexOutOfRange {
+            vertex: *v,
+            points: np,
+        });
     }
     Ok(())
 }
@@ -310,7 +344,7 @@ pub enum SeriesError {
         source: std::io::Error,
     },
     /// The frame's arrays do not fit the mesh.
-    Frame(String),
+    Frame(FrameError),
 }
 
 impl std::fmt::Display for SeriesError {
@@ -330,7 +364,7 @@ impl std::error::Error for SeriesError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             SeriesError::Io { source, .. } => Some(source),
-            SeriesError::Frame(_) => None,
+            SeriesError::Frame(e) => Some(e),
         }
     }
 }

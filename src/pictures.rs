@@ -18,7 +18,7 @@ use crate::model::Model;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The font of every label (a subset of DejaVu Sans, `assets/fonts`).
 const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans-subset.ttf");
@@ -278,8 +278,67 @@ impl Fit {
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
 
-fn draw_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
-    format!("drawing failed: {e}")
+/// The bitmap backend's error (plotters does not re-export its type).
+pub type BackendError = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+
+/// A drawing operation's error.
+pub type DrawingError = DrawingAreaErrorKind<BackendError>;
+
+/// Why a picture was not written.
+#[derive(Debug)]
+pub enum PictureError {
+    /// Nothing to draw (`purpose`: "animate" or "draw").
+    NoFrames(&'static str),
+    /// A plot over time needs two output times at least.
+    TooFewTimes,
+    /// The file could not be created.
+    Create {
+        /// The file.
+        path: PathBuf,
+        /// The backend's error.
+        source: BackendError,
+    },
+    /// Drawing into the picture failed.
+    Drawing(DrawingError),
+    /// The finished picture could not be written.
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The backend's error.
+        source: DrawingError,
+    },
+}
+
+impl std::fmt::Display for PictureError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PictureError::NoFrames(purpose) => write!(f, "no frames to {purpose}"),
+            PictureError::TooFewTimes => write!(f, "a plot needs at least two output times"),
+            PictureError::Create { path, source } => {
+                write!(f, "cannot write {}: {source}", path.display())
+            }
+            PictureError::Drawing(e) => write!(f, "drawing failed: {e}"),
+            PictureError::Write { path, source } => {
+                write!(f, "cannot write {}: {source}", path.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for PictureError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            PictureError::Create { source, .. } => Some(source),
+            PictureError::Drawing(e) | PictureError::Write { source: e, .. } => Some(e),
+            PictureError::NoFrames(_) | PictureError::TooFewTimes => None,
+        }
+    }
+}
+
+/// The error of writing the finished picture to `path`.
+fn write_err(path: &Path) -> impl FnOnce(DrawingError) -> PictureError {
+    let path = path.to_path_buf();
+    move |source| PictureError::Write { path, source }
 }
 
 /// Draw `frame` of `sheet` into `area` (pixel coordinates of the area).
@@ -289,7 +348,7 @@ fn draw_sheet(
     frame: &Frame,
     fit: &Fit,
     vmax: f64,
-) -> Result<(), String> {
+) -> Result<(), PictureError> {
     let light = {
         let l = [-0.4, -0.5, 0.77];
         let n = dot(l, l).sqrt();
@@ -339,12 +398,12 @@ fn draw_sheet(
                 let color = RGBColor(s(c.0), s(c.1), s(c.2));
                 let pts: Vec<(i32, i32)> = tri.iter().map(|&v| fit.pixel(x[v])).collect();
                 area.draw(&Polygon::new(pts.clone(), color.filled()))
-                    .map_err(draw_err)?;
+                    .map_err(PictureError::Drawing)?;
                 // An outline in the facet's colour closes the hairline gaps.
                 let mut closed = pts;
                 closed.push(closed[0]);
                 area.draw(&PathElement::new(closed, color.stroke_width(1)))
-                    .map_err(draw_err)?;
+                    .map_err(PictureError::Drawing)?;
             }
             Item::Line(l) => {
                 let [a, b] = sheet.lines[l];
@@ -352,7 +411,7 @@ fn draw_sheet(
                     vec![fit.pixel(x[a]), fit.pixel(x[b])],
                     RGBColor(38, 38, 38).stroke_width(1),
                 ))
-                .map_err(draw_err)?;
+                .map_err(PictureError::Drawing)?;
             }
         }
     }
@@ -369,7 +428,7 @@ fn color_limit(frames: &[&Frame]) -> f64 {
 }
 
 /// A vertical colour bar for 0..`vmax` deg at (x, y), `h` pixels tall.
-fn color_bar(area: &Area, (x, y): (i32, i32), h: i32, vmax: f64) -> Result<(), String> {
+fn color_bar(area: &Area, (x, y): (i32, i32), h: i32, vmax: f64) -> Result<(), PictureError> {
     for k in 0..h {
         let v = vmax * (h - 1 - k) as f64 / (h - 1).max(1) as f64;
         let c = ViridisRGB::get_color_normalized(v, 0.0, vmax);
@@ -377,7 +436,7 @@ fn color_bar(area: &Area, (x, y): (i32, i32), h: i32, vmax: f64) -> Result<(), S
             [(x, y + k), (x + 12, y + k + 1)],
             RGBColor(c.0, c.1, c.2).filled(),
         ))
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     }
     let font = (FAMILY, 11).into_font();
     for (v, yy) in [(vmax, y), (0.5 * vmax, y + h / 2), (0.0, y + h)] {
@@ -386,32 +445,39 @@ fn color_bar(area: &Area, (x, y): (i32, i32), h: i32, vmax: f64) -> Result<(), S
             (x + 16, yy - 6),
             font.clone(),
         ))
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     }
     area.draw(&Text::new("deg", (x, y + h + 8), (FAMILY, 11).into_font()))
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     Ok(())
 }
 
 /// Write an animated GIF of `frames` (12 frames per second, then the last
 /// frame held a second).
-pub fn write_gif(path: &Path, sheet: &Sheet, frames: &[&Frame], title: &str) -> Result<(), String> {
+pub fn write_gif(
+    path: &Path,
+    sheet: &Sheet,
+    frames: &[&Frame],
+    title: &str,
+) -> Result<(), PictureError> {
     register_font();
     if frames.is_empty() {
-        return Err("no frames to animate".into());
+        return Err(PictureError::NoFrames("animate"));
     }
     let (w, h) = (480u32, 400u32);
     let fit = Fit::new(frames, w - 70, h - 40);
     let vmax = color_limit(frames);
-    let backend = BitMapBackend::gif(path, (w, h), 83)
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let backend = BitMapBackend::gif(path, (w, h), 83).map_err(|source| PictureError::Create {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let root = backend.into_drawing_area();
     let last = frames.len() - 1;
     for (k, f) in frames.iter().enumerate() {
         // The last frame repeats so that the folded state stays in view.
         let repeat = if k == last { 12 } else { 1 };
         for _ in 0..repeat {
-            root.fill(&WHITE).map_err(draw_err)?;
+            root.fill(&WHITE).map_err(PictureError::Drawing)?;
             let panel = root.margin(30, 10, 0, 70);
             draw_sheet(&panel, sheet, f, &fit, vmax)?;
             root.draw(&Text::new(
@@ -419,9 +485,9 @@ pub fn write_gif(path: &Path, sheet: &Sheet, frames: &[&Frame], title: &str) -> 
                 (8, 8),
                 (FAMILY, 14).into_font(),
             ))
-            .map_err(draw_err)?;
+            .map_err(PictureError::Drawing)?;
             color_bar(&root, (w as i32 - 50, 80), 200, vmax)?;
-            root.present().map_err(draw_err)?;
+            root.present().map_err(PictureError::Drawing)?;
         }
     }
     Ok(())
@@ -433,10 +499,10 @@ pub fn write_snapshots(
     sheet: &Sheet,
     frames: &[&Frame],
     title: &str,
-) -> Result<(), String> {
+) -> Result<(), PictureError> {
     register_font();
     if frames.is_empty() {
-        return Err("no frames to draw".into());
+        return Err(PictureError::NoFrames("draw"));
     }
     let cols = frames.len().min(3);
     let rows = frames.len().div_ceil(cols);
@@ -445,13 +511,13 @@ pub fn write_snapshots(
     let fit = Fit::new(frames, pw - 10, ph - 34);
     let vmax = color_limit(frames);
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
-    root.fill(&WHITE).map_err(draw_err)?;
+    root.fill(&WHITE).map_err(PictureError::Drawing)?;
     root.draw(&Text::new(
         title.to_string(),
         (10, 8),
         (FAMILY, 16).into_font(),
     ))
-    .map_err(draw_err)?;
+    .map_err(PictureError::Drawing)?;
     let grid = root.margin(36, 0, 0, 70);
     let panels = grid.split_evenly((rows, cols));
     for (f, panel) in frames.iter().zip(&panels) {
@@ -461,13 +527,12 @@ pub fn write_snapshots(
                 (pw as i32 / 2 - 40, 2),
                 (FAMILY, 13).into_font(),
             ))
-            .map_err(draw_err)?;
+            .map_err(PictureError::Drawing)?;
         let inner = panel.margin(30, 4, 5, 5);
         draw_sheet(&inner, sheet, f, &fit, vmax)?;
     }
     color_bar(&root, (w as i32 - 50, 60), (h as i32 - 130).max(60), vmax)?;
-    root.present()
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    root.present().map_err(write_err(path))?;
     Ok(())
 }
 
@@ -519,14 +584,19 @@ fn range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
 
 /// Write a PNG plot: every fold angle (top) and the energies (bottom)
 /// against time.
-pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> Result<(), String> {
+pub fn write_plot(
+    path: &Path,
+    sheet: &Sheet,
+    series: &Series,
+    title: &str,
+) -> Result<(), PictureError> {
     register_font();
     let t = &series.time;
     if t.len() < 2 {
-        return Err("a plot needs at least two output times".into());
+        return Err(PictureError::TooFewTimes);
     }
     let root = BitMapBackend::new(path, (880, 760)).into_drawing_area();
-    root.fill(&WHITE).map_err(draw_err)?;
+    root.fill(&WHITE).map_err(PictureError::Drawing)?;
     let (top, bottom) = root.split_vertically(380);
     let tr = t[0]..t[t.len() - 1];
     let mut chart = ChartBuilder::on(&top)
@@ -535,14 +605,14 @@ pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> R
         .x_label_area_size(30)
         .y_label_area_size(60)
         .build_cartesian_2d(tr.clone(), range(series.angles.iter().flatten().copied()))
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     chart
         .configure_mesh()
         .y_desc("fold angle (deg)")
         .label_style((FAMILY, 12))
         .axis_desc_style((FAMILY, 13))
         .draw()
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     let n = sheet.angle_outputs.len();
     for k in 0..n {
         let c = ViridisRGB::get_color_normalized(k as f64, 0.0, n.max(2) as f64 - 1.0);
@@ -551,7 +621,7 @@ pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> R
                 t.iter().zip(&series.angles).map(|(&x, a)| (x, a[k])),
                 RGBColor(c.0, c.1, c.2).stroke_width(1),
             ))
-            .map_err(draw_err)?;
+            .map_err(PictureError::Drawing)?;
     }
     let mut chart = ChartBuilder::on(&bottom)
         .caption("energies", (FAMILY, 16))
@@ -559,7 +629,7 @@ pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> R
         .x_label_area_size(36)
         .y_label_area_size(60)
         .build_cartesian_2d(tr, range(series.energies.iter().flatten().copied()))
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     chart
         .configure_mesh()
         .x_desc("time (s)")
@@ -568,7 +638,7 @@ pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> R
         .label_style((FAMILY, 12))
         .axis_desc_style((FAMILY, 13))
         .draw()
-        .map_err(draw_err)?;
+        .map_err(PictureError::Drawing)?;
     let palette = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
@@ -584,7 +654,7 @@ pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> R
                 t.iter().zip(&series.energies).map(|(&x, e)| (x, e[k])),
                 color.stroke_width(2),
             ))
-            .map_err(draw_err)?
+            .map_err(PictureError::Drawing)?
             .label(name.clone())
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
@@ -597,10 +667,9 @@ pub fn write_plot(path: &Path, sheet: &Sheet, series: &Series, title: &str) -> R
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
-            .map_err(draw_err)?;
+            .map_err(PictureError::Drawing)?;
     }
-    root.present()
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    root.present().map_err(write_err(path))?;
     Ok(())
 }
 

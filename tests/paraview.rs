@@ -100,11 +100,20 @@ fn bad_frames_are_refused_with_a_message() {
     };
     let pts: &'static [[f64; 3]] = Box::leak(Box::new(points));
     let good: &'static [[f64; 3]] = Box::leak(Box::new(ok));
-    let err = vtu_text(&mk(pts, &[[0, 1, 2]], &[0.0])).err().unwrap();
+    let err = vtu_text(&mk(pts, &[[0, 1, 2]], &[0.0]))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("non-finite"), "{err}");
-    let err = vtu_text(&mk(good, &[[0, 1, 2]], &[])).err().unwrap();
+    let err = vtu_text(&mk(good, &[[0, 1, 2]], &[]))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("lengths"), "{err}");
-    let err = vtu_text(&mk(good, &[[0, 1, 7]], &[0.0])).err().unwrap();
+    let err = vtu_text(&mk(good, &[[0, 1, 7]], &[0.0]))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("vertex 7"), "{err}");
 }
 

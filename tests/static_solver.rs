@@ -97,7 +97,9 @@ fn hopeless_solve_fails_with_a_clear_error() {
         min_increment: 0.1,
     };
     let q0 = q.clone();
-    let err = statics::solve(&asm, &mut q, &theta0, &Constant(f), settings).unwrap_err();
+    let err = statics::solve(&asm, &mut q, &theta0, &Constant(f), settings)
+        .unwrap_err()
+        .to_string();
     eprintln!("{err}");
     assert!(err.contains("load factor 0.000000"), "{err}");
     assert!(err.contains("after 1 iterations"), "{err}");

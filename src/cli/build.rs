@@ -6,7 +6,7 @@
 //! next to the running executable unless `--library` names it) and the
 //! scene in `resources/`.
 
-use super::{SceneOptions, out};
+use super::{CliError, SceneOptions, out};
 use crate::fmi::{self, MODEL_IDENTIFIER, SCENE_FILE};
 use std::fmt::Write as _;
 use std::io::Write;
@@ -41,9 +41,9 @@ const PLATFORM: &str = "linux64";
 /// The cdylib next to the running executable: `target/<profile>/` after
 /// `cargo build`, or `target/<profile>/deps/` where `cargo test` leaves it;
 /// the newer of the two when both exist.
-fn default_library() -> Result<PathBuf, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("cannot locate this executable: {e}"))?;
-    let dir = exe.parent().ok_or("the executable has no parent folder")?;
+fn default_library() -> Result<PathBuf, CliError> {
+    let exe = std::env::current_exe().map_err(CliError::Executable)?;
+    let dir = exe.parent().ok_or(CliError::NoExecutableFolder)?;
     let name = format!("lib{MODEL_IDENTIFIER}.so");
     let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
     // max_by_key keeps the last of equals: prefer target/<profile>/ on a tie.
@@ -52,21 +52,18 @@ fn default_library() -> Result<PathBuf, String> {
         .filter_map(|p| modified(&p).map(|t| (t, p)))
         .max_by_key(|(t, _)| *t)
         .map(|(_, p)| p)
-        .ok_or_else(|| {
-            format!(
-                "the FMU library {} is missing; build it with `cargo build --release` (it is built \
-                 with the executable), or name it with --library",
-                dir.join(&name).display()
-            )
-        })
+        .ok_or_else(|| CliError::LibraryMissing(dir.join(&name)))
 }
 
 /// Run `origami-fmu build`.
-pub fn run(args: &BuildArgs) -> Result<(), String> {
+pub fn run(args: &BuildArgs) -> Result<(), CliError> {
     let loaded = super::load_scene(&args.scene, &args.read)?;
     let mut scene = loaded.scene;
     if let Some(t) = args.ramp {
-        crate::scene::limits::check("ramp.time", t).map_err(|e| format!("--ramp: {e}"))?;
+        crate::scene::limits::check("ramp.time", t).map_err(|source| CliError::Limit {
+            option: "--ramp",
+            source,
+        })?;
         scene.ramp.time = t;
     }
     let contents = fmi::fmu_contents(&scene)?;
@@ -74,8 +71,7 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
         Some(l) => l.clone(),
         None => default_library()?,
     };
-    let so = std::fs::read(&library)
-        .map_err(|e| format!("cannot read the FMU library {}: {e}", library.display()))?;
+    let so = std::fs::read(&library).map_err(super::error::io("read the FMU library", &library))?;
     let binary = format!("binaries/{PLATFORM}/{MODEL_IDENTIFIER}.so");
     let resource = format!("resources/{SCENE_FILE}");
     // A FOLD source travels along as resources/scene.fold, for the user and
@@ -83,10 +79,7 @@ pub fn run(args: &BuildArgs) -> Result<(), String> {
     let fold_source = if args.scene.extension().is_some_and(|e| e == "json") {
         None
     } else {
-        Some(
-            std::fs::read(&args.scene)
-                .map_err(|e| format!("cannot read {}: {e}", args.scene.display()))?,
-        )
+        Some(std::fs::read(&args.scene).map_err(super::error::io("read", &args.scene))?)
     };
     let mut files: Vec<(&str, &[u8], u32)> = vec![
         (
@@ -175,19 +168,23 @@ fn drive_note(scene: &crate::scene::Scene) -> String {
     o
 }
 
-fn write_zip(path: &Path, files: &[(&str, &[u8], u32)]) -> Result<(), String> {
+fn write_zip(path: &Path, files: &[(&str, &[u8], u32)]) -> Result<(), CliError> {
     use zip::write::SimpleFileOptions;
-    let err = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
-    let file = std::fs::File::create(path).map_err(|e| err(&e))?;
+    let zip_err = |source| CliError::Zip {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::create(path).map_err(super::error::io("write", path))?;
     let mut zip = zip::ZipWriter::new(file);
     for (name, bytes, mode) in files {
         let options = SimpleFileOptions::default()
             .compression_method(zip::CompressionMethod::Deflated)
             .last_modified_time(zip::DateTime::default())
             .unix_permissions(*mode);
-        zip.start_file(*name, options).map_err(|e| err(&e))?;
-        zip.write_all(bytes).map_err(|e| err(&e))?;
+        zip.start_file(*name, options).map_err(zip_err)?;
+        zip.write_all(bytes)
+            .map_err(super::error::io("write", path))?;
     }
-    zip.finish().map_err(|e| err(&e))?;
+    zip.finish().map_err(zip_err)?;
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! `origami-fmu check SCENE.fold`: load and validate a scene and print a
 //! summary (mesh, DOFs, inputs, outputs, warnings).
 
+use super::CliError;
 use crate::mesh::EdgeKind;
 use crate::model::Model;
 use crate::scene::{self, CreaseStiffness, Integrator, Loaded};
@@ -17,17 +18,13 @@ pub struct CheckArgs {
 }
 
 /// Run the check; an invalid scene is an error naming the key and reason.
-pub fn run(args: CheckArgs) -> Result<(), String> {
+pub fn run(args: CheckArgs) -> Result<(), CliError> {
     let path = args.scene.display().to_string();
     let loaded = if args.scene.extension().is_some_and(|e| e == "json") {
         super::load_scene(&args.scene, &args.read)?
     } else {
         // The warnings go into the summary, not to stderr.
-        let mut loaded =
-            scene::load_report(&args.scene, &args.read.load_options()).map_err(|e| match e {
-                scene::SceneError::Io { .. } => e.to_string(),
-                _ => format!("{path}: {e}"),
-            })?;
+        let mut loaded = super::read_fold(&args.scene, &args.read)?;
         args.read.apply(&mut loaded.scene)?;
         loaded
     };
@@ -60,12 +57,12 @@ fn list(names: &[String]) -> String {
 
 /// The text `check` prints for a loaded scene: [`summary`] with the
 /// loader's notes (unit or scale, F edges, traced faces, split vertices).
-pub fn report(path: &str, loaded: &Loaded) -> Result<String, String> {
+pub fn report(path: &str, loaded: &Loaded) -> Result<String, CliError> {
     summary_with(path, &loaded.scene, &loaded.warnings, &loaded.notes)
 }
 
 /// The text `check` prints for a valid scene.
-pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<String, String> {
+pub fn summary(path: &str, scene: &scene::Scene, warnings: &[String]) -> Result<String, CliError> {
     summary_with(path, scene, warnings, &[])
 }
 
@@ -194,7 +191,7 @@ fn summary_with(
     scene: &scene::Scene,
     warnings: &[String],
     notes: &[String],
-) -> Result<String, String> {
+) -> Result<String, CliError> {
     use std::fmt::Write as _;
     let m = &scene.mesh;
     let count = |k: EdgeKind| m.edges().iter().filter(|e| e.kind == k).count();
@@ -229,7 +226,10 @@ fn summary_with(
         count(EdgeKind::Boundary)
     );
     // One model build serves the DOF count and the variable tables.
-    let model = Model::new(scene.clone()).map_err(|e| format!("{path}: {e}"))?;
+    let model = Model::new(scene.clone()).map_err(|source| CliError::ModelOf {
+        path: path.into(),
+        source,
+    })?;
     let _ = writeln!(
         o,
         "  DOFs:      {} ({} vector slots: positions and sector gradients)",

@@ -1,12 +1,15 @@
 //! Command-line interface. Each subcommand lives in its own file and
-//! returns `Result<(), String>`; errors print to stderr with a non-zero exit.
+//! returns `Result<(), CliError>`; errors print to stderr with a non-zero exit.
 //! Output goes through [`out`] and [`err`], which stop quietly when the
 //! reader has gone (`origami-fmu build ... | head`) instead of panicking.
 
 pub mod build;
 pub mod check;
+mod error;
 pub mod pattern;
 pub mod simulate;
+
+pub use error::{CliError, InputCsvError};
 
 use crate::scene::{self, FlatEdges, LoadOptions, Loaded};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -101,7 +104,7 @@ impl SceneOptions {
     }
 
     /// Apply `--contact` and `--friction` to a loaded scene.
-    pub fn apply(&self, scene: &mut scene::Scene) -> Result<(), String> {
+    pub fn apply(&self, scene: &mut scene::Scene) -> Result<(), CliError> {
         if self.contact && scene.contact.is_none() {
             scene.contact = Some(crate::contact::ContactSettings {
                 thickness: scene.material.thickness,
@@ -110,17 +113,11 @@ impl SceneOptions {
         }
         if let Some(mu) = self.friction {
             if !(mu.is_finite() && mu >= 0.0) {
-                return Err(format!("--friction {mu}: must be a finite number >= 0"));
+                return Err(CliError::Friction(mu));
             }
             match scene.contact.as_mut() {
                 Some(c) => c.friction = mu,
-                None => {
-                    return Err(
-                        "--friction sets the self-contact's friction, and contact is off: add \
-                         --contact (or \"ancf:contact\": {\"enabled\": true} in the scene)"
-                            .into(),
-                    );
-                }
+                None => return Err(CliError::FrictionWithoutContact),
             }
         }
         Ok(())
@@ -149,14 +146,10 @@ impl SceneOptions {
 /// `.json`) go through the FOLD reader with `options`; `.json` files hold a
 /// serialized [`crate::scene::Scene`] (already in metres, so the options do
 /// not apply). Warnings are printed; the notes are returned.
-pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, String> {
+pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, CliError> {
     if path.extension().is_some_and(|e| e == "json") {
         if options.any() {
-            return Err(format!(
-                "{}: --frame, --size, --unit and --f-edges apply to FOLD files; this is a scene \
-                 JSON (as written into an FMU's resources), whose geometry is fixed",
-                path.display()
-            ));
+            return Err(CliError::FoldOptionsOnJson(path.to_path_buf()));
         }
         let mut scene = crate::fmi::resources::load_scene_file(path)?;
         options.apply(&mut scene)?;
@@ -166,10 +159,7 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, String>
             notes: vec![],
         });
     }
-    let mut loaded = scene::load_report(path, &options.load_options()).map_err(|e| match e {
-        scene::SceneError::Io { .. } => e.to_string(),
-        _ => format!("{}: {e}", path.display()),
-    })?;
+    let mut loaded = read_fold(path, options)?;
     options.apply(&mut loaded.scene)?;
     for w in &loaded.warnings {
         err(&format!("warning: {w}\n"));
@@ -177,10 +167,19 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, String>
     Ok(loaded)
 }
 
+/// Read the FOLD scene at `path` with `options` (no `--contact`,
+/// `--friction`, no warnings printed).
+fn read_fold(path: &Path, options: &SceneOptions) -> Result<Loaded, CliError> {
+    scene::load_report(path, &options.load_options()).map_err(|source| CliError::Scene {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 /// Run the CLI with the process arguments.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), String> = match cli.command {
+    let result: Result<(), CliError> = match cli.command {
         Command::Pattern(args) => pattern::run(args),
         Command::Check(args) => check::run(args),
         Command::Build(args) => build::run(&args),

@@ -1,6 +1,7 @@
 //! `origami-fmu pattern <kind> [params] -o FILE.fold`: write a generated
 //! crease pattern (see [`crate::scene::patterns`]) as a FOLD file.
 
+use super::CliError;
 use crate::scene::patterns::{
     CurvedCrease, Kresling, Miura, Pattern, SingleCrease, WaterbombBase, WaterbombTessellation,
     Yoshimura,
@@ -205,10 +206,9 @@ impl Kind {
 }
 
 /// Generate, check that the file loads as a scene, and write it.
-pub fn run(args: PatternArgs) -> Result<(), String> {
-    let file = args.kind.pattern().generate().map_err(|e| e.to_string())?;
-    let (scene, _) = crate::scene::from_fold(&file, None)
-        .map_err(|e| format!("internal error: the generated pattern does not load: {e}"))?;
+pub fn run(args: PatternArgs) -> Result<(), CliError> {
+    let file = args.kind.pattern().generate().map_err(CliError::Pattern)?;
+    let (scene, _) = crate::scene::from_fold(&file, None).map_err(CliError::PatternDoesNotLoad)?;
     let text = file.to_json();
     let creases = scene.mesh.creases().count();
     let summary = format!(
@@ -219,8 +219,7 @@ pub fn run(args: PatternArgs) -> Result<(), String> {
     );
     match &args.output {
         Some(path) => {
-            std::fs::write(path, text)
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            std::fs::write(path, text).map_err(super::error::io("write", path))?;
             super::err(&format!("wrote {}: {summary}\n", path.display()));
         }
         None => super::out(&text),

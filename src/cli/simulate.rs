@@ -3,6 +3,7 @@
 //! ParaView series. The input is the model's built-in ramp (`--ramp`), or
 //! a CSV with a `time` column and one column per input, linearly interpolated.
 
+use super::{CliError, InputCsvError};
 use crate::model::Model;
 use clap::Args;
 use std::io::Write;
@@ -102,20 +103,19 @@ impl Signals {
     }
 }
 
-fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, CliError> {
+    let text = std::fs::read_to_string(path).map_err(super::error::io("read", path))?;
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let header: Vec<&str> = lines
         .next()
-        .ok_or("input CSV is empty")?
+        .ok_or(InputCsvError::Empty)?
         .split(',')
         .map(str::trim)
         .collect();
     let tcol = header
         .iter()
         .position(|h| *h == "time")
-        .ok_or("input CSV has no `time` column")?;
+        .ok_or(InputCsvError::NoTimeColumn)?;
     let mut cols = Vec::new();
     for (c, h) in header.iter().enumerate() {
         if c == tcol {
@@ -125,30 +125,35 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
             .inputs()
             .iter()
             .position(|v| v.name == *h)
-            .ok_or_else(|| format!("input CSV column `{h}` is not an input of the scene"))?;
+            .ok_or_else(|| InputCsvError::UnknownColumn(h.to_string()))?;
         cols.push((c, i));
     }
     let mut time = Vec::new();
     let mut values = vec![Vec::new(); cols.len()];
     for (n, line) in lines.enumerate() {
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
-        let num = |c: usize| -> Result<f64, String> {
+        let (line, column) = (n + 2, |c: usize| c + 1);
+        let num = |c: usize| -> Result<f64, InputCsvError> {
             let x: f64 = f
                 .get(c)
-                .ok_or_else(|| format!("input CSV line {}: missing column {}", n + 2, c + 1))?
+                .ok_or(InputCsvError::MissingColumn {
+                    line,
+                    column: column(c),
+                })?
                 .parse()
-                .map_err(|_| {
-                    format!("input CSV line {}: column {} is not a number", n + 2, c + 1)
+                .map_err(|_| InputCsvError::NotANumber {
+                    line,
+                    column: column(c),
                 })?;
             if x.is_finite() {
                 Ok(x)
             } else {
-                Err(format!("input CSV line {}: non-finite value", n + 2))
+                Err(InputCsvError::NonFinite { line })
             }
         };
         let t = num(tcol)?;
         if time.last().is_some_and(|&p| t <= p) {
-            return Err(format!("input CSV line {}: time must increase", n + 2));
+            return Err(InputCsvError::TimeNotIncreasing { line }.into());
         }
         time.push(t);
         for (k, &(c, _)) in cols.iter().enumerate() {
@@ -156,7 +161,7 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
         }
     }
     if time.is_empty() {
-        return Err("input CSV has no rows".into());
+        return Err(InputCsvError::NoRows.into());
     }
     Ok(Signals {
         time,
@@ -165,10 +170,10 @@ fn read_inputs(path: &PathBuf, model: &Model) -> Result<Signals, String> {
 }
 
 /// Set a parameter of `model` by name (a scene may not have it).
-fn set_parameter(model: &mut Model, name: &str, value: f64) -> Result<bool, String> {
+fn set_parameter(model: &mut Model, name: &str, value: f64) -> Result<bool, CliError> {
     match model.parameter_id(name) {
         Some(i) => {
-            model.set_parameter(i, value).map_err(|e| e.to_string())?;
+            model.set_parameter(i, value)?;
             Ok(true)
         }
         None => Ok(false),
@@ -214,7 +219,7 @@ impl Pictures {
     }
 
     /// Write the pictures asked for, from what was recorded.
-    fn write(&self, args: &SimulateArgs, title: &str) -> Result<(), String> {
+    fn write(&self, args: &SimulateArgs, title: &str) -> Result<(), CliError> {
         let pick = |rows: &[usize]| -> Vec<&crate::pictures::Frame> {
             self.frames
                 .iter()
@@ -306,7 +311,7 @@ impl Progress {
 }
 
 /// Run `simulate`.
-pub fn run(args: &SimulateArgs) -> Result<(), String> {
+pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let loaded = super::load_scene(&args.scene, &args.read)?;
     for n in &loaded.notes {
         super::err(&format!("{n}\n"));
@@ -315,16 +320,14 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     let stop = args.stop_time.unwrap_or(scene.solver.stop_time);
     check_times(args, stop)?;
     let title = scene.name.clone();
-    let mut model = Model::new(scene).map_err(|e| e.to_string())?;
+    let mut model = Model::new(scene)?;
     let signals = choose_signals(args, &mut model)?;
     if let Some(sig) = &signals {
         for (i, v) in sig.at(0.0) {
-            model
-                .set_input(crate::model::InputId(i), v)
-                .map_err(|e| e.to_string())?;
+            model.set_input(crate::model::InputId(i), v)?;
         }
     }
-    model.initialize().map_err(|e| e.to_string())?;
+    model.initialize()?;
     let mut csv = args
         .output
         .as_ref()
@@ -352,7 +355,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         match model.advance(t - model.time()) {
             Ok(r) => total.accumulate(&r),
             Err(e) => {
-                failure = Some(e.to_string());
+                failure = Some(e);
                 break;
             }
         }
@@ -364,7 +367,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             p.record(k, &model, &values);
         }
         if let Some(s) = series.as_mut() {
-            s.write(&model).map_err(|e| e.to_string())?;
+            s.write(&model)?;
         }
         progress.update(k, t, total.steps);
     }
@@ -374,10 +377,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         c.flush()?;
     }
     if let Some(s) = &series {
-        super::err(&format!(
-            "ParaView series -> {}\n",
-            s.finish().map_err(|e| e.to_string())?.display()
-        ));
+        super::err(&format!("ParaView series -> {}\n", s.finish()?.display()));
     }
     if let Some(p) = &pictures {
         p.write(args, &title)?;
@@ -394,33 +394,34 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     super::err(&closing_report(&total));
     match failure {
         None => Ok(()),
-        Some(e) => Err(format!(
-            "{e}; the run stopped at t = {reached} of {stop} s (outputs up to there are written)"
-        )),
+        Some(source) => Err(CliError::RunStopped {
+            source,
+            reached,
+            stop,
+        }),
     }
 }
 
 /// The communication step, the stop time and the ramp are usable.
-fn check_times(args: &SimulateArgs, stop: f64) -> Result<(), String> {
+fn check_times(args: &SimulateArgs, stop: f64) -> Result<(), CliError> {
     if !(args.step > 0.0 && args.step.is_finite() && stop > 0.0 && stop.is_finite()) {
-        return Err("--step and --stop-time must be positive numbers".into());
+        return Err(CliError::StepOrStopTime);
     }
     if stop / args.step > MAX_STEPS as f64 {
-        return Err(format!(
-            "--stop-time / --step gives {} communication steps; at most {MAX_STEPS} \
-             (one CSV row each): take a longer --step",
-            crate::text::num((stop / args.step).round())
-        ));
+        return Err(CliError::TooManySteps {
+            steps: (stop / args.step).round(),
+            max: MAX_STEPS,
+        });
     }
     if !(args.ramp >= 0.0 && args.ramp.is_finite()) {
-        return Err("--ramp must be zero or a positive number of seconds".into());
+        return Err(CliError::RampTime);
     }
     Ok(())
 }
 
 /// The input table of `--input`, or else the model's built-in ramp (the
 /// FMU's ramp.time: the same signal whatever the stop time), said on stderr.
-fn choose_signals(args: &SimulateArgs, model: &mut Model) -> Result<Option<Signals>, String> {
+fn choose_signals(args: &SimulateArgs, model: &mut Model) -> Result<Option<Signals>, CliError> {
     if let Some(p) = &args.input {
         return Ok(Some(read_inputs(p, model)?));
     }
@@ -447,15 +448,13 @@ fn choose_signals(args: &SimulateArgs, model: &mut Model) -> Result<Option<Signa
 /// The table's value at the step start and its slope over the step to `t`
 /// (the FMU's held input plus derivative): the piecewise linear signal
 /// itself, never a staircase.
-fn set_signals(model: &mut Model, sig: &Signals, t: f64) -> Result<(), String> {
+fn set_signals(model: &mut Model, sig: &Signals, t: f64) -> Result<(), CliError> {
     let t0 = model.time();
     let h = t - t0;
     for ((i, v0), (_, v1)) in sig.at(t0).into_iter().zip(sig.at(t)) {
         let i = crate::model::InputId(i);
-        model.set_input(i, v0).map_err(|e| e.to_string())?;
-        model
-            .set_input_derivative(i, 1, (v1 - v0) / h)
-            .map_err(|e| e.to_string())?;
+        model.set_input(i, v0)?;
+        model.set_input_derivative(i, 1, (v1 - v0) / h)?;
     }
     Ok(())
 }
@@ -468,9 +467,8 @@ struct Csv<'a> {
 }
 
 impl<'a> Csv<'a> {
-    fn create(path: &'a PathBuf, model: &Model) -> Result<Self, String> {
-        let file = std::fs::File::create(path)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    fn create(path: &'a PathBuf, model: &Model) -> Result<Self, CliError> {
+        let file = std::fs::File::create(path).map_err(super::error::io("write", path))?;
         let mut csv = Csv {
             out: std::io::BufWriter::new(file),
             path,
@@ -481,12 +479,11 @@ impl<'a> Csv<'a> {
         Ok(csv)
     }
 
-    fn line(&mut self, line: &str) -> Result<(), String> {
-        writeln!(self.out, "{line}")
-            .map_err(|e| format!("cannot write {}: {e}", self.path.display()))
+    fn line(&mut self, line: &str) -> Result<(), CliError> {
+        writeln!(self.out, "{line}").map_err(super::error::io("write", self.path))
     }
 
-    fn row(&mut self, t: f64, vals: &[f64]) -> Result<(), String> {
+    fn row(&mut self, t: f64, vals: &[f64]) -> Result<(), CliError> {
         let mut line = format!("{t}");
         for v in vals {
             line.push_str(&format!(",{v}"));
@@ -494,10 +491,10 @@ impl<'a> Csv<'a> {
         self.line(&line)
     }
 
-    fn flush(&mut self) -> Result<(), String> {
+    fn flush(&mut self) -> Result<(), CliError> {
         self.out
             .flush()
-            .map_err(|e| format!("cannot write {}: {e}", self.path.display()))
+            .map_err(super::error::io("write", self.path))
     }
 }
 
@@ -505,7 +502,7 @@ impl<'a> Csv<'a> {
 fn pvd_series(
     args: &SimulateArgs,
     model: &Model,
-) -> Result<Option<crate::paraview::Series>, String> {
+) -> Result<Option<crate::paraview::Series>, CliError> {
     let Some(dir) = &args.pvd else {
         return Ok(None);
     };
@@ -514,8 +511,8 @@ fn pvd_series(
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let mut s = crate::paraview::Series::new(dir, &stem, model).map_err(|e| e.to_string())?;
-    s.write(model).map_err(|e| e.to_string())?;
+    let mut s = crate::paraview::Series::new(dir, &stem, model)?;
+    s.write(model)?;
     Ok(Some(s))
 }
 

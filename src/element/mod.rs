@@ -37,7 +37,7 @@ pub struct ElementOptions {
     /// Shape functions (Specht by default).
     pub interpolation: Interpolation,
 }
-pub use shell::{MembraneResultants, ShellElement, ShellEnergy};
+pub use shell::{ElementError, MembraneResultants, ShellElement, ShellEnergy};
 
 /// The element vector `e0` of a flat straight-edged reference triangle in the
 /// plane `z = 0`: positions `X_i` and, at node `i`, the gradient DOF towards

@@ -201,13 +201,75 @@ fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Why a reference triangle makes no element.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ElementError {
+    /// A corner or side vector is NaN or infinite (the corners).
+    NonFinite([Vector2<f64>; 3]),
+    /// Zero or vanishing area.
+    Degenerate {
+        /// Twice the signed area.
+        twice_area: f64,
+        /// Squared length of the longest edge.
+        longest_edge_squared: f64,
+    },
+    /// Corners clockwise.
+    Clockwise {
+        /// The (negative) signed area.
+        signed_area: f64,
+    },
+    /// The corners' Jacobian has no inverse.
+    SingularJacobian,
+    /// A curved side makes the reference map fold over at a quadrature point.
+    FoldedSide {
+        /// The reference Jacobian there.
+        jacobian: f64,
+        /// The point's area coordinates.
+        area_coordinates: [f64; 3],
+        /// The chord triangle's Jacobian (twice its area).
+        chord_jacobian: f64,
+    },
+}
+
+impl std::fmt::Display for ElementError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ElementError::NonFinite(x) => write!(f, "triangle has non-finite coordinates {x:?}"),
+            ElementError::Degenerate {
+                twice_area,
+                longest_edge_squared,
+            } => write!(
+                f,
+                "degenerate triangle (2 * area = {twice_area:e}, longest edge^2 = {longest_edge_squared:e})"
+            ),
+            ElementError::Clockwise { signed_area } => write!(
+                f,
+                "clockwise triangle (signed area {signed_area:e}); corners must be counter-clockwise"
+            ),
+            ElementError::SingularJacobian => write!(f, "degenerate triangle (singular Jacobian)"),
+            ElementError::FoldedSide {
+                jacobian,
+                area_coordinates,
+                chord_jacobian,
+            } => write!(
+                f,
+                "a curved side folds the facet over itself (reference Jacobian {jacobian:e} \
+                 at area coordinates {area_coordinates:?}, chord triangle {chord_jacobian:e})"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ElementError {}
+
 impl ShellElement {
     /// Precomputes the element for the flat reference triangle `x` (crease
     /// pattern coordinates, counter-clockwise) with the default
     /// ([`Interpolation::Specht`]) shape functions.
     ///
-    /// Fails (Err(String) naming the reason) for a degenerate or clockwise triangle.
-    pub fn new(x: [Vector2<f64>; 3], rule: Rule) -> Result<Self, String> {
+    /// Fails ([`ElementError`] naming the reason) for a degenerate or
+    /// clockwise triangle.
+    pub fn new(x: [Vector2<f64>; 3], rule: Rule) -> Result<Self, ElementError> {
         Self::with_interpolation(x, rule, Interpolation::default())
     }
 
@@ -216,7 +278,7 @@ impl ShellElement {
         x: [Vector2<f64>; 3],
         rule: Rule,
         interpolation: Interpolation,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ElementError> {
         let chords = [
             x[1] - x[0],
             x[2] - x[0],
@@ -243,10 +305,10 @@ impl ShellElement {
         sides: [Vector2<f64>; 6],
         rule: Rule,
         interpolation: Interpolation,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ElementError> {
         let finite = |p: &Vector2<f64>| p.x.is_finite() && p.y.is_finite();
         if !x.iter().all(finite) || !sides.iter().all(finite) {
-            return Err(format!("triangle has non-finite coordinates {x:?}"));
+            return Err(ElementError::NonFinite(x));
         }
         let a1 = x[1] - x[0];
         let a2 = x[2] - x[0];
@@ -256,15 +318,15 @@ impl ShellElement {
             .max(a2.norm_squared())
             .max((x[2] - x[1]).norm_squared());
         if !scale.is_finite() || !det.is_finite() || scale <= 0.0 || det.abs() <= 1e-12 * scale {
-            return Err(format!(
-                "degenerate triangle (2 * area = {det:e}, longest edge^2 = {scale:e})"
-            ));
+            return Err(ElementError::Degenerate {
+                twice_area: det,
+                longest_edge_squared: scale,
+            });
         }
         if det < 0.0 {
-            return Err(format!(
-                "clockwise triangle (signed area {:e}); corners must be counter-clockwise",
-                0.5 * det
-            ));
+            return Err(ElementError::Clockwise {
+                signed_area: 0.5 * det,
+            });
         }
         let e1 = a1 / a1.norm();
         let e2 = Vector2::new(-e1.y, e1.x);
@@ -275,7 +337,7 @@ impl ShellElement {
         };
         let j2_inv = j2_of(a1, a2)
             .try_inverse()
-            .ok_or_else(|| "degenerate triangle (singular Jacobian)".to_string())?;
+            .ok_or(ElementError::SingularJacobian)?;
         let shape = interpolation.shape(&x);
         // The reference element vector in the plane: corners and side vectors.
         let e0 = [
@@ -299,10 +361,11 @@ impl ShellElement {
                 let (c1, c2) = reference_tangents(&e0, &d1);
                 let d = c1.perp(&c2);
                 if d.is_nan() || d <= 1e-6 * det {
-                    return Err(format!(
-                        "a curved side folds the facet over itself (reference Jacobian {d:e} \
-                         at area coordinates {l:?}, chord triangle {det:e})"
-                    ));
+                    return Err(ElementError::FoldedSide {
+                        jacobian: d,
+                        area_coordinates: *l,
+                        chord_jacobian: det,
+                    });
                 }
                 (
                     j2_of(c1, c2).try_inverse().expect("positive determinant"),
@@ -903,7 +966,10 @@ mod tests {
         for rule in [Rule::Dunavant7, Rule::Dunavant12] {
             for (x, why) in bad {
                 match ShellElement::new(x, rule) {
-                    Err(msg) => assert!(msg.contains(why), "{msg}"),
+                    Err(e) => {
+                        let msg = e.to_string();
+                        assert!(msg.contains(why), "{msg}")
+                    }
                     Ok(_) => panic!("accepted {x:?}"),
                 }
             }

@@ -41,6 +41,79 @@ const HEAD: usize = 16;
 /// Bytes of a container with an empty GUID and payload.
 pub const MIN_LEN: usize = HEAD + 8 + CHECKSUM;
 
+/// Why serialized state bytes were refused.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StateBytesError {
+    /// Fewer bytes than the smallest container.
+    TooShort(usize),
+    /// The bytes do not start with [`MAGIC`].
+    NotAState,
+    /// Another format version.
+    Version(u32),
+    /// The length differs from the header's.
+    Length {
+        /// Bytes given.
+        actual: usize,
+        /// Bytes the header gives.
+        expected: usize,
+    },
+    /// The header's lengths overflow.
+    ImpossibleLengths(usize),
+    /// The checksum does not match.
+    Checksum,
+    /// The GUID is not UTF-8.
+    GuidNotText,
+    /// The state belongs to another FMU.
+    Foreign {
+        /// The state's GUID.
+        theirs: String,
+        /// This FMU's GUID.
+        ours: String,
+    },
+}
+
+impl std::fmt::Display for StateBytesError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StateBytesError::TooShort(n) => write!(
+                f,
+                "{n} bytes are too few for a serialized state (at least {MIN_LEN}); it was truncated"
+            ),
+            StateBytesError::NotAState => write!(
+                f,
+                "the bytes are not a serialized state of origami-fmu (they do not start with \
+                 \"OFMUSTAT\")"
+            ),
+            StateBytesError::Version(v) => write!(
+                f,
+                "the state has format version {v}; this library reads version {FORMAT_VERSION}"
+            ),
+            StateBytesError::Length { actual, expected } => write!(
+                f,
+                "the state has {actual} bytes but its header says {expected}; it was truncated or extended"
+            ),
+            StateBytesError::ImpossibleLengths(n) => write!(
+                f,
+                "the state has {n} bytes but its header gives impossible lengths; it was truncated \
+                 or corrupted"
+            ),
+            StateBytesError::Checksum => write!(
+                f,
+                "the state's checksum does not match its bytes: they were changed after \
+                 fmi2SerializeFMUstate wrote them"
+            ),
+            StateBytesError::GuidNotText => write!(f, "the state's GUID is not text"),
+            StateBytesError::Foreign { theirs, ours } => write!(
+                f,
+                "the state belongs to the FMU with GUID {theirs}, not to this one ({ours}): another \
+                 scene or library version"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for StateBytesError {}
+
 /// The container of `payload` for the FMU with GUID `guid`.
 pub fn seal(guid: &str, payload: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(MIN_LEN + guid.len() + payload.len());
@@ -58,27 +131,21 @@ pub fn seal(guid: &str, payload: &[u8]) -> Vec<u8> {
 
 /// The header: GUID and payload ranges, with the length, magic number
 /// and version checked (not the checksum).
-fn header(bytes: &[u8]) -> Result<(std::ops::Range<usize>, std::ops::Range<usize>), String> {
+fn header(
+    bytes: &[u8],
+) -> Result<(std::ops::Range<usize>, std::ops::Range<usize>), StateBytesError> {
     let n = bytes.len();
     if n < MIN_LEN {
-        return Err(format!(
-            "{n} bytes are too few for a serialized state (at least {MIN_LEN}); it was truncated"
-        ));
+        return Err(StateBytesError::TooShort(n));
     }
     if &bytes[..8] != MAGIC {
-        return Err(
-            "the bytes are not a serialized state of origami-fmu (they do not start with \
-             \"OFMUSTAT\")"
-                .into(),
-        );
+        return Err(StateBytesError::NotAState);
     }
     let word =
         |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
     let version = word(8);
     if version != FORMAT_VERSION {
-        return Err(format!(
-            "the state has format version {version}; this library reads version {FORMAT_VERSION}"
-        ));
+        return Err(StateBytesError::Version(version));
     }
     let g = word(12) as usize;
     let at = HEAD.saturating_add(g);
@@ -95,25 +162,23 @@ fn header(bytes: &[u8]) -> Result<(std::ops::Range<usize>, std::ops::Range<usize
         .and_then(|p| MIN_LEN.checked_add(g)?.checked_add(p));
     match expected {
         Some(e) if e == n => Ok((HEAD..at, at + 8..n - CHECKSUM)),
-        Some(e) => Err(format!(
-            "the state has {n} bytes but its header says {e}; it was truncated or extended"
-        )),
-        None => Err(format!(
-            "the state has {n} bytes but its header gives impossible lengths; it was truncated \
-             or corrupted"
-        )),
+        Some(e) => Err(StateBytesError::Length {
+            actual: n,
+            expected: e,
+        }),
+        None => Err(StateBytesError::ImpossibleLengths(n)),
     }
 }
 
 /// The GUID a container names (its header checked, not its checksum).
-pub fn guid(bytes: &[u8]) -> Result<&str, String> {
+pub fn guid(bytes: &[u8]) -> Result<&str, StateBytesError> {
     let (g, _) = header(bytes)?;
-    std::str::from_utf8(&bytes[g]).map_err(|_| "the state's GUID is not text".into())
+    std::str::from_utf8(&bytes[g]).map_err(|_| StateBytesError::GuidNotText)
 }
 
 /// The payload of a container written by [`seal`] for GUID `guid`; any
 /// other bytes are refused with the reason.
-pub fn open<'a>(guid: &str, bytes: &'a [u8]) -> Result<&'a [u8], String> {
+pub fn open<'a>(guid: &str, bytes: &'a [u8]) -> Result<&'a [u8], StateBytesError> {
     let (g, payload) = header(bytes)?;
     let body = bytes.len() - CHECKSUM;
     let [a, b] = hash128(&[&bytes[..body]]);
@@ -121,11 +186,7 @@ pub fn open<'a>(guid: &str, bytes: &'a [u8]) -> Result<&'a [u8], String> {
     sum[..8].copy_from_slice(&a.to_le_bytes());
     sum[8..].copy_from_slice(&b.to_le_bytes());
     if bytes[body..] != sum {
-        return Err(
-            "the state's checksum does not match its bytes: they were changed after \
-             fmi2SerializeFMUstate wrote them"
-                .into(),
-        );
+        return Err(StateBytesError::Checksum);
     }
     let theirs = String::from_utf8_lossy(&bytes[g]);
     if theirs != guid {
@@ -135,11 +196,11 @@ pub fn open<'a>(guid: &str, bytes: &'a [u8]) -> Result<&'a [u8], String> {
 }
 
 /// The refusal of a state of the FMU with GUID `theirs` by one with `ours`.
-pub fn foreign(theirs: &str, ours: &str) -> String {
-    format!(
-        "the state belongs to the FMU with GUID {theirs}, not to this one ({ours}): another \
-         scene or library version"
-    )
+pub fn foreign(theirs: &str, ours: &str) -> StateBytesError {
+    StateBytesError::Foreign {
+        theirs: theirs.into(),
+        ours: ours.into(),
+    }
 }
 
 #[cfg(test)]
@@ -152,7 +213,12 @@ mod tests {
         assert_eq!(c.len(), MIN_LEN + 3 + 7);
         assert_eq!(open("{g}", &c), Ok(&b"payload"[..]));
         assert_eq!(guid(&c), Ok("{g}"));
-        assert!(open("{h}", &c).unwrap_err().contains("GUID {g}"));
+        assert!(
+            open("{h}", &c)
+                .unwrap_err()
+                .to_string()
+                .contains("GUID {g}")
+        );
         for n in 0..c.len() {
             assert!(open("{g}", &c[..n]).is_err(), "{n}");
         }
@@ -163,10 +229,20 @@ mod tests {
         }
         let mut v2 = c.clone();
         v2[8] = 2;
-        assert!(open("{g}", &v2).unwrap_err().contains("version 2"));
+        assert!(
+            open("{g}", &v2)
+                .unwrap_err()
+                .to_string()
+                .contains("version 2")
+        );
         let mut long = c.clone();
         long.push(0);
-        assert!(open("{g}", &long).unwrap_err().contains("extended"));
+        assert!(
+            open("{g}", &long)
+                .unwrap_err()
+                .to_string()
+                .contains("extended")
+        );
         // Lengths that overflow are refused, not wrapped.
         let mut huge = c.clone();
         huge[12..16].copy_from_slice(&u32::MAX.to_le_bytes());

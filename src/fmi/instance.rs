@@ -16,6 +16,10 @@
 //! failed) moves it to [`InstancePhase::Error`], from which
 //! `fmi2SetFMUstate` or `fmi2Reset` recover. A panic kills the instance.
 
+mod error;
+
+pub use error::InstanceError;
+
 use super::container;
 use super::ptr;
 use super::resources::{self, SCENE_FILE};
@@ -353,36 +357,35 @@ impl Instance {
         fmu_type: i32,
         guid: Option<&str>,
         resource_location: Option<&str>,
-    ) -> Result<(String, Scene, Model), String> {
+    ) -> Result<(String, Scene, Model), InstanceError> {
         match Fmi2Type::from_c(fmu_type) {
             Some(Fmi2Type::CoSimulation) => {}
-            Some(Fmi2Type::ModelExchange) => {
-                return Err(
-                    "fmuType is fmi2ModelExchange; this FMU supports co-simulation only".into(),
-                );
-            }
-            None => return Err(format!("fmuType {fmu_type} is not a valid fmi2Type")),
+            Some(Fmi2Type::ModelExchange) => return Err(InstanceError::ModelExchange),
+            None => return Err(InstanceError::BadFmuType(fmu_type)),
         }
-        let guid = guid.ok_or("fmuGUID is NULL")?;
-        let uri = resource_location.ok_or("fmuResourceLocation is NULL")?;
-        let dir = resources::resource_dir_from_uri(uri)?;
+        let guid = guid.ok_or(InstanceError::NullGuid)?;
+        let uri = resource_location.ok_or(InstanceError::NullResourceLocation)?;
+        let dir = resources::resource_dir_from_uri(uri).map_err(InstanceError::ResourceLocation)?;
         let path = dir.join(SCENE_FILE);
-        let bytes = std::fs::read(&path)
-            .map_err(|e| format!("cannot read the scene {}: {e}", path.display()))?;
+        let bytes = match std::fs::read(&path) {
+            Ok(b) => b,
+            Err(source) => return Err(InstanceError::ReadScene { path, source }),
+        };
         // Validate before the GUID so that a broken scene reports why.
-        let scene = resources::parse_scene(&bytes)
-            .map_err(|e| format!("invalid scene {}: {e}", path.display()))?;
+        let scene = match resources::parse_scene(&bytes) {
+            Ok(s) => s,
+            Err(source) => return Err(InstanceError::InvalidScene { path, source }),
+        };
         let expected = resources::guid(&bytes);
         if guid != expected {
-            return Err(format!(
-                "GUID mismatch: the host passed {guid} but the scene in {} and library version {} give {expected}; \
-                 the modelDescription.xml does not belong to this scene or library",
-                path.display(),
-                resources::VERSION
-            ));
+            return Err(InstanceError::GuidMismatch {
+                host: guid.into(),
+                path,
+                expected,
+            });
         }
-        let model = Model::new(scene.clone()).map_err(|e| format!("invalid scene: {e}"))?;
-        resources::check_variable_names(&model).map_err(|e| format!("invalid scene: {e}"))?;
+        let model = Model::new(scene.clone()).map_err(InstanceError::Model)?;
+        resources::check_variable_names(&model).map_err(InstanceError::VariableNames)?;
         Ok((expected, scene, model))
     }
 
@@ -908,22 +911,24 @@ impl Instance {
     /// Check a saved state against this instance: its FMU, times and
     /// phase, and every value of its model state
     /// ([`Model::check_state`]).
-    fn check_saved(&self, s: &SavedState) -> Result<(), String> {
+    fn check_saved(&self, s: &SavedState) -> Result<(), InstanceError> {
         if s.guid != self.guid {
-            return Err(container::foreign(&s.guid, &self.guid));
+            return Err(InstanceError::StateBytes(container::foreign(
+                &s.guid, &self.guid,
+            )));
         }
-        let limit = |what: &str, x: f64| {
-            crate::scene::limits::check_number(x).map_err(|e| format!("{what} = {e}"))
+        let limit = |what: &'static str, x: f64| {
+            crate::scene::limits::check_number(x)
+                .map_err(|source| InstanceError::SavedTime { what, source })
         };
         limit("start_time", s.start_time)?;
         if let Some(stop) = s.stop_time {
             limit("stop_time", stop)?;
             if stop < s.start_time {
-                return Err(format!(
-                    "stop_time {} is before start_time {}",
-                    num(stop),
-                    num(s.start_time)
-                ));
+                return Err(InstanceError::StopBeforeStart {
+                    stop,
+                    start: s.start_time,
+                });
             }
         }
         use crate::model::Phase;
@@ -937,19 +942,20 @@ impl Instance {
             InstancePhase::Error => true,
         };
         if !fits {
-            return Err(format!(
-                "phase '{}' with a model phase {:?}: they do not go together",
-                s.phase.name(),
-                s.model.phase
-            ));
+            return Err(InstanceError::PhaseMismatch {
+                phase: s.phase.name(),
+                model_phase: s.model.phase,
+            });
         }
-        self.model.check_state(&s.model).map_err(|e| e.to_string())
+        self.model
+            .check_state(&s.model)
+            .map_err(InstanceError::State)
     }
 
     /// The bytes of `fmi2SerializeFMUstate`: the state's JSON in the
     /// checksummed container of [`container`].
-    pub fn serialize(s: &SavedState) -> Result<Vec<u8>, String> {
-        let payload = serde_json::to_vec(s).map_err(|e| format!("cannot write the state: {e}"))?;
+    pub fn serialize(s: &SavedState) -> Result<Vec<u8>, InstanceError> {
+        let payload = serde_json::to_vec(s).map_err(InstanceError::Serialize)?;
         Ok(container::seal(&s.guid, &payload))
     }
 

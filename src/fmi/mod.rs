@@ -53,12 +53,12 @@ pub struct FmuContents {
 }
 
 /// The modelDescription.xml, scene file and GUID of the FMU of `scene`.
-pub fn fmu_contents(scene: &Scene) -> Result<FmuContents, String> {
+pub fn fmu_contents(scene: &Scene) -> Result<FmuContents, resources::ResourceError> {
     let scene_file = resources::scene_bytes(scene);
     // Read back exactly what the FMU will read at instantiation.
     let scene = resources::parse_scene(&scene_file)?;
     let guid = resources::guid(&scene_file);
-    let model = Model::new(scene.clone()).map_err(|e| e.to_string())?;
+    let model = Model::new(scene.clone()).map_err(resources::ResourceError::Model)?;
     resources::check_variable_names(&model)?;
     let counts = [
         model.parameters().len(),

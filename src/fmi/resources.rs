@@ -7,9 +7,108 @@
 //! struct to a FOLD file is a change in that one function and the
 //! [`SCENE_FILE`] name.
 
+use crate::mesh::MeshError;
 use crate::model::Model;
-use crate::scene::Scene;
+use crate::scene::limits::LimitError;
+use crate::scene::{Scene, SceneError};
 use std::path::{Path, PathBuf};
+
+/// Why a scene resource, a variable name or a resource location was refused.
+#[derive(Debug)]
+pub enum ResourceError {
+    /// The scene file could not be read.
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// An error in the scene file at `path`.
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong in it.
+        error: Box<ResourceError>,
+    },
+    /// The bytes are not JSON of a scene.
+    Json(serde_json::Error),
+    /// The mesh is invalid.
+    Mesh(MeshError),
+    /// A key of the scene is wrong (index out of range, over the size budget, ...).
+    Scene(SceneError),
+    /// A physical value is out of its limits.
+    Limit(LimitError),
+    /// The scene makes no model.
+    Model(crate::model::Error),
+    /// A variable name is not a legal FMI structured name.
+    IllegalName(String),
+    /// Two variables have the same name.
+    DuplicateName(String),
+    /// The resource location is not a `file:` URI.
+    NotFileUri(String),
+    /// The resource location names another host.
+    RemoteHost {
+        /// The URI.
+        uri: String,
+        /// Its host.
+        host: String,
+    },
+    /// The resource location's path is not absolute.
+    RelativeUri(String),
+    /// The resource location has a malformed %-escape.
+    BadEscape(String),
+}
+
+impl std::fmt::Display for ResourceError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ResourceError::Read { path, source } => {
+                write!(f, "cannot read scene {}: {source}", path.display())
+            }
+            ResourceError::InFile { path, error } => write!(f, "{}: {error}", path.display()),
+            ResourceError::Json(e) => write!(f, "not a valid scene JSON: {e}"),
+            ResourceError::Mesh(e) => write!(f, "mesh: {e}"),
+            ResourceError::Scene(e) => write!(f, "{e}"),
+            ResourceError::Limit(e) => write!(f, "{e}"),
+            ResourceError::Model(e) => write!(f, "{e}"),
+            ResourceError::IllegalName(name) => write!(
+                f,
+                "variable name {name:?} is not a legal FMI structured name (letters, digits, _, '.', [index])"
+            ),
+            ResourceError::DuplicateName(name) => {
+                write!(f, "variable name {name:?} is used twice")
+            }
+            ResourceError::NotFileUri(uri) => {
+                write!(f, "resource location {uri:?} is not a file: URI")
+            }
+            ResourceError::RemoteHost { uri, host } => write!(
+                f,
+                "resource location {uri:?} names host {host:?}; only local files are supported"
+            ),
+            ResourceError::RelativeUri(uri) => {
+                write!(f, "resource location {uri:?} is not an absolute path")
+            }
+            ResourceError::BadEscape(uri) => {
+                write!(f, "resource location {uri:?} has a malformed %-escape")
+            }
+        }
+    }
+}
+
+impl std::error::Error for ResourceError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ResourceError::Read { source, .. } => Some(source),
+            ResourceError::InFile { error, .. } => Some(error.as_ref()),
+            ResourceError::Json(e) => Some(e),
+            ResourceError::Mesh(e) => Some(e),
+            ResourceError::Scene(e) => Some(e),
+            ResourceError::Limit(e) => Some(e),
+            ResourceError::Model(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 
 /// The `modelIdentifier`: one shared library for every scene.
 pub const MODEL_IDENTIFIER: &str = "origami_fmu";
@@ -67,18 +166,22 @@ pub fn scene_bytes(scene: &Scene) -> Vec<u8> {
 }
 
 /// Read and validate a scene file (today: JSON of the [`Scene`] struct).
-pub fn load_scene_file(path: &Path) -> Result<Scene, String> {
-    let bytes =
-        std::fs::read(path).map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
-    parse_scene(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+pub fn load_scene_file(path: &Path) -> Result<Scene, ResourceError> {
+    let bytes = std::fs::read(path).map_err(|source| ResourceError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_scene(&bytes).map_err(|e| ResourceError::InFile {
+        path: path.to_path_buf(),
+        error: Box::new(e),
+    })
 }
 
 /// Parse and validate scene bytes. This is the one place that knows the
 /// scene format; every message names the key or index and the reason.
-pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
-    check_budget(bytes)?;
-    let mut scene: Scene =
-        serde_json::from_slice(bytes).map_err(|e| format!("not a valid scene JSON: {e}"))?;
+pub fn parse_scene(bytes: &[u8]) -> Result<Scene, ResourceError> {
+    check_budget(bytes).map_err(ResourceError::Scene)?;
+    let mut scene: Scene = serde_json::from_slice(bytes).map_err(ResourceError::Json)?;
     // The derived Deserialize does not check the mesh: rebuild it through
     // the validating constructor (all edges listed, so nothing is added).
     let m = &scene.mesh;
@@ -87,14 +190,14 @@ pub fn parse_scene(bytes: &[u8]) -> Result<Scene, String> {
         m.triangles().to_vec(),
         m.edges().to_vec(),
     )
-    .map_err(|e| format!("mesh: {e}"))?;
+    .map_err(ResourceError::Mesh)?;
     validate_scene(&scene)?;
     Ok(scene)
 }
 
 /// The size budget on the raw scene JSON, before it is parsed: the
 /// number of triangles of `mesh`.
-fn check_budget(bytes: &[u8]) -> Result<(), String> {
+fn check_budget(bytes: &[u8]) -> Result<(), SceneError> {
     use serde_json::value::RawValue;
     use std::collections::BTreeMap;
     type Raw<'a> = BTreeMap<String, &'a RawValue>;
@@ -107,74 +210,95 @@ fn check_budget(bytes: &[u8]) -> Result<(), String> {
         .and_then(|m| Some(crate::scene::fold::array_counts(m.get("triangles")?).0))
         .unwrap_or(0);
     if triangles > crate::scene::build::MAX_FACETS {
-        return Err(
-            crate::scene::build::over_budget("mesh.triangles", triangles, "the mesh has")
-                .to_string(),
-        );
+        return Err(crate::scene::build::over_budget(
+            "mesh.triangles",
+            triangles,
+            "the mesh has",
+        ));
     }
     Ok(())
 }
 
-fn check(ok: bool, msg: impl FnOnce() -> String) -> Result<(), String> {
-    if ok { Ok(()) } else { Err(msg()) }
+/// `Ok` when `ok`, else the [`SceneError::Invalid`] of `(key, reason)`.
+fn check(ok: bool, msg: impl FnOnce() -> (String, String)) -> Result<(), ResourceError> {
+    if ok {
+        Ok(())
+    } else {
+        let (key, reason) = msg();
+        Err(ResourceError::Scene(SceneError::invalid(key, reason)))
+    }
 }
 
 /// Checks of the scene data beyond the mesh (indices in range, physical
 /// values). Stands in for the scene module's own
 /// validation until the FOLD reader lands.
-fn validate_scene(s: &Scene) -> Result<(), String> {
+fn validate_scene(s: &Scene) -> Result<(), ResourceError> {
     let nv = s.mesh.n_vertices();
     let ne = s.mesh.edges().len();
-    check(!s.name.trim().is_empty(), || "name: empty".into())?;
+    check(!s.name.trim().is_empty(), || {
+        ("name".into(), "empty".into())
+    })?;
     check(s.fold_vertex_count <= nv, || {
-        format!(
-            "fold_vertex_count: {} but the mesh has {nv} vertices",
-            s.fold_vertex_count
+        (
+            "fold_vertex_count".into(),
+            format!("{} but the mesh has {nv} vertices", s.fold_vertex_count),
         )
     })?;
     for (e, edge) in s.mesh.edges().iter().enumerate() {
         if let Some(f) = edge.fold_edge {
             check(f.index() < s.fold_edge_count, || {
-                format!(
-                    "mesh edge {e}: fold_edge {f} >= fold_edge_count {}",
-                    s.fold_edge_count
+                (
+                    format!("mesh edge {e}"),
+                    format!("fold_edge {f} >= fold_edge_count {}", s.fold_edge_count),
                 )
             })?;
         }
     }
-    crate::scene::limits::check_scene(s)?;
+    crate::scene::limits::check_scene(s).map_err(ResourceError::Limit)?;
     for (i, a) in s.actuators.iter().enumerate() {
         check(a.start.is_finite(), || {
-            format!("actuators[{i}].start: not a finite number")
+            (
+                format!("actuators[{i}].start"),
+                "not a finite number".into(),
+            )
         })?;
         for &e in &a.edges {
             check(e.index() < ne, || {
-                format!(
-                    "actuators[{i}] ({}): edge {e} out of range (mesh has {ne} edges)",
-                    a.name
+                (
+                    format!("actuators[{i}] ({})", a.name),
+                    format!("edge {e} out of range (mesh has {ne} edges)"),
                 )
             })?;
             check(s.mesh.edge(e).kind == crate::mesh::EdgeKind::Crease, || {
-                format!("actuators[{i}] ({}): edge {e} is not a crease", a.name)
+                (
+                    format!("actuators[{i}] ({})", a.name),
+                    format!("edge {e} is not a crease"),
+                )
             })?;
         }
     }
     for (i, sup) in s.supports.iter().enumerate() {
         for &v in &sup.vertices {
             check(v.index() < nv, || {
-                format!("supports[{i}]: vertex {v} out of range (mesh has {nv} vertices)")
+                (
+                    format!("supports[{i}]"),
+                    format!("vertex {v} out of range (mesh has {nv} vertices)"),
+                )
             })?;
         }
     }
     for (i, a) in s.attachments.iter().enumerate() {
         check(!a.vertices.is_empty(), || {
-            format!("attachments[{i}] ({}): no vertices", a.name)
+            (
+                format!("attachments[{i}] ({})", a.name),
+                "no vertices".into(),
+            )
         })?;
         for &v in &a.vertices {
             check(v.index() < nv, || {
-                format!(
-                    "attachments[{i}] ({}): vertex {v} out of range (mesh has {nv} vertices)",
-                    a.name
+                (
+                    format!("attachments[{i}] ({})", a.name),
+                    format!("vertex {v} out of range (mesh has {nv} vertices)"),
                 )
             })?;
         }
@@ -192,9 +316,9 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
     ] {
         for (i, vi) in list.iter().enumerate() {
             check(vi.vertex.index() < nv, || {
-                format!(
-                    "{what}[{i}] ({}): vertex {} out of range (mesh has {nv} vertices)",
-                    vi.name, vi.vertex
+                (
+                    format!("{what}[{i}] ({})", vi.name),
+                    format!("vertex {} out of range (mesh has {nv} vertices)", vi.vertex),
                 )
             })?;
         }
@@ -204,7 +328,7 @@ fn validate_scene(s: &Scene) -> Result<(), String> {
 
 /// Check that every variable name of `model` is a legal FMI structured
 /// name and unique (actuator and vertex-input names come from the scene).
-pub fn check_variable_names(model: &Model) -> Result<(), String> {
+pub fn check_variable_names(model: &Model) -> Result<(), ResourceError> {
     let mut seen = std::collections::HashSet::new();
     for v in model
         .parameters()
@@ -212,15 +336,12 @@ pub fn check_variable_names(model: &Model) -> Result<(), String> {
         .chain(model.inputs())
         .chain(model.outputs())
     {
-        check(is_structured_name(&v.name), || {
-            format!(
-                "variable name {:?} is not a legal FMI structured name (letters, digits, _, '.', [index])",
-                v.name
-            )
-        })?;
-        check(seen.insert(v.name.as_str()), || {
-            format!("variable name {:?} is used twice", v.name)
-        })?;
+        if !is_structured_name(&v.name) {
+            return Err(ResourceError::IllegalName(v.name.clone()));
+        }
+        if !seen.insert(v.name.as_str()) {
+            return Err(ResourceError::DuplicateName(v.name.clone()));
+        }
     }
     Ok(())
 }
@@ -255,29 +376,29 @@ pub fn is_structured_name(name: &str) -> bool {
 /// `file:///abs/path`, `file://localhost/abs/path` or `file:/abs/path`,
 /// percent-encoded, with or without a trailing slash. Other hosts and
 /// schemes are rejected with the reason.
-pub fn resource_dir_from_uri(uri: &str) -> Result<PathBuf, String> {
+pub fn resource_dir_from_uri(uri: &str) -> Result<PathBuf, ResourceError> {
     let lower = uri.get(..5).map(str::to_ascii_lowercase);
     if lower.as_deref() != Some("file:") {
-        return Err(format!("resource location {uri:?} is not a file: URI"));
+        return Err(ResourceError::NotFileUri(uri.into()));
     }
     let rest = &uri[5..];
     let path = if let Some(after) = rest.strip_prefix("//") {
         let slash = after.find('/').unwrap_or(after.len());
         let host = &after[..slash];
         if !(host.is_empty() || host.eq_ignore_ascii_case("localhost")) {
-            return Err(format!(
-                "resource location {uri:?} names host {host:?}; only local files are supported"
-            ));
+            return Err(ResourceError::RemoteHost {
+                uri: uri.into(),
+                host: host.into(),
+            });
         }
         &after[slash..]
     } else {
         rest
     };
     if !path.starts_with('/') {
-        return Err(format!("resource location {uri:?} is not an absolute path"));
+        return Err(ResourceError::RelativeUri(uri.into()));
     }
-    let bytes = percent_decode(path)
-        .ok_or_else(|| format!("resource location {uri:?} has a malformed %-escape"))?;
+    let bytes = percent_decode(path).ok_or_else(|| ResourceError::BadEscape(uri.into()))?;
     use std::os::unix::ffi::OsStringExt;
     Ok(PathBuf::from(std::ffi::OsString::from_vec(bytes)))
 }
@@ -319,11 +440,44 @@ mod tests {
             PathBuf::from("/tmp/x")
         );
         assert_eq!(p("FILE:/tmp/x").unwrap(), PathBuf::from("/tmp/x"));
-        assert!(p("file://server/share/x").unwrap_err().contains("server"));
+        assert!(
+            p("file://server/share/x")
+                .unwrap_err()
+                .to_string()
+                .contains("server")
+        );
         assert!(p("http://x/y").is_err());
         assert!(p("file:relative/x").is_err());
         assert!(p("file:///tmp/%zz").is_err());
         assert!(p("file:///tmp/%4").is_err());
+    }
+
+    /// Scene resources fail with typed errors that keep their cause.
+    #[test]
+    fn scene_errors_are_typed() {
+        use std::error::Error as _;
+        let missing = Path::new("/nonexistent/origami-fmu/scene.json");
+        let e = load_scene_file(missing).unwrap_err();
+        match &e {
+            ResourceError::Read { path, source } => {
+                assert_eq!(path, missing);
+                assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(
+            e.to_string().starts_with("cannot read scene /nonexistent"),
+            "{e}"
+        );
+        let e = parse_scene(b"{").unwrap_err();
+        assert!(matches!(e, ResourceError::Json(_)), "{e:?}");
+        assert!(e.to_string().starts_with("not a valid scene JSON: "), "{e}");
+        assert!(e.source().is_some());
+        let e = resource_dir_from_uri("file://server/x").unwrap_err();
+        assert!(
+            matches!(&e, ResourceError::RemoteHost { host, .. } if host == "server"),
+            "{e:?}"
+        );
     }
 
     #[test]

@@ -69,6 +69,23 @@ pub enum Error {
         value: f64,
         reason: String,
     },
+    /// A value for a variable outside its limits
+    /// ([`crate::scene::limits`]); nothing changed.
+    OutOfLimits {
+        name: String,
+        value: f64,
+        source: crate::scene::limits::LimitError,
+    },
+    /// The scene is over the size budget.
+    Budget(crate::scene::SceneError),
+    /// The scene's assembler could not be built (a degenerate facet).
+    Build(crate::assembly::BuildError),
+    /// The scene's contact settings are refused.
+    Contact(crate::contact::SettingsError),
+    /// The scene's sparse solver could not be set up.
+    Solver(crate::solver::LinearError),
+    /// The explicit integrator could not be set up.
+    ExplicitSetup(crate::solver::central_difference::SetupError),
     /// A call that is not allowed in the current phase.
     Phase(String),
     /// The stepper could not complete; the state is as it was before.
@@ -92,6 +109,18 @@ impl fmt::Display for Error {
             } => {
                 write!(f, "{name} = {}: {reason}; value not applied", num(*value))
             }
+            Error::OutOfLimits {
+                name,
+                value,
+                source,
+            } => {
+                write!(f, "{name} = {}: {source}; value not applied", num(*value))
+            }
+            Error::Budget(e) => write!(f, "invalid scene: {e}"),
+            Error::Build(e) => write!(f, "invalid scene: {e}"),
+            Error::Contact(e) => write!(f, "invalid scene: {e}"),
+            Error::Solver(e) => write!(f, "invalid scene: {e}"),
+            Error::ExplicitSetup(e) => write!(f, "invalid scene: {e}"),
             Error::Phase(m) => write!(f, "{m}"),
             Error::StepFailed { time, reason } => {
                 write!(
@@ -106,7 +135,19 @@ impl fmt::Display for Error {
     }
 }
 
-impl std::error::Error for Error {}
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::OutOfLimits { source, .. } => Some(source),
+            Error::Budget(e) => Some(e),
+            Error::Build(e) => Some(e),
+            Error::Contact(e) => Some(e),
+            Error::Solver(e) => Some(e),
+            Error::ExplicitSetup(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 
 /// Life-cycle phase of a [`Model`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -154,9 +195,11 @@ impl Model {
         let facets = scene.mesh.triangles().len();
         if facets > crate::scene::build::MAX_FACETS {
             // Refused before the large allocations of the assembly.
-            return Err(Error::Scene(
-                crate::scene::build::over_budget("mesh", facets, "the mesh has").to_string(),
-            ));
+            return Err(Error::Budget(crate::scene::build::over_budget(
+                "mesh",
+                facets,
+                "the mesh has",
+            )));
         }
         let (parameter_kinds, parameters) = parameters::parameter_table(&scene);
         let inputs = variables::input_table(&scene);

@@ -268,16 +268,16 @@ impl Model {
                 spec.name
             )));
         }
-        let bad = |reason: String| Error::BadValue {
+        let bad = |source| Error::OutOfLimits {
             name: spec.name.clone(),
             value,
-            reason,
+            source,
         };
         crate::scene::limits::check(kind.name(), value).map_err(bad)?;
         if kind == MaxStep {
             let mut so = self.scene.solver;
             so.max_step = value;
-            crate::scene::limits::check_solver_relations(&so).map_err(|(_, why)| bad(why))?;
+            crate::scene::limits::check_solver_relations(&so).map_err(bad)?;
         }
         if kind.is_damping() {
             self.state.damping_set = true;
@@ -336,7 +336,7 @@ impl Model {
             self.auto_actuator && !actuator_set,
         );
         apply(&self.parameter_kinds, auto, &mut scene, &mut values);
-        crate::scene::limits::check_scene(&scene)?;
+        crate::scene::limits::check_scene(&scene).map_err(|e| e.to_string())?;
         Ok((scene, values))
     }
 }

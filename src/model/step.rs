@@ -155,7 +155,10 @@ impl Model {
             None if sys.reactions.is_empty() => None,
             None => Some(
                 sys.evaluate(&state.dynamics, &d_end, &state.crease_theta)
-                    .map_err(|reason| Error::StepFailed { time: t0, reason })?,
+                    .map_err(|e| Error::StepFailed {
+                        time: t0,
+                        reason: e.to_string(),
+                    })?,
             ),
         };
         for (k, a) in state.actuators.iter_mut().enumerate() {

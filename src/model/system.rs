@@ -4,7 +4,7 @@
 use super::attach::{self, About, FrameInput, Reaction, Reactions};
 use super::drive::{DriveValues, InputMap};
 use super::{Error, Model, fold_edges, physics};
-use crate::assembly::{Assembler, Evaluation, State};
+use crate::assembly::{Assembler, EvalError, Evaluation, State};
 use crate::contact::ContactTerm;
 use crate::dofs::{DofLayout, SlotKind};
 use crate::element::ElementOptions;
@@ -89,7 +89,7 @@ impl System {
         d: &Dynamics,
         drive: &DriveValues,
         theta_prev: &[f64],
-    ) -> Result<Evaluation, String> {
+    ) -> Result<Evaluation, EvalError> {
         let mut ev = Evaluation::default();
         let st = State {
             q: &d.q,
@@ -98,9 +98,7 @@ impl System {
             moment: &drive.moment,
             theta_prev,
         };
-        self.asm
-            .evaluate(&st, &mut ev, None)
-            .map_err(|e| e.to_string())?;
+        self.asm.evaluate(&st, &mut ev, None)?;
         Ok(ev)
     }
 
@@ -174,8 +172,7 @@ impl System {
             rule: sc.solver.quadrature,
             ..ElementOptions::default()
         };
-        let mut asm = Assembler::new(mesh, physics, element, &fixed)
-            .map_err(|e| Error::Scene(e.to_string()))?;
+        let mut asm = Assembler::new(mesh, physics, element, &fixed).map_err(Error::Build)?;
         // Modified Newton's matrix takes the membrane geometric stiffness
         // from each step start (full Newton keeps the exact tangent).
         asm.lag_membrane_stiffness(
@@ -214,7 +211,7 @@ impl System {
             3,
             Some(&block_coords),
         )
-        .map_err(|e| Error::Scene(e.to_string()))?;
+        .map_err(Error::Solver)?;
         let (rest, torque) = crease_actuators(sc, &asm);
         let gravity = sc.gravity.map(|g| gravity_force(mesh, &asm, g));
         let angle_ends = angle_ends(sc, &asm);
@@ -267,7 +264,7 @@ fn add_contact(
         m.density * m.thickness,
         m.youngs_modulus * m.thickness,
     )
-    .map_err(|e| Error::Scene(e.to_string()))?;
+    .map_err(Error::Contact)?;
     asm.add_barrier(Box::new(term));
     Ok(())
 }
@@ -418,7 +415,7 @@ fn stepper(
     Ok(match s.integrator {
         SceneIntegrator::CentralDifference => Box::new(
             CentralDifference::new(asm, q_ref, &vec![std::f64::consts::PI; asm.creases.len()])
-                .map_err(Error::Scene)?,
+                .map_err(Error::ExplicitSetup)?,
         ),
         SceneIntegrator::GeneralizedAlpha => {
             let params = s.integration;

@@ -360,11 +360,11 @@ impl Model {
     pub fn set_input(&mut self, id: InputId, value: f64) -> Result<(), Error> {
         let i = id.0;
         let spec = self.input_spec(i)?;
-        if let Err(reason) = crate::scene::limits::check_number(value) {
-            return Err(Error::BadValue {
+        if let Err(source) = crate::scene::limits::check_number(value) {
+            return Err(Error::OutOfLimits {
                 name: spec.name.clone(),
                 value,
-                reason,
+                source,
             });
         }
         if self.is_ramped(i) {
@@ -427,8 +427,12 @@ impl Model {
                 "the scene ramps its inputs (solver input_timing \"ramp\"); derivatives need held inputs",
             ));
         }
-        if let Err(reason) = crate::scene::limits::check_number(value) {
-            return Err(bad(&reason));
+        if let Err(source) = crate::scene::limits::check_number(value) {
+            return Err(Error::OutOfLimits {
+                name: format!("derivative of order {order} of {}", spec.name),
+                value,
+                source,
+            });
         }
         if !self.is_ramped(i) {
             if order == 1 {
@@ -746,5 +750,36 @@ mod tests {
             );
         }
         assert!(energy_seen, "the fold has strain or crease energy");
+    }
+
+    /// A value refused by the limits is a typed error holding the limit's
+    /// reason as its source; the message names the input and the value.
+    #[test]
+    fn refused_inputs_keep_the_limit_error() {
+        use crate::scene::limits::LimitError;
+        let mut m = Model::new(crate::benchmarks::miura_scene(1)).unwrap();
+        let fold = m.input_id("fold").unwrap();
+        let e = m.set_input(fold, f64::NAN).unwrap_err();
+        assert!(
+            matches!(&e, Error::OutOfLimits { name, source: LimitError::NotFinite(_), .. } if name == "fold"),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            "fold = NaN: NaN is not a finite number; value not applied"
+        );
+        let source = std::error::Error::source(&e).expect("the limit's reason");
+        assert_eq!(source.to_string(), "NaN is not a finite number");
+        let e = m.set_input(fold, 1e31).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::OutOfLimits {
+                    source: LimitError::TooLarge(_),
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
     }
 }

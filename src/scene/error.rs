@@ -31,6 +31,13 @@ pub enum SceneError {
         /// The reason.
         message: String,
     },
+    /// A physical value is outside its limits ([`super::limits`]).
+    Limit {
+        /// The key with its index path, e.g. `ancf:material.thickness`.
+        key: String,
+        /// Why the value was refused.
+        source: super::limits::LimitError,
+    },
 }
 
 impl SceneError {
@@ -42,11 +49,11 @@ impl SceneError {
         }
     }
 
-    /// The key an [`SceneError::Invalid`] names (`None` for I/O and JSON
-    /// syntax errors).
+    /// The key an [`SceneError::Invalid`] or [`SceneError::Limit`] names
+    /// (`None` for I/O and JSON syntax errors).
     pub fn key(&self) -> Option<&str> {
         match self {
-            SceneError::Invalid { key, .. } => Some(key),
+            SceneError::Invalid { key, .. } | SceneError::Limit { key, .. } => Some(key),
             _ => None,
         }
     }
@@ -80,11 +87,19 @@ impl fmt::Display for SceneError {
                 "malformed JSON at line {line}, column {column}: {message}"
             ),
             SceneError::Invalid { key, message } => write!(f, "{key}: {message}"),
+            SceneError::Limit { key, source } => write!(f, "{key}: {source}"),
         }
     }
 }
 
-impl std::error::Error for SceneError {}
+impl std::error::Error for SceneError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            SceneError::Limit { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
 
 /// Levenshtein distance between two short strings (for "did you mean").
 pub(crate) fn edit_distance(a: &str, b: &str) -> usize {

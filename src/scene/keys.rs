@@ -225,7 +225,10 @@ impl<'a> Obj<'a> {
     fn num_limited(&self, f: &str, name: &str) -> Result<Option<f64>, SceneError> {
         let x = self.num(f)?;
         if let Some(x) = x {
-            super::limits::check(name, x).map_err(|e| SceneError::invalid(self.path(f), e))?;
+            super::limits::check(name, x).map_err(|source| SceneError::Limit {
+                key: self.path(f),
+                source,
+            })?;
         }
         Ok(x)
     }
@@ -992,8 +995,11 @@ fn key_solver(
     if let Some(x) = o.num_limited("min_step", "solver.min_step")? {
         s.min_step = x;
     }
-    if let Err((_, why)) = super::limits::check_solver_relations(s) {
-        return Err(SceneError::invalid(o.path("min_step"), why));
+    if let Err(source) = super::limits::check_solver_relations(s) {
+        return Err(SceneError::Limit {
+            key: o.path("min_step"),
+            source,
+        });
     }
     if let Some(x) = o.num_limited("tolerance", "solver.tolerance")? {
         s.tolerance = x;

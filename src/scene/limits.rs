@@ -160,62 +160,135 @@ pub fn limit(name: &str) -> Option<&'static Limit> {
     LIMITS.iter().find(|l| l.name == name)
 }
 
+/// Why a value was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LimitError {
+    /// NaN or infinite.
+    NotFinite(f64),
+    /// Larger than [`MAX_MAGNITUDE`] in magnitude.
+    TooLarge(f64),
+    /// Outside the range of its [`Limit`].
+    OutOfRange {
+        /// The value.
+        value: f64,
+        /// What the value must be.
+        range: Range,
+        /// Its unit ("" when dimensionless).
+        unit: &'static str,
+    },
+    /// `solver.min_step` above `solver.max_step`.
+    MinStepAboveMaxStep {
+        /// `solver.min_step`.
+        min_step: f64,
+        /// `solver.max_step`.
+        max_step: f64,
+    },
+    /// A value of a scene, by its parameter name.
+    Named {
+        /// The parameter name (`material.thickness`, ...).
+        name: &'static str,
+        /// Why it was refused.
+        error: Box<LimitError>,
+    },
+}
+
+impl LimitError {
+    /// The parameter name of a [`LimitError::Named`] or of a relation
+    /// between values, if the error carries one.
+    pub fn name(&self) -> Option<&'static str> {
+        match self {
+            LimitError::Named { name, .. } => Some(name),
+            LimitError::MinStepAboveMaxStep { .. } => Some("solver.min_step"),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for LimitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LimitError::NotFinite(x) => write!(f, "{} is not a finite number", num(*x)),
+            LimitError::TooLarge(x) => write!(
+                f,
+                "{} is too large (at most {MAX_MAGNITUDE:e} in magnitude)",
+                num(*x)
+            ),
+            LimitError::OutOfRange { value, range, unit } => {
+                write!(
+                    f,
+                    "{} is out of range; it must be {}",
+                    num(*value),
+                    range.describe()
+                )?;
+                if !unit.is_empty() {
+                    write!(f, " ({unit})")?;
+                }
+                Ok(())
+            }
+            LimitError::MinStepAboveMaxStep { min_step, max_step } => write!(
+                f,
+                "min_step {} is larger than max_step {}; an internal step must fit between them",
+                num(*min_step),
+                num(*max_step)
+            ),
+            LimitError::Named { name, error } => write!(f, "{name}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for LimitError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            LimitError::Named { error, .. } => Some(error.as_ref()),
+            _ => None,
+        }
+    }
+}
+
 /// Check one value: finite, of sensible magnitude, and in the range of
 /// `name` (names without a limit only need to be finite). The error says
 /// what the value must be, e.g. "0 is out of range; it must be positive (at
 /// least 1e-30) (m)".
-pub fn check(name: &str, x: f64) -> Result<(), String> {
+pub fn check(name: &str, x: f64) -> Result<(), LimitError> {
     if !x.is_finite() {
-        return Err(format!("{} is not a finite number", num(x)));
+        return Err(LimitError::NotFinite(x));
     }
     if x.abs() > MAX_MAGNITUDE {
-        return Err(format!(
-            "{} is too large (at most {MAX_MAGNITUDE:e} in magnitude)",
-            num(x)
-        ));
+        return Err(LimitError::TooLarge(x));
     }
     if let Some(l) = limit(name)
         && !l.range.contains(x)
     {
-        let unit = if l.unit.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", l.unit)
-        };
-        return Err(format!(
-            "{} is out of range; it must be {}{unit}",
-            num(x),
-            l.range.describe()
-        ));
+        return Err(LimitError::OutOfRange {
+            value: x,
+            range: l.range,
+            unit: l.unit,
+        });
     }
     Ok(())
 }
 
 /// Check a number without a limit of its own (an input, a stored value):
 /// finite and at most [`MAX_MAGNITUDE`] in magnitude.
-pub fn check_number(x: f64) -> Result<(), String> {
+pub fn check_number(x: f64) -> Result<(), LimitError> {
     check("", x)
 }
 
-/// Rules between solver settings: `min_step <= max_step`. Returns the name
-/// of the offending value and the reason.
-pub fn check_solver_relations(s: &SolverSettings) -> Result<(), (&'static str, String)> {
+/// Rules between solver settings: `min_step <= max_step`. The error's
+/// [`LimitError::name`] is the offending value.
+pub fn check_solver_relations(s: &SolverSettings) -> Result<(), LimitError> {
     if s.min_step > s.max_step {
-        return Err((
-            "solver.min_step",
-            format!(
-                "min_step {} is larger than max_step {}; an internal step must fit between them",
-                num(s.min_step),
-                num(s.max_step)
-            ),
-        ));
+        return Err(LimitError::MinStepAboveMaxStep {
+            min_step: s.min_step,
+            max_step: s.max_step,
+        });
     }
     Ok(())
 }
 
 /// Every value of a scene that has a limit, by name (what the FMU's scene
 /// check and a parameter rebuild run).
-pub fn check_scene(s: &Scene) -> Result<(), String> {
+pub fn check_scene(s: &Scene) -> Result<(), LimitError> {
     let m = &s.material;
     let d = &s.damping;
     let so = &s.solver;
@@ -264,9 +337,15 @@ pub fn check_scene(s: &Scene) -> Result<(), String> {
         }
     }
     for (name, x) in values {
-        check(name, x).map_err(|e| format!("{name}: {e}"))?;
+        check(name, x).map_err(|e| LimitError::Named {
+            name,
+            error: Box::new(e),
+        })?;
     }
-    check_solver_relations(so).map_err(|(name, e)| format!("{name}: {e}"))
+    check_solver_relations(so).map_err(|e| LimitError::Named {
+        name: "solver.min_step",
+        error: Box::new(e),
+    })
 }
 
 #[cfg(test)]
@@ -278,7 +357,7 @@ mod tests {
         assert!(check("material.thickness", 1e-4).is_ok());
         let e = check("material.thickness", 0.0).unwrap_err();
         assert_eq!(
-            e,
+            e.to_string(),
             "0 is out of range; it must be positive (at least 1e-30) (m)"
         );
         assert!(check("material.density", 1e-300).is_err());
@@ -289,11 +368,22 @@ mod tests {
         assert!(check("solver.max_newton", 2.5).is_err());
         assert!(check("solver.max_internal_steps", 0.0).is_err());
         assert!(check("gravity.z", -9.81).is_ok());
-        assert!(check("gravity.z", f64::NAN).unwrap_err().contains("finite"));
-        assert!(check("anything", 1e31).unwrap_err().contains("too large"));
+        assert!(
+            check("gravity.z", f64::NAN)
+                .unwrap_err()
+                .to_string()
+                .contains("finite")
+        );
+        assert!(
+            check("anything", 1e31)
+                .unwrap_err()
+                .to_string()
+                .contains("too large")
+        );
         assert!(
             check("damping.alpha", -1.0)
                 .unwrap_err()
+                .to_string()
                 .contains("zero or positive")
         );
     }
@@ -304,8 +394,9 @@ mod tests {
             max_step: 1e-10,
             ..SolverSettings::default()
         };
-        let (name, why) = check_solver_relations(&s).unwrap_err();
-        assert_eq!(name, "solver.min_step");
+        let e = check_solver_relations(&s).unwrap_err();
+        assert_eq!(e.name(), Some("solver.min_step"));
+        let why = e.to_string();
         assert!(why.contains("larger than max_step"), "{why}");
     }
 }

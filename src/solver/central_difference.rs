@@ -15,12 +15,12 @@
 //! (membrane waves across the smallest element), which is the point of the
 //! comparison.
 
-use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
-use crate::solver::SparseSolver;
+use crate::assembly::{Assembler, EvalError, Evaluation, FIXED, MatrixCoeffs, State};
 use crate::solver::stepper::{
     Attempt, Drive, Dynamics, Failure, Mechanics, Outcome, StepError, StepPolicy, Stepper,
     StepperMemory,
 };
+use crate::solver::{LinearError, SparseSolver};
 // Phase times are CPU time: the calling thread's clock, not the wall.
 use crate::cpu_time::CpuInstant as Instant;
 use std::time::Duration;
@@ -39,14 +39,44 @@ pub struct CentralDifference {
     m_accel_p: Vec<f64>,
 }
 
+/// Why the explicit stepper could not be set up.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SetupError {
+    /// The mass matrix could not be factored.
+    MassMatrix(LinearError),
+    /// The stiffness could not be evaluated.
+    Assembly(EvalError),
+    /// A solve of the power iteration failed.
+    PowerIteration(LinearError),
+}
+
+impl std::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SetupError::MassMatrix(e) => write!(f, "mass matrix: {e}"),
+            SetupError::Assembly(m) => write!(f, "{m}"),
+            SetupError::PowerIteration(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for SetupError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            SetupError::MassMatrix(e) | SetupError::PowerIteration(e) => Some(e),
+            SetupError::Assembly(e) => Some(e),
+        }
+    }
+}
+
 impl CentralDifference {
     /// Factor the mass matrix and estimate `omega_max` at the state `q`
     /// (crease rest angles `theta0`) by power iteration on `M^-1 K`.
-    pub fn new(asm: &Assembler, q: &[f64], theta0: &[f64]) -> Result<Self, String> {
+    pub fn new(asm: &Assembler, q: &[f64], theta0: &[f64]) -> Result<Self, SetupError> {
         let mut mass = SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
-            .map_err(|e| format!("mass matrix: {e}"))?;
+            .map_err(SetupError::MassMatrix)?;
         mass.factor(asm.mass_values())
-            .map_err(|e| format!("mass matrix: {e}"))?;
+            .map_err(SetupError::MassMatrix)?;
         let n = asm.n_dofs();
         let mut eval = Evaluation::default();
         let mut k = vec![0.0; asm.nnz()];
@@ -71,7 +101,7 @@ impl CentralDifference {
                 },
             )),
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(SetupError::Assembly)?;
         let lambda = power_iteration(asm, &k, &mut mass)?;
         let omega = lambda.max(0.0).sqrt();
         // Rayleigh damping alpha M + beta K shrinks the limit to
@@ -223,7 +253,7 @@ impl Stepper for CentralDifference {
 /// Largest eigenvalue of `M^-1 K` on the free DOFs (`k`: matrix values in
 /// the assembler's pattern, `mass`: factored), by power iteration: the norm
 /// ratio `|M^-1 K x| / |x|` tends to it from below, so it is raised by 5 %.
-fn power_iteration(asm: &Assembler, k: &[f64], mass: &mut SparseSolver) -> Result<f64, String> {
+fn power_iteration(asm: &Assembler, k: &[f64], mass: &mut SparseSolver) -> Result<f64, SetupError> {
     let nf = asm.n_free;
     if nf == 0 {
         return Ok(0.0);
@@ -241,7 +271,8 @@ fn power_iteration(asm: &Assembler, k: &[f64], mass: &mut SparseSolver) -> Resul
                 y[asm.row_idx[p]] += k[p] * xj;
             }
         }
-        mass.solve_in_place(&mut y).map_err(|e| e.to_string())?;
+        mass.solve_in_place(&mut y)
+            .map_err(SetupError::PowerIteration)?;
         let ny = y.iter().map(|a| a * a).sum::<f64>().sqrt();
         let nx = x.iter().map(|a| a * a).sum::<f64>().sqrt();
         let new = ny / nx;

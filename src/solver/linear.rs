@@ -26,7 +26,7 @@ use crate::cpu_time::CpuInstant as Instant;
 #[derive(Clone, Debug, PartialEq)]
 pub enum LinearError {
     /// The fill-reducing ordering failed.
-    Ordering(String),
+    Ordering(super::ordering::OrderingError),
     /// faer's symbolic analysis failed (`what`: Cholesky or LU).
     Symbolic {
         /// Which factorization.
@@ -79,7 +79,14 @@ impl std::fmt::Display for LinearError {
     }
 }
 
-impl std::error::Error for LinearError {}
+impl std::error::Error for LinearError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            LinearError::Ordering(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 use std::time::Duration;
 
 /// A dense low-rank part of a matrix that its sparse pattern cannot hold:

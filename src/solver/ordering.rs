@@ -34,15 +34,56 @@ impl Graph<'_> {
 /// (16 to 128 give the same flops within 1 % on the pyramid).
 pub const ND_LEAF: usize = 48;
 
+/// Why no fill-reducing order was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OrderingError {
+    /// Nested dissection got a number of positions unlike the vertices'.
+    PositionCount {
+        /// Positions given.
+        positions: usize,
+        /// Vertices of the graph.
+        vertices: usize,
+    },
+    /// No memory for faer's AMD workspace.
+    OutOfMemory,
+    /// faer's AMD failed.
+    Amd(faer::sparse::FaerError),
+}
+
+impl std::fmt::Display for OrderingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OrderingError::PositionCount {
+                positions,
+                vertices,
+            } => write!(
+                f,
+                "nested dissection: {positions} positions for {vertices} vertices"
+            ),
+            OrderingError::OutOfMemory => write!(f, "out of memory for the ordering"),
+            OrderingError::Amd(e) => write!(f, "ordering failed: {e:?}"),
+        }
+    }
+}
+
+impl std::error::Error for OrderingError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            OrderingError::Amd(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 /// The nested-dissection order of the graph's vertices at positions
 /// `coords` (`order[k]` is the vertex eliminated `k`-th).
-pub fn nested_dissection(g: &Graph, coords: &[[f64; 3]]) -> Result<Vec<usize>, String> {
+pub fn nested_dissection(g: &Graph, coords: &[[f64; 3]]) -> Result<Vec<usize>, OrderingError> {
     let n = g.n();
     if coords.len() != n {
-        return Err(format!(
-            "nested dissection: {} positions for {n} vertices",
-            coords.len()
-        ));
+        return Err(OrderingError::PositionCount {
+            positions: coords.len(),
+            vertices: n,
+        });
     }
     let mut nd = Dissection {
         g,
@@ -117,7 +158,7 @@ impl Dissection<'_, '_> {
 
     /// Order `set`: push (in reverse) the tasks that order its parts and
     /// then its separator.
-    fn order_set(&mut self, set: Vec<usize>, stack: &mut Vec<Task>) -> Result<(), String> {
+    fn order_set(&mut self, set: Vec<usize>, stack: &mut Vec<Task>) -> Result<(), OrderingError> {
         if set.len() <= ND_LEAF {
             return self.minimum_degree(&set);
         }
@@ -203,7 +244,7 @@ impl Dissection<'_, '_> {
     }
 
     /// Append `set` in minimum-degree order of its induced subgraph.
-    fn minimum_degree(&mut self, set: &[usize]) -> Result<(), String> {
+    fn minimum_degree(&mut self, set: &[usize]) -> Result<(), OrderingError> {
         let m = set.len();
         if m <= 2 {
             self.order.extend_from_slice(set);
@@ -233,7 +274,7 @@ impl Dissection<'_, '_> {
 
 /// faer's AMD order of an `m x m` symmetric pattern (CSC, both triangles,
 /// rows unsorted): `order[k]` is the index eliminated `k`-th.
-pub(super) fn amd(m: usize, col: Vec<usize>, row: Vec<usize>) -> Result<Vec<usize>, String> {
+pub(super) fn amd(m: usize, col: Vec<usize>, row: Vec<usize>) -> Result<Vec<usize>, OrderingError> {
     let nnz = row.len();
     let pat = SymbolicSparseColMat::new_unsorted_checked(m, m, col, None, row);
     let mut fwd = vec![0usize; m];
@@ -241,7 +282,7 @@ pub(super) fn amd(m: usize, col: Vec<usize>, row: Vec<usize>) -> Result<Vec<usiz
     let mut mem = MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<
         usize,
     >(m, nnz))
-    .map_err(|_| "out of memory for the ordering".to_string())?;
+    .map_err(|_| OrderingError::OutOfMemory)?;
     faer::sparse::linalg::amd::order_maybe_unsorted(
         &mut fwd,
         &mut inv,
@@ -249,7 +290,7 @@ pub(super) fn amd(m: usize, col: Vec<usize>, row: Vec<usize>) -> Result<Vec<usiz
         Default::default(),
         MemStack::new(&mut mem),
     )
-    .map_err(|e| format!("ordering failed: {e:?}"))?;
+    .map_err(OrderingError::Amd)?;
     Ok(fwd)
 }
 

@@ -8,8 +8,8 @@
 //! (Crisfield). An increment that does not converge is retried with half the
 //! size; easy increments let the size grow back to `1 / load_steps`.
 
-use crate::assembly::{Assembler, Evaluation, FIXED, MatrixCoeffs, State};
-use crate::solver::SparseSolver;
+use crate::assembly::{Assembler, EvalError, Evaluation, FIXED, MatrixCoeffs, State};
+use crate::solver::{LinearError, SparseSolver};
 
 /// A load that depends on the configuration (e.g. an end moment acting on
 /// a rotation angle): adds `-dV/dq` scaled by `lambda` to `force` and, if
@@ -81,6 +81,107 @@ impl StaticReport {
     }
 }
 
+/// Why a static solve failed or was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StaticsError {
+    /// `q` does not have one value per DOF.
+    StateSize {
+        /// Values given.
+        values: usize,
+        /// DOFs of the model.
+        dofs: usize,
+    },
+    /// `theta0` does not have one rest angle per crease end.
+    RestAngleCount {
+        /// Angles given.
+        angles: usize,
+        /// Crease ends of the model.
+        crease_ends: usize,
+    },
+    /// `load_steps` or `max_iterations` is zero.
+    ZeroBudget,
+    /// `tolerance` or `min_increment` is not positive and finite (or
+    /// `min_increment` above 1).
+    BadTolerance,
+    /// The stops do not increase within (0, 1].
+    BadStops,
+    /// `q` has non-finite values.
+    NonFiniteState,
+    /// The sparse solver could not be set up.
+    Linear(LinearError),
+    /// Forces could not be evaluated.
+    Assembly(EvalError),
+    /// The load (or the residual) is not finite.
+    NonFiniteLoad,
+    /// An increment failed and a smaller one would be below `min_increment`.
+    IncrementFailed {
+        /// The last converged load factor.
+        lambda: f64,
+        /// The increment that failed.
+        increment: f64,
+        /// What Newton did ("did not converge", ...).
+        reason: &'static str,
+        /// Relative residual at the end.
+        residual: f64,
+        /// Iterations spent.
+        iterations: usize,
+        /// The smallest increment tried.
+        min_increment: f64,
+    },
+}
+
+impl std::fmt::Display for StaticsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StaticsError::StateSize { values, dofs } => {
+                write!(f, "static solve: q has {values} values, the model {dofs}")
+            }
+            StaticsError::RestAngleCount {
+                angles,
+                crease_ends,
+            } => write!(
+                f,
+                "static solve: {angles} rest angles for {crease_ends} crease ends"
+            ),
+            StaticsError::ZeroBudget => write!(
+                f,
+                "static solve: load_steps and max_iterations must be positive"
+            ),
+            StaticsError::BadTolerance => write!(
+                f,
+                "static solve: tolerance and min_increment must be positive and finite"
+            ),
+            StaticsError::BadStops => write!(f, "static solve: stops must increase within (0, 1]"),
+            StaticsError::NonFiniteState => write!(f, "static solve: q has non-finite values"),
+            StaticsError::Linear(e) => write!(f, "{e}"),
+            StaticsError::Assembly(m) => write!(f, "{m}"),
+            StaticsError::NonFiniteLoad => write!(f, "the load is not finite"),
+            StaticsError::IncrementFailed {
+                lambda,
+                increment,
+                reason,
+                residual,
+                iterations,
+                min_increment,
+            } => write!(
+                f,
+                "static solve failed at load factor {lambda:.6}: an increment of {increment:.3e} {reason} \
+                 (relative residual {residual:.3e} after {iterations} iterations) and increments below {min_increment:.1e} are not tried"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for StaticsError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            StaticsError::Linear(e) => Some(e),
+            StaticsError::Assembly(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 /// Solve for equilibrium starting from `q` (updated in place). Fixed DOFs
 /// keep their values in `q`. `theta0` are the crease rest angles; crease
 /// angles are unwrapped from the flat state (pi) at the start.
@@ -90,7 +191,7 @@ pub fn solve(
     theta0: &[f64],
     load: &dyn Load,
     settings: StaticSettings,
-) -> Result<StaticReport, String> {
+) -> Result<StaticReport, StaticsError> {
     solve_path(asm, q, theta0, load, settings, &[], |_, _, _| {})
 }
 
@@ -105,7 +206,7 @@ pub fn solve_path(
     settings: StaticSettings,
     stops: &[f64],
     mut at_stop: impl FnMut(f64, &[f64], &StaticReport),
-) -> Result<StaticReport, String> {
+) -> Result<StaticReport, StaticsError> {
     check_inputs(asm, q, theta0, &settings, stops)?;
     let mut newton = Newton::new(asm, theta0, load)?;
     let mut report = StaticReport::default();
@@ -160,11 +261,14 @@ pub fn solve_path(
                 report.wasted_iterations += fail.iterations;
                 step = 0.5 * dl;
                 if step < settings.min_increment {
-                    return Err(format!(
-                        "static solve failed at load factor {lambda:.6}: an increment of {dl:.3e} {} \
-                         (relative residual {:.3e} after {} iterations) and increments below {:.1e} are not tried",
-                        fail.reason, fail.residual, fail.iterations, settings.min_increment
-                    ));
+                    return Err(StaticsError::IncrementFailed {
+                        lambda,
+                        increment: dl,
+                        reason: fail.reason,
+                        residual: fail.residual,
+                        iterations: fail.iterations,
+                        min_increment: settings.min_increment,
+                    });
                 }
             }
         }
@@ -179,34 +283,32 @@ fn check_inputs(
     theta0: &[f64],
     settings: &StaticSettings,
     stops: &[f64],
-) -> Result<(), String> {
+) -> Result<(), StaticsError> {
     if q.len() != asm.n_dofs() {
-        return Err(format!(
-            "static solve: q has {} values, the model {}",
-            q.len(),
-            asm.n_dofs()
-        ));
+        return Err(StaticsError::StateSize {
+            values: q.len(),
+            dofs: asm.n_dofs(),
+        });
     }
     if theta0.len() != asm.creases.len() {
-        return Err(format!(
-            "static solve: {} rest angles for {} crease ends",
-            theta0.len(),
-            asm.creases.len()
-        ));
+        return Err(StaticsError::RestAngleCount {
+            angles: theta0.len(),
+            crease_ends: asm.creases.len(),
+        });
     }
     if settings.load_steps == 0 || settings.max_iterations == 0 {
-        return Err("static solve: load_steps and max_iterations must be positive".into());
+        return Err(StaticsError::ZeroBudget);
     }
     let tolerance_ok = settings.tolerance > 0.0 && settings.tolerance.is_finite();
     let increment_ok = settings.min_increment > 0.0 && settings.min_increment <= 1.0;
     if !(tolerance_ok && increment_ok) {
-        return Err("static solve: tolerance and min_increment must be positive and finite".into());
+        return Err(StaticsError::BadTolerance);
     }
     if stops.iter().any(|s| !(*s > 0.0 && *s <= 1.0)) || stops.windows(2).any(|w| w[1] <= w[0]) {
-        return Err("static solve: stops must increase within (0, 1]".into());
+        return Err(StaticsError::BadStops);
     }
     if q.iter().any(|x| !x.is_finite()) {
-        return Err("static solve: q has non-finite values".into());
+        return Err(StaticsError::NonFiniteState);
     }
     Ok(())
 }
@@ -236,14 +338,18 @@ struct Newton<'a> {
 }
 
 impl<'a> Newton<'a> {
-    fn new(asm: &'a Assembler, theta0: &'a [f64], load: &'a dyn Load) -> Result<Self, String> {
+    fn new(
+        asm: &'a Assembler,
+        theta0: &'a [f64],
+        load: &'a dyn Load,
+    ) -> Result<Self, StaticsError> {
         let n = asm.n_dofs();
         Ok(Newton {
             asm,
             theta0,
             load,
             solver: SparseSolver::new(asm.n_free, asm.col_ptr.clone(), asm.row_idx.clone())
-                .map_err(|e| e.to_string())?,
+                .map_err(StaticsError::Linear)?,
             zeros: vec![0.0; n],
             moment: vec![0.0; asm.creases.len()],
             ev: Evaluation::default(),
@@ -263,7 +369,7 @@ impl<'a> Newton<'a> {
         lambda: f64,
         theta_prev: &[f64],
         tangent: bool,
-    ) -> Result<f64, String> {
+    ) -> Result<f64, StaticsError> {
         let st = State {
             q,
             v: &self.zeros,
@@ -280,13 +386,13 @@ impl<'a> Newton<'a> {
             };
             self.asm
                 .evaluate(&st, &mut self.ev, Some((&mut self.mat, co)))
-                .map_err(|e| e.to_string())?;
+                .map_err(StaticsError::Assembly)?;
             self.load
                 .apply(self.asm, q, lambda, &mut self.fext, Some(&mut self.mat));
         } else {
             self.asm
                 .evaluate(&st, &mut self.ev, None)
-                .map_err(|e| e.to_string())?;
+                .map_err(StaticsError::Assembly)?;
             self.load.apply(self.asm, q, lambda, &mut self.fext, None);
         }
         let r2: f64 = (0..q.len())
@@ -294,7 +400,7 @@ impl<'a> Newton<'a> {
             .map(|i| (self.ev.force[i] - self.fext[i]).powi(2))
             .sum();
         if !r2.is_finite() || self.fext.iter().any(|x| !x.is_finite()) {
-            return Err("the load is not finite".into());
+            return Err(StaticsError::NonFiniteLoad);
         }
         Ok(r2.sqrt())
     }
