@@ -304,11 +304,16 @@ fn validate_scene(s: &Scene) -> Result<(), ResourceError> {
         }
     }
     for (i, o) in s.obstacles.iter().enumerate() {
+        let key = format!("obstacles[{i}] ({})", o.name);
         o.shape
             .check()
-            .map_err(|e| format!("obstacles[{i}] ({}): {e}", o.name))?;
-        crate::scene::limits::check("contact.friction", o.friction)
-            .map_err(|e| format!("obstacles[{i}] ({}).friction: {e}", o.name))?;
+            .map_err(|e| ResourceError::Scene(SceneError::invalid(key.clone(), e)))?;
+        crate::scene::limits::check("contact.friction", o.friction).map_err(|e| {
+            ResourceError::Scene(SceneError::invalid(
+                format!("{key}.friction"),
+                e.to_string(),
+            ))
+        })?;
     }
     for (what, list) in [
         ("vertex_forces", &s.vertex_forces),
