@@ -264,10 +264,7 @@ impl Assembler {
                     element.rule,
                     element.interpolation,
                 )
-                .map_err(|e| BuildError::Element {
-                    face: f,
-                    reason: e.to_string(),
-                })
+                .map_err(|source| BuildError::Element { face: f, source })
             })
             .collect::<Result<Vec<_>, _>>()?;
         let creases = crease_ends(mesh, &layout);

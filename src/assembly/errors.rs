@@ -1,6 +1,7 @@
 //! Why an assembler could not be built, a configuration not evaluated, or
 //! a force term's saved memory not taken back.
 
+use crate::element::ElementError;
 use crate::ids::{EdgeId, FacetId};
 use std::fmt;
 
@@ -11,8 +12,8 @@ pub enum BuildError {
     Element {
         /// The facet.
         face: FacetId,
-        /// The element's reason.
-        reason: String,
+        /// Why.
+        source: ElementError,
     },
     /// A force term declared a slot pair outside the layout.
     Pattern {
@@ -28,7 +29,7 @@ pub enum BuildError {
 impl fmt::Display for BuildError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            BuildError::Element { face, reason } => write!(f, "face {face}: {reason}"),
+            BuildError::Element { face, source } => write!(f, "face {face}: {source}"),
             BuildError::Pattern {
                 term,
                 pair: (a, b),
@@ -41,7 +42,14 @@ impl fmt::Display for BuildError {
     }
 }
 
-impl std::error::Error for BuildError {}
+impl std::error::Error for BuildError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            BuildError::Element { source, .. } => Some(source),
+            BuildError::Pattern { .. } => None,
+        }
+    }
+}
 
 /// Why forces could not be evaluated at a configuration.
 #[derive(Clone, Debug, PartialEq)]
@@ -240,4 +248,11 @@ impl fmt::Display for MemoryError {
     }
 }
 
-impl std::error::Error for MemoryError {}
+impl std::error::Error for MemoryError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            MemoryError::Term { reason, .. } => Some(reason.as_ref()),
+            _ => None,
+        }
+    }
+}

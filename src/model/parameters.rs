@@ -7,6 +7,7 @@
 
 use super::{Error, Model, Phase, VariableSpec, physics};
 use crate::assembly::Physics;
+use crate::scene::limits::LimitError;
 use crate::scene::{ActuatorMode, CreaseStiffness, RampShape as RampShapeKind, Scene};
 
 /// Whether `sc` has an actuator that the built-in ramp drives.
@@ -317,17 +318,18 @@ impl Model {
         values: &[f64],
         damping_set: bool,
         actuator_set: bool,
-    ) -> Result<(Scene, Vec<f64>), String> {
+    ) -> Result<(Scene, Vec<f64>), ParametersError> {
         if values.len() != self.parameters.len() {
-            return Err(format!(
-                "parameters: {} values; this model has {}",
-                values.len(),
-                self.parameters.len()
-            ));
+            return Err(ParametersError::Count {
+                given: values.len(),
+                parameters: self.parameters.len(),
+            });
         }
         for (p, &x) in self.parameter_kinds.iter().zip(values) {
-            crate::scene::limits::check(p.name(), x)
-                .map_err(|e| format!("{} = {}", p.name(), e))?;
+            crate::scene::limits::check(p.name(), x).map_err(|source| ParametersError::Value {
+                name: p.name(),
+                source,
+            })?;
         }
         let mut scene = self.scene.clone();
         let mut values = values.to_vec();
@@ -336,8 +338,50 @@ impl Model {
             self.auto_actuator && !actuator_set,
         );
         apply(&self.parameter_kinds, auto, &mut scene, &mut values);
-        crate::scene::limits::check_scene(&scene).map_err(|e| e.to_string())?;
+        crate::scene::limits::check_scene(&scene).map_err(ParametersError::Scene)?;
         Ok((scene, values))
+    }
+}
+
+/// Why a saved state's parameter values were refused.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParametersError {
+    /// Not one value per parameter.
+    Count {
+        /// Values given.
+        given: usize,
+        /// The model's parameters.
+        parameters: usize,
+    },
+    /// A value out of its limits.
+    Value {
+        /// The parameter.
+        name: &'static str,
+        /// Why.
+        source: LimitError,
+    },
+    /// The values together make a scene out of limits.
+    Scene(LimitError),
+}
+
+impl std::fmt::Display for ParametersError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParametersError::Count { given, parameters } => {
+                write!(f, "parameters: {given} values; this model has {parameters}")
+            }
+            ParametersError::Value { name, source } => write!(f, "{name} = {source}"),
+            ParametersError::Scene(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for ParametersError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ParametersError::Count { .. } => None,
+            ParametersError::Value { source, .. } | ParametersError::Scene(source) => Some(source),
+        }
     }
 }
 

@@ -226,7 +226,9 @@ impl Model {
         let flat: Vec<f64> = s.actuators.iter().flatten().copied().collect();
         values("actuators", &flat, &[0, 2 * self.scene.actuators.len()])?;
         check_memory(&s.memory, running, n, nc)?;
-        let checked = self.check_parameters(&s.parameters, s.damping_set, s.actuator_set)?;
+        let checked = self
+            .check_parameters(&s.parameters, s.damping_set, s.actuator_set)
+            .map_err(|e| e.to_string())?;
         if let Some(o) = &s.outputs {
             if o.len() != self.outputs.len() {
                 return Err(format!(
