@@ -15,6 +15,6 @@ pub mod shapes;
 pub mod surface;
 pub mod term;
 
-pub use obstacles::ObstacleTerm;
-pub use shapes::{Obstacle, Shape};
+pub use obstacles::{ObstacleError, ObstacleTerm};
+pub use shapes::{Obstacle, Shape, ShapeError};
 pub use term::{ContactReport, ContactSettings, ContactTerm, SettingsError};

@@ -23,11 +23,11 @@
 //! taken at the closest points of its surface.
 
 use super::ccd;
-use super::shapes::{Closest, Obstacle, Shape};
+use super::shapes::{Closest, Obstacle, Shape, ShapeError};
 use super::surface::{ContactSurface, VertexMap, eval_map};
 use super::term::{
-    ContactSettings, barrier, db, ddb, friction_matrix, reversal_fraction, slip_factor,
-    speed_stiffness, tangent_basis,
+    ContactSettings, SettingsError, barrier, db, ddb, friction_matrix, reversal_fraction,
+    slip_factor, speed_stiffness, tangent_basis,
 };
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
@@ -35,6 +35,38 @@ use crate::assembly::{
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use std::collections::HashMap;
+
+/// Why [`ObstacleTerm::new`] refused its obstacles or settings.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ObstacleError {
+    /// The contact settings (a thickness that is not positive).
+    Settings(SettingsError),
+    /// An obstacle's shape.
+    Shape {
+        /// The obstacle's name.
+        obstacle: String,
+        /// What is wrong with its shape.
+        error: ShapeError,
+    },
+}
+
+impl std::fmt::Display for ObstacleError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ObstacleError::Settings(e) => write!(f, "obstacles: {e}"),
+            ObstacleError::Shape { obstacle, error } => write!(f, "obstacle {obstacle}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for ObstacleError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ObstacleError::Settings(e) => Some(e),
+            ObstacleError::Shape { error, .. } => Some(error),
+        }
+    }
+}
 
 /// Dashpot and friction data of one pair, from the step start.
 #[derive(Clone, Debug)]
@@ -105,14 +137,17 @@ impl ObstacleTerm {
         settings: &ContactSettings,
         areal_mass: f64,
         membrane: f64,
-    ) -> Result<ObstacleTerm, String> {
+    ) -> Result<ObstacleTerm, ObstacleError> {
         if settings.thickness.is_nan() || settings.thickness <= 0.0 {
-            return Err("obstacles need a positive contact thickness".into());
+            return Err(ObstacleError::Settings(SettingsError::Thickness(
+                settings.thickness,
+            )));
         }
         for o in obstacles {
-            o.shape
-                .check()
-                .map_err(|e| format!("obstacle {}: {e}", o.name))?;
+            o.shape.check().map_err(|error| ObstacleError::Shape {
+                obstacle: o.name.clone(),
+                error,
+            })?;
         }
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
         let nf = mesh.triangles().len().max(1);

@@ -49,6 +49,24 @@ pub enum Shape {
     },
 }
 
+/// Why a shape's numbers make no shape: the field at fault and what is
+/// wrong with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeError {
+    /// The field (`radius`, `normal`, `half_extents[1]`, ...).
+    pub field: String,
+    /// What is wrong.
+    pub reason: String,
+}
+
+impl std::fmt::Display for ShapeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.field, self.reason)
+    }
+}
+
+impl std::error::Error for ShapeError {}
+
 /// A point's signed distance to a shape (negative inside), its gradient
 /// (unit) and its Hessian.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -89,19 +107,23 @@ impl Shape {
     /// Whether the shape's numbers make a shape: finite, radii and half
     /// extents positive, a normal that is not zero (the message names the
     /// field at fault).
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), ShapeError> {
+        let fault = |field: &str, reason: String| ShapeError {
+            field: field.into(),
+            reason,
+        };
         let finite = |name: &str, a: &[f64]| {
             if a.iter().all(|x| x.is_finite()) {
                 Ok(())
             } else {
-                Err(format!("{name}: not finite numbers"))
+                Err(fault(name, "not finite numbers".into()))
             }
         };
         let positive = |name: &str, x: f64| {
             if x.is_finite() && x > 0.0 {
                 Ok(())
             } else {
-                Err(format!("{name}: {x} is not a positive length"))
+                Err(fault(name, format!("{x} is not a positive length")))
             }
         };
         match self {
@@ -109,7 +131,7 @@ impl Shape {
                 finite("point", point)?;
                 finite("normal", normal)?;
                 if v3(normal).norm() == 0.0 {
-                    return Err("normal: the zero vector has no direction".into());
+                    return Err(fault("normal", "the zero vector has no direction".into()));
                 }
             }
             Shape::Sphere { center, radius } => {

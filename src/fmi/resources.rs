@@ -307,7 +307,7 @@ fn validate_scene(s: &Scene) -> Result<(), ResourceError> {
         let key = format!("obstacles[{i}] ({})", o.name);
         o.shape
             .check()
-            .map_err(|e| ResourceError::Scene(SceneError::invalid(key.clone(), e)))?;
+            .map_err(|e| ResourceError::Scene(SceneError::invalid(key.clone(), e.to_string())))?;
         crate::scene::limits::check("contact.friction", o.friction).map_err(|e| {
             ResourceError::Scene(SceneError::invalid(
                 format!("{key}.friction"),

@@ -82,6 +82,8 @@ pub enum Error {
     Build(crate::assembly::BuildError),
     /// The scene's contact settings are refused.
     Contact(crate::contact::SettingsError),
+    /// The scene's obstacles are refused.
+    Obstacles(crate::contact::ObstacleError),
     /// The scene's sparse solver could not be set up.
     Solver(crate::solver::LinearError),
     /// The explicit integrator could not be set up.
@@ -119,6 +121,7 @@ impl fmt::Display for Error {
             Error::Budget(e) => write!(f, "invalid scene: {e}"),
             Error::Build(e) => write!(f, "invalid scene: {e}"),
             Error::Contact(e) => write!(f, "invalid scene: {e}"),
+            Error::Obstacles(e) => write!(f, "invalid scene: {e}"),
             Error::Solver(e) => write!(f, "invalid scene: {e}"),
             Error::ExplicitSetup(e) => write!(f, "invalid scene: {e}"),
             Error::Phase(m) => write!(f, "{m}"),
@@ -142,6 +145,7 @@ impl std::error::Error for Error {
             Error::Budget(e) => Some(e),
             Error::Build(e) => Some(e),
             Error::Contact(e) => Some(e),
+            Error::Obstacles(e) => Some(e),
             Error::Solver(e) => Some(e),
             Error::ExplicitSetup(e) => Some(e),
             _ => None,

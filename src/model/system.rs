@@ -298,7 +298,7 @@ fn add_obstacles(sc: &Scene, asm: &mut Assembler) -> Result<(), Error> {
         m.density * m.thickness,
         m.youngs_modulus * m.thickness,
     )
-    .map_err(Error::Scene)?;
+    .map_err(Error::Obstacles)?;
     asm.add_barrier(Box::new(term));
     Ok(())
 }

@@ -937,7 +937,7 @@ fn key_obstacles(
         };
         shape
             .check()
-            .map_err(|e| SceneError::invalid(key.clone(), e))?;
+            .map_err(|e| SceneError::invalid(key.clone(), e.to_string()))?;
         let friction = o.num_limited("friction", "contact.friction")?;
         p.obstacles.push(ObstacleSpec {
             obstacle: Obstacle {
