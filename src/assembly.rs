@@ -998,8 +998,7 @@ impl Assembler {
 /// is not held looser there). With 1 for gradients, the gradients of a
 /// sheet of n x n facets were held about n times tighter than its
 /// positions, and the ringing of the panels' unresolved stiff modes in them
-/// set the step (traced on the 4x4 Miura fold: gradient errors 40x the
-/// positions').
+/// set the step.
 pub fn error_scales(layout: &DofLayout, mesh: &Mesh, length: f64) -> Vec<f64> {
     let nt = mesh.triangles().len().max(1);
     let mean_area = mesh.facet_ids().map(|t| mesh.area(t)).sum::<f64>() / nt as f64;

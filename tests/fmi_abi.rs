@@ -2,6 +2,8 @@
 //! checks, the state machine, value references, NaN rejection, FMU states,
 //! the logger's "%s" format, and the symbols the cdylib exports.
 
+mod common;
+use common::fmi::{Log, callbacks};
 use origami_fmu::fmi::exports::*;
 use origami_fmu::fmi::resources::{SCENE_FILE, guid, scene_bytes};
 use origami_fmu::fmi::types::*;
@@ -9,54 +11,12 @@ use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::square_with_diagonal;
 use origami_fmu::model::Model;
 use origami_fmu::scene::Scene;
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::{CStr, CString};
 use std::path::{Path, PathBuf};
 use std::ptr::{null, null_mut};
 use std::sync::Mutex;
 
 use fmi2Status::*;
-
-/// Log lines captured by the test logger: (status, category, format, message).
-type Log = Mutex<Vec<(fmi2Status, String, String, String)>>;
-
-/// The test logger. A C-variadic function cannot be defined in stable Rust;
-/// this one takes the single string argument that the FMU always passes
-/// after its "%s" format, which is how the C calling convention of x86-64
-/// and aarch64 Linux delivers it.
-unsafe extern "C" fn logger(
-    env: *mut c_void,
-    _name: *const c_char,
-    status: fmi2Status,
-    category: *const c_char,
-    format: *const c_char,
-    message: *const c_char,
-) {
-    let log = unsafe { &*(env as *const Log) };
-    let s = |p: *const c_char| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
-    log.lock()
-        .unwrap()
-        .push((status, s(category), s(format), s(message)));
-}
-
-fn callbacks(log: &Log) -> fmi2CallbackFunctions {
-    type Variadic = unsafe extern "C" fn(
-        fmi2ComponentEnvironment,
-        fmi2String,
-        fmi2Status,
-        fmi2String,
-        fmi2String,
-        ...
-    );
-    #[allow(clippy::missing_transmute_annotations)]
-    let f: Variadic = unsafe { std::mem::transmute(logger as *const ()) };
-    fmi2CallbackFunctions {
-        logger: Some(f),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: log as *const Log as *mut c_void,
-    }
-}
 
 fn scene() -> Scene {
     let mut s = Scene::with_defaults("square", square_with_diagonal(0.1, true, 1.5));

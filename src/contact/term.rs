@@ -622,10 +622,8 @@ impl ContactTerm {
     /// within the step would only leave the iteration matrix; the next
     /// step adds its blocks);
     /// facets that only share a vertex and lie flat get none (they are no
-    /// candidates), where boxes around whole facets gave every two facets
-    /// sharing a vertex their blocks from the start (the flat
-    /// BoxPleatPyramid: 4.0x the matrix entries, 7.2x the factorization's
-    /// multiply-adds).
+    /// candidates): blocks between every two facets sharing a vertex would
+    /// multiply the factorization's work on a large flat sheet.
     fn pattern_pairs(&self, asm: &Assembler) -> Vec<(usize, usize)> {
         // Pairs between the same facets share their slots: each set once.
         let mut sets: Vec<Vec<usize>> = self

@@ -392,9 +392,7 @@ impl SparseSolver {
             CholeskySymbolicParams {
                 // Supernodal at every size: faer's automatic choice takes
                 // the simplicial factorization for small systems, which is
-                // 2-2.6x slower on a 4x4 Miura's 315 unknowns (0.39-0.50 ms
-                // against 0.19 ms a factorization); from 8x8 on it chooses
-                // supernodal itself.
+                // slower on our small sheets (docs/performance.md).
                 supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
                 ..Default::default()
             },

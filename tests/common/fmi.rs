@@ -38,8 +38,9 @@ pub fn contact_square() -> Scene {
     s
 }
 
-/// Log lines captured by the test logger: (status, category, message).
-pub type Log = Mutex<Vec<(fmi2Status, String, String)>>;
+/// Log lines captured by the test logger: (status, category, format,
+/// message).
+pub type Log = Mutex<Vec<(fmi2Status, String, String, String)>>;
 
 /// The test logger. A C-variadic function cannot be defined in stable
 /// Rust; this one takes the single string argument that the FMU always
@@ -50,14 +51,16 @@ unsafe extern "C" fn logger(
     _name: *const c_char,
     status: fmi2Status,
     category: *const c_char,
-    _format: *const c_char,
+    format: *const c_char,
     message: *const c_char,
 ) {
     // SAFETY: env is the Log of `callbacks`, alive while the instance is;
     // the strings are NUL-terminated by the FMU.
     let log = unsafe { &*(env as *const Log) };
     let s = |p: *const c_char| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
-    log.lock().unwrap().push((status, s(category), s(message)));
+    log.lock()
+        .unwrap()
+        .push((status, s(category), s(format), s(message)));
 }
 
 /// Callbacks that log into `log`.
@@ -215,7 +218,7 @@ impl Fmu {
     /// The last message logged ("" when none).
     pub fn last(&self) -> String {
         let log = self.log.lock().unwrap();
-        log.last().map(|l| l.2.clone()).unwrap_or_default()
+        log.last().map(|l| l.3.clone()).unwrap_or_default()
     }
 
     /// Number of lines logged with `status`.
