@@ -123,40 +123,9 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
         }
     }
     if o.energies {
-        v.push(spec(
-            "energy.kinetic".into(),
-            "J",
-            "kinetic energy".into(),
-            0.0,
-        ));
-        v.push(spec(
-            "energy.strain".into(),
-            "J",
-            "shell strain energy (membrane + bending)".into(),
-            0.0,
-        ));
-        v.push(spec(
-            "energy.crease".into(),
-            "J",
-            "crease spring energy".into(),
-            0.0,
-        ));
-        v.push(spec(
-            "energy.input_work".into(),
-            "J",
-            "work done on the sheet by the inputs so far (crease actuators, applied moments, \
-             forces and gravity)"
-                .into(),
-            0.0,
-        ));
-        v.push(spec(
-            "energy.dissipated".into(),
-            "J",
-            "work dissipated so far (damping, crease dashpots, contact dashpots and friction): \
-             kinetic + strain + crease (+ contact) energy + this - energy.input_work is constant"
-                .into(),
-            0.0,
-        ));
+        for (name, unit, what) in ENERGY_TABLE {
+            v.push(spec(name.into(), unit, what.into(), 0.0));
+        }
     }
     if scene.contact.is_some() {
         for (name, unit, what) in CONTACT_OUTPUTS {
@@ -169,6 +138,14 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
             v.push(spec((*name).into(), unit, (*what).into(), 0.0));
         }
     }
+    wrench_outputs(scene, &mut v);
+    v
+}
+
+/// The wrench outputs: attachments', the reactions' (where the scene
+/// asks for them) and obstacles'.
+fn wrench_outputs(scene: &Scene, v: &mut Vec<VariableSpec>) {
+    let o = scene.outputs;
     let mut wrench = |prefix: &str, what: &str, about: &str, moment: bool| {
         for c in ["x", "y", "z"] {
             v.push(spec(
@@ -216,11 +193,33 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
         };
         wrench(&o.name, &what, about, true);
     }
-    v
 }
 
 /// The energy outputs: kinetic, strain, crease, input work, dissipated.
-const ENERGY_OUTPUTS: usize = 5;
+const ENERGY_OUTPUTS: usize = ENERGY_TABLE.len();
+
+/// The energy outputs' names, units and descriptions.
+const ENERGY_TABLE: [(&str, &str, &str); 5] = [
+    ("energy.kinetic", "J", "kinetic energy"),
+    (
+        "energy.strain",
+        "J",
+        "shell strain energy (membrane + bending)",
+    ),
+    ("energy.crease", "J", "crease spring energy"),
+    (
+        "energy.input_work",
+        "J",
+        "work done on the sheet by the inputs so far (crease actuators, applied moments, \
+         forces and gravity)",
+    ),
+    (
+        "energy.dissipated",
+        "J",
+        "work dissipated so far (damping, crease dashpots, contact dashpots and friction): \
+         kinetic + strain + crease (+ contact) energy + this - energy.input_work is constant",
+    ),
+];
 
 /// The outputs of a scene with contact (after the energies).
 const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [

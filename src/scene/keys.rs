@@ -803,25 +803,11 @@ fn key_obstacles(
     p: &mut PhysicsKeys,
     _warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
-    use crate::contact::{Obstacle, Shape};
-    const SHAPES: &[&str] = &["half_space", "sphere", "box", "capsule"];
+    use crate::contact::Obstacle;
     for (i, item) in expect_array(v, "ancf:obstacles")?.iter().enumerate() {
         let key = format!("ancf:obstacles[{i}]");
         // The shape first: it says which fields are allowed.
-        let shape_name = match item.get("shape") {
-            Some(s) => expect_string(s, &format!("{key}.shape"))?,
-            None if item.is_object() => {
-                return Err(SceneError::invalid(
-                    format!("{key}.shape"),
-                    format!("missing (required): one of {}", SHAPES.join(", ")),
-                ));
-            }
-            None => "",
-        };
-        if item.is_object() && !SHAPES.contains(&shape_name) {
-            let options: Vec<(&str, ())> = SHAPES.iter().map(|&s| (s, ())).collect();
-            enum_value(&format!("{key}.shape"), shape_name, &options)?;
-        }
+        let shape_name = obstacle_shape_name(item, &key)?;
         let fields: &[&str] = match shape_name {
             "half_space" => &["name", "shape", "friction", "moving", "point", "normal"],
             "sphere" => &["name", "shape", "friction", "moving", "center", "radius"],
@@ -840,101 +826,8 @@ fn key_obstacles(
         let o = Obj::new(&key, item, fields)?;
         let name = expect_string(o.required("name")?, &o.path("name"))?;
         check_name(&o.path("name"), name)?;
-        match o.get("moving") {
-            None | Some(Value::Bool(false)) => {}
-            Some(Value::Bool(true)) => {
-                return Err(SceneError::invalid(
-                    o.path("moving"),
-                    "moving obstacles (pose inputs) are not supported yet; obstacles are fixed \
-                     in the world",
-                ));
-            }
-            Some(other) => {
-                return Err(SceneError::invalid(
-                    o.path("moving"),
-                    format!("expected true or false, found {}", type_name(other)),
-                ));
-            }
-        }
-        let length = |f: &str| -> Result<f64, SceneError> {
-            let x = number(o.required(f)?, &o.path(f))?;
-            if x > 0.0 {
-                Ok(x)
-            } else {
-                Err(SceneError::invalid(
-                    o.path(f),
-                    format!("{} is not a positive length (m)", num(x)),
-                ))
-            }
-        };
-        let shape = match shape_name {
-            "half_space" => {
-                let normal = vector3(&o, "normal")?;
-                let len = normal.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if !(len > 0.0 && len.is_finite()) {
-                    return Err(SceneError::invalid(
-                        o.path("normal"),
-                        "the outward normal must be a nonzero vector",
-                    ));
-                }
-                Shape::HalfSpace {
-                    point: vector3(&o, "point")?,
-                    normal: normal.map(|x| x / len),
-                }
-            }
-            "sphere" => Shape::Sphere {
-                center: vector3(&o, "center")?,
-                radius: length("radius")?,
-            },
-            "box" => {
-                let half = vector3(&o, "half_extents")?;
-                if let Some(c) = half.iter().position(|&h| h <= 0.0) {
-                    return Err(SceneError::invalid(
-                        format!("{}[{c}]", o.path("half_extents")),
-                        format!("{} is not a positive length (m)", num(half[c])),
-                    ));
-                }
-                Shape::Box {
-                    center: vector3(&o, "center")?,
-                    half_extents: half,
-                    rotation: match o.get("rotation") {
-                        Some(_) => vector3(&o, "rotation")?,
-                        None => [0.0; 3],
-                    },
-                }
-            }
-            _ => {
-                let key = o.path("ends");
-                let arr = expect_array(o.required("ends")?, &key)?;
-                if arr.len() != 2 {
-                    return Err(SceneError::invalid(
-                        key,
-                        format!(
-                            "expected the segment's 2 end points [[x, y, z], [x, y, z]], found {}",
-                            arr.len()
-                        ),
-                    ));
-                }
-                let mut ends = [[0.0; 3]; 2];
-                for (e, end) in arr.iter().enumerate() {
-                    let ke = format!("{key}[{e}]");
-                    let xs = expect_array(end, &ke)?;
-                    if xs.len() != 3 {
-                        return Err(SceneError::invalid(
-                            ke,
-                            format!("expected 3 components [x, y, z], found {}", xs.len()),
-                        ));
-                    }
-                    for (c, x) in xs.iter().enumerate() {
-                        ends[e][c] = number(x, &format!("{ke}[{c}]"))?;
-                    }
-                }
-                Shape::Capsule {
-                    ends,
-                    radius: length("radius")?,
-                }
-            }
-        };
+        obstacle_fixed(&o)?;
+        let shape = obstacle_shape(&o, shape_name)?;
         shape
             .check()
             .map_err(|e| SceneError::invalid(key.clone(), e.to_string()))?;
@@ -950,6 +843,131 @@ fn key_obstacles(
         });
     }
     Ok(())
+}
+
+/// An obstacle's `shape` (one of the known ones; "" for an item that is
+/// not an object, which the object check then names).
+fn obstacle_shape_name<'a>(item: &'a Value, key: &str) -> Result<&'a str, SceneError> {
+    const SHAPES: &[&str] = &["half_space", "sphere", "box", "capsule"];
+    let shape_name = match item.get("shape") {
+        Some(s) => expect_string(s, &format!("{key}.shape"))?,
+        None if item.is_object() => {
+            return Err(SceneError::invalid(
+                format!("{key}.shape"),
+                format!("missing (required): one of {}", SHAPES.join(", ")),
+            ));
+        }
+        None => "",
+    };
+    if item.is_object() && !SHAPES.contains(&shape_name) {
+        let options: Vec<(&str, ())> = SHAPES.iter().map(|&s| (s, ())).collect();
+        enum_value(&format!("{key}.shape"), shape_name, &options)?;
+    }
+    Ok(shape_name)
+}
+
+/// An obstacle's `moving`: only false (or absent) for now.
+fn obstacle_fixed(o: &Obj) -> Result<(), SceneError> {
+    match o.get("moving") {
+        None | Some(Value::Bool(false)) => Ok(()),
+        Some(Value::Bool(true)) => Err(SceneError::invalid(
+            o.path("moving"),
+            "moving obstacles (pose inputs) are not supported yet; obstacles are fixed \
+             in the world",
+        )),
+        Some(other) => Err(SceneError::invalid(
+            o.path("moving"),
+            format!("expected true or false, found {}", type_name(other)),
+        )),
+    }
+}
+
+/// An obstacle's shape from its fields (`shape_name` one of the known
+/// ones).
+fn obstacle_shape(o: &Obj, shape_name: &str) -> Result<crate::contact::Shape, SceneError> {
+    use crate::contact::Shape;
+    let length = |f: &str| -> Result<f64, SceneError> {
+        let x = number(o.required(f)?, &o.path(f))?;
+        if x > 0.0 {
+            Ok(x)
+        } else {
+            Err(SceneError::invalid(
+                o.path(f),
+                format!("{} is not a positive length (m)", num(x)),
+            ))
+        }
+    };
+    Ok(match shape_name {
+        "half_space" => {
+            let normal = vector3(o, "normal")?;
+            let len = normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !(len > 0.0 && len.is_finite()) {
+                return Err(SceneError::invalid(
+                    o.path("normal"),
+                    "the outward normal must be a nonzero vector",
+                ));
+            }
+            Shape::HalfSpace {
+                point: vector3(o, "point")?,
+                normal: normal.map(|x| x / len),
+            }
+        }
+        "sphere" => Shape::Sphere {
+            center: vector3(o, "center")?,
+            radius: length("radius")?,
+        },
+        "box" => {
+            let half = vector3(o, "half_extents")?;
+            if let Some(c) = half.iter().position(|&h| h <= 0.0) {
+                return Err(SceneError::invalid(
+                    format!("{}[{c}]", o.path("half_extents")),
+                    format!("{} is not a positive length (m)", num(half[c])),
+                ));
+            }
+            Shape::Box {
+                center: vector3(o, "center")?,
+                half_extents: half,
+                rotation: match o.get("rotation") {
+                    Some(_) => vector3(o, "rotation")?,
+                    None => [0.0; 3],
+                },
+            }
+        }
+        _ => Shape::Capsule {
+            ends: capsule_ends(o)?,
+            radius: length("radius")?,
+        },
+    })
+}
+
+/// A capsule's `ends`: two points `[[x, y, z], [x, y, z]]`.
+fn capsule_ends(o: &Obj) -> Result<[[f64; 3]; 2], SceneError> {
+    let key = o.path("ends");
+    let arr = expect_array(o.required("ends")?, &key)?;
+    if arr.len() != 2 {
+        return Err(SceneError::invalid(
+            key,
+            format!(
+                "expected the segment's 2 end points [[x, y, z], [x, y, z]], found {}",
+                arr.len()
+            ),
+        ));
+    }
+    let mut ends = [[0.0; 3]; 2];
+    for (e, end) in arr.iter().enumerate() {
+        let ke = format!("{key}[{e}]");
+        let xs = expect_array(end, &ke)?;
+        if xs.len() != 3 {
+            return Err(SceneError::invalid(
+                ke,
+                format!("expected 3 components [x, y, z], found {}", xs.len()),
+            ));
+        }
+        for (c, x) in xs.iter().enumerate() {
+            ends[e][c] = number(x, &format!("{ke}[{c}]"))?;
+        }
+    }
+    Ok(ends)
 }
 
 /// `ancf:solver`: the integrator and its settings.
