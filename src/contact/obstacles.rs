@@ -24,7 +24,7 @@
 
 use super::ccd;
 use super::shapes::{Closest, Obstacle, Shape, ShapeError};
-use super::surface::{ContactSurface, VertexMap, eval_map};
+use super::surface::{ContactSurface, VertexMap, eval_map, scatter_map};
 use super::term::{
     ContactSettings, SettingsError, barrier, db, ddb, friction_matrix, reversal_fraction,
     slip_factor, speed_stiffness, tangent_basis,
@@ -322,10 +322,7 @@ impl ObstacleTerm {
     /// no sample comes within the clearance of an obstacle (conservative
     /// advancement, keeping [`ccd::MIN_SEPARATION`] of each gap).
     pub fn safe_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
-        let mut x = Vec::new();
-        let mut d = Vec::new();
-        self.surf.positions(q, &mut x);
-        self.surf.positions(dq, &mut d);
+        let (x, d) = self.samples(q, dq);
         let mut t: f64 = 1.0;
         for o in &self.obstacles {
             for (p, dp) in x.iter().zip(&d) {
@@ -379,7 +376,7 @@ impl ObstacleTerm {
         force: &mut [f64],
         wrenches: &mut [[f64; 6]],
     ) {
-        scatter(&self.surf.maps[i], f, force);
+        scatter_map(&self.surf.maps[i], f, force);
         let shape = &self.obstacles[k].shape;
         let c = shape.closest(x);
         let arm = x - c.distance * c.normal - shape.origin();
@@ -402,7 +399,7 @@ impl ObstacleTerm {
         wrenches: &mut [[f64; 6]],
     ) {
         self.apply(lg.obstacle, lg.sample, &x[lg.sample], f, force, wrenches);
-        scatter(&self.surf.maps[lg.sample], f, part);
+        scatter_map(&self.surf.maps[lg.sample], f, part);
     }
 
     /// The barrier's, dashpots' and friction's forces, energy and matrix
@@ -414,10 +411,7 @@ impl ObstacleTerm {
         out: &mut Evaluation,
         matrix: Option<(&mut [f64], MatrixCoeffs)>,
     ) -> Result<(), EvalError> {
-        let mut x = Vec::new();
-        let mut v = Vec::new();
-        self.surf.positions(st.q, &mut x);
-        self.surf.positions(st.v, &mut v);
+        let (x, v) = self.samples(st.q, st.v);
         let n = out.force.len();
         if out.dissipative_force.friction.len() != n {
             out.dissipative_force.zeroed(n);
@@ -529,7 +523,8 @@ impl ObstacleTerm {
         Ok(map)
     }
 
-    /// Sample positions and velocities of the slot vectors `q`, `v`.
+    /// The samples' values of two slot vectors (positions and velocities,
+    /// or positions and a move).
     fn samples(&self, q: &[f64], v: &[f64]) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
         let mut x = Vec::new();
         let mut vx = Vec::new();
@@ -546,15 +541,6 @@ impl ObstacleTerm {
     /// Obstacle `k`'s shape.
     pub fn shape(&self, k: usize) -> &Shape {
         &self.obstacles[k].shape
-    }
-}
-
-/// Add a sample's 3-vector `f` to the slots it maps to.
-fn scatter(m: &VertexMap, f: &Vector3<f64>, force: &mut [f64]) {
-    for &(slot, c) in m {
-        for a in 0..3 {
-            force[3 * slot + a] += c * f[a];
-        }
     }
 }
 

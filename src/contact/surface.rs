@@ -244,6 +244,16 @@ impl ContactSurface {
     }
 }
 
+/// Add the 3-vector `f` at a vertex to the slots it maps to (`c_k f` to
+/// slot `k`): the transpose of [`eval_map`].
+pub fn scatter_map(m: &VertexMap, f: &Vector3<f64>, force: &mut [f64]) {
+    for &(slot, c) in m {
+        for a in 0..3 {
+            force[3 * slot + a] += c * f[a];
+        }
+    }
+}
+
 /// `sum c_k q[slot_k]` for one vertex map.
 pub fn eval_map(m: &VertexMap, q: &[f64]) -> Vector3<f64> {
     let mut x = Vector3::zeros();

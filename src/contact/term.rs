@@ -924,11 +924,11 @@ impl ContactTerm {
 
     fn scatter_force(&self, ids: &[usize; 4], g: &SVector<f64, 12>, force: &mut [f64]) {
         for (k, &i) in ids.iter().enumerate() {
-            for &(slot, c) in &self.surf.maps[i] {
-                for a in 0..3 {
-                    force[3 * slot + a] += c * g[3 * k + a];
-                }
-            }
+            super::surface::scatter_map(
+                &self.surf.maps[i],
+                &g.fixed_rows::<3>(3 * k).into(),
+                force,
+            );
         }
     }
 
@@ -1394,11 +1394,7 @@ impl ContactTerm {
         force: &mut [f64],
     ) {
         for (j, m) in maps.iter().enumerate() {
-            for &(s, w) in m {
-                for x in 0..3 {
-                    force[3 * s + x] += w * f[3 * j + x];
-                }
-            }
+            super::surface::scatter_map(m, &f.fixed_rows::<3>(3 * j).into(), force);
         }
     }
 

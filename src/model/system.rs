@@ -248,13 +248,7 @@ fn add_contact(
     asm: &mut Assembler,
 ) -> Result<(), Error> {
     let mesh = &sc.mesh;
-    if sc.solver.integrator == SceneIntegrator::CentralDifference {
-        return Err(Error::Scene(
-            "ancf:contact needs the implicit integrator (its Newton steps are \
-             collision-checked); remove \"integrator\": \"central_difference\""
-                .into(),
-        ));
-    }
+    needs_implicit(sc, "ancf:contact")?;
     let m = &asm.physics.material;
     let term = ContactTerm::new(
         mesh,
@@ -266,6 +260,18 @@ fn add_contact(
     )
     .map_err(Error::Contact)?;
     asm.add_barrier(Box::new(term));
+    Ok(())
+}
+
+/// A barrier term (`key`) needs the implicit integrator: its Newton steps
+/// are collision-checked.
+fn needs_implicit(sc: &Scene, key: &str) -> Result<(), Error> {
+    if sc.solver.integrator == SceneIntegrator::CentralDifference {
+        return Err(Error::Scene(format!(
+            "{key} needs the implicit integrator (its Newton steps are \
+             collision-checked); remove \"integrator\": \"central_difference\""
+        )));
+    }
     Ok(())
 }
 
@@ -281,13 +287,7 @@ pub(super) fn obstacle_settings(sc: &Scene) -> crate::contact::ContactSettings {
 /// The rigid obstacles' force term on the assembler (the implicit
 /// integrator only).
 fn add_obstacles(sc: &Scene, asm: &mut Assembler) -> Result<(), Error> {
-    if sc.solver.integrator == SceneIntegrator::CentralDifference {
-        return Err(Error::Scene(
-            "ancf:obstacles needs the implicit integrator (its Newton steps are \
-             collision-checked); remove \"integrator\": \"central_difference\""
-                .into(),
-        ));
-    }
+    needs_implicit(sc, "ancf:obstacles")?;
     let m = &asm.physics.material;
     let term = crate::contact::ObstacleTerm::new(
         &sc.mesh,
