@@ -808,19 +808,12 @@ fn a_step_into_an_obstacle_is_cut_before_the_sheet_reaches_it() {
 /// weight (1e-3 relative), the ball carrying part of it.
 #[test]
 fn a_mount_presses_the_sheet_onto_a_ball() {
-    let text = r#"{
-      "frame_unit": "m",
-      "vertices_coords": [[0,0],[0.05,0],[0.1,0],[0.1,0.05],[0.05,0.05],[0,0.05]],
-      "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4]],
-      "edges_assignment": ["B","B","B","B","B","B","V"],
-      "edges_foldAngle": [null,null,null,null,null,null,90],
-      "faces_vertices": [[0,1,4,5],[1,2,3,4]],
-      "ancf:material": {"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200},
-      "ancf:loads": {"gravity": [0, 0, -9.81]},
+    let mut m = Model::new(common::two_plastic_panels(
+        r#""ancf:loads": {"gravity": [0, 0, -9.81]},
       "ancf:attachments": [{"name": "mount", "vertices": [0, 5]}],
-      "ancf:obstacles": [{"name": "ball", "shape": "sphere", "center": [0.075, 0.025, -0.0225], "radius": 0.02}]
-    }"#;
-    let mut m = Model::new(origami_fmu::scene::from_str(text).unwrap().0).unwrap();
+      "ancf:obstacles": [{"name": "ball", "shape": "sphere", "center": [0.075, 0.025, -0.0225], "radius": 0.02}]"#,
+    ))
+    .unwrap();
     m.initialize().unwrap();
     let z = m.input_id("mount.z").unwrap();
     let (speed, h) = (-0.02, 0.01);

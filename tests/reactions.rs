@@ -17,19 +17,9 @@ use origami_fmu::Model;
 /// crease between them, the edge x = 0 (vertices 0, 5) clamped to the
 /// attachment `mount`; `extra` adds keys.
 fn sheet(extra: &str) -> origami_fmu::Scene {
-    let text = format!(
-        r#"{{
-          "frame_unit": "m",
-          "vertices_coords": [[0,0],[0.05,0],[0.1,0],[0.1,0.05],[0.05,0.05],[0,0.05]],
-          "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4]],
-          "edges_assignment": ["B","B","B","B","B","B","V"],
-          "edges_foldAngle": [null,null,null,null,null,null,90],
-          "faces_vertices": [[0,1,4,5],[1,2,3,4]],
-          "ancf:material": {{"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200}},
-          "ancf:attachments": [{{"name": "mount", "vertices": [0, 5]}}]{extra}
-        }}"#
-    );
-    origami_fmu::scene::from_str(&text).unwrap().0
+    common::two_plastic_panels(&format!(
+        r#""ancf:attachments": [{{"name": "mount", "vertices": [0, 5]}}]{extra}"#
+    ))
 }
 
 /// The frame's (force, moment) outputs now.
@@ -178,20 +168,13 @@ fn a_frame_turning_at_a_constant_rate_feels_the_centripetal_force() {
 /// to m (c - s) x g, within 1e-6 of the weight (and of its moment).
 #[test]
 fn support_and_motion_reactions_balance_the_weight() {
-    let text = r#"{
-      "frame_unit": "m",
-      "vertices_coords": [[0,0],[0.05,0],[0.1,0],[0.1,0.05],[0.05,0.05],[0,0.05]],
-      "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4]],
-      "edges_assignment": ["B","B","B","B","B","B","V"],
-      "edges_foldAngle": [null,null,null,null,null,null,90],
-      "faces_vertices": [[0,1,4,5],[1,2,3,4]],
-      "ancf:material": {"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200},
-      "ancf:loads": {"gravity": [0, 0, -9.81]},
+    let mut m = Model::new(common::two_plastic_panels(
+        r#""ancf:loads": {"gravity": [0, 0, -9.81]},
       "ancf:supports": [{"vertices": [0, 5], "fix": "clamped"}],
       "ancf:motions": [{"name": "tip", "vertex": 2}],
-      "ancf:outputs": ["reactions"]
-    }"#;
-    let mut m = Model::new(origami_fmu::scene::from_str(text).unwrap().0).unwrap();
+      "ancf:outputs": ["reactions"]"#,
+    ))
+    .unwrap();
     m.initialize().unwrap();
     for _ in 0..100 {
         m.advance(0.01).unwrap();

@@ -194,6 +194,26 @@ pub fn hinge_velocity(model: &mut Model, w: f64, rate: f64) {
 }
 pub mod fmi;
 
+/// Two 50 x 50 mm panels of 1 mm plastic (2 GPa, 1200 kg/m^3) with a valley
+/// crease between them (vertices 0-5 counter-clockwise from the origin,
+/// the crease from 1 to 4), with the scene keys `keys` (JSON members,
+/// comma-separated) added.
+pub fn two_plastic_panels(keys: &str) -> Scene {
+    let text = format!(
+        r#"{{
+          "frame_unit": "m",
+          "vertices_coords": [[0,0],[0.05,0],[0.1,0],[0.1,0.05],[0.05,0.05],[0,0.05]],
+          "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,5],[5,0],[1,4]],
+          "edges_assignment": ["B","B","B","B","B","B","V"],
+          "edges_foldAngle": [null,null,null,null,null,null,90],
+          "faces_vertices": [[0,1,4,5],[1,2,3,4]],
+          "ancf:material": {{"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200}},
+          {keys}
+        }}"#
+    );
+    origami_fmu::scene::from_str(&text).unwrap().0
+}
+
 /// The outputs `prefix.x/y/z` now (a wrench's force or moment, a vertex).
 pub fn output_vector(m: &Model, prefix: &str) -> Vector3<f64> {
     let at = |c: &str| {
