@@ -190,6 +190,7 @@ fn assembler_with(shape: Shape, friction: f64) -> (Assembler, Vec<f64>) {
         name: "o".into(),
         shape,
         friction,
+        moving: false,
     };
     let term = ObstacleTerm::new(
         &mesh,
@@ -394,9 +395,9 @@ fn bad_obstacles_are_refused_with_the_key_and_the_fault() {
             "",
         ),
         (
-            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "moving": true}]"#,
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "moving": "yes"}]"#,
             "ancf:obstacles[0].moving",
-            "not supported",
+            "expected true or false",
         ),
         (
             r#"[{"name": "vertex", "shape": "sphere", "center": [0, 0, 0], "radius": 1}]"#,
