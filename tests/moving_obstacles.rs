@@ -363,7 +363,11 @@ fn forged_moving_obstacle_states_are_refused() {
     let e = m.restore_state(&short).unwrap_err().to_string();
     assert!(e.contains("motions take the first 12"), "{e}");
     let mut jac = good.clone();
-    let j = jac.memory.jacobian.as_mut().expect("a kept iteration matrix");
+    let j = jac
+        .memory
+        .jacobian
+        .as_mut()
+        .expect("a kept iteration matrix");
     assert_eq!(j.obstacles.len(), 24, "start and end motions");
     j.obstacles.push(1.0);
     let e = m.restore_state(&jac).unwrap_err().to_string();
