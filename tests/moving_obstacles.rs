@@ -244,11 +244,15 @@ fn a_turntable_turns_the_sheet_with_it() {
 /// below it, so that it cuts 5 mm into where the sheet is) swept at
 /// 0.5 m/s along x under a floating sheet (no gravity) pushes it ahead and
 /// up: no output has a contact sample within the sheet's half thickness of
-/// it, and the sheet leaves moving along x and up.
+/// it, and the sheet leaves moving along x and up. The rod's work (through
+/// the barrier and the dashpots: `energy.input_work`) is the sheet's
+/// kinetic, strain and barrier energy plus what the dashpots dissipated,
+/// within 1 % (rho_inf = 1, no damping, tolerance 1e-6).
 #[test]
 fn a_rod_swept_through_a_floating_sheet_pushes_it_aside() {
     let rod = r#"[{"name": "rod", "shape": "capsule", "ends": [[-0.1, -0.1, -0.005], [-0.1, 0.1, -0.005]], "radius": 0.01, "moving": true}]"#;
-    let mut m = Model::new(square([0.0, 0.0, 0.0], rod, "")).unwrap();
+    let extra = r#", "ancf:solver": {"rho_inf": 1.0, "tolerance": 1e-6}, "ancf:damping": {"alpha": 0, "beta": 0}"#;
+    let mut m = Model::new(square([0.0, 0.0, 0.0], rod, extra)).unwrap();
     m.initialize().unwrap();
     let speed = 0.5;
     let mut steps = 0;
@@ -265,8 +269,26 @@ fn a_rod_swept_through_a_floating_sheet_pushes_it_aside() {
         pushed = pushed.max(vector(&m, "rod.force").norm());
     }
     let c = corners(&m);
-    eprintln!("steps {steps}; corners' mean {c:?}; largest rod force {pushed:.3e} N");
+    let work = out(&m, "energy.input_work");
+    let held: f64 = [
+        "energy.kinetic",
+        "energy.strain",
+        "energy.crease",
+        "energy.contact",
+        "energy.dissipated",
+    ]
+    .iter()
+    .map(|n| out(&m, n))
+    .sum();
+    eprintln!(
+        "steps {steps}; corners' mean {c:?}; largest rod force at an output {pushed:.3e} N; \
+         rod's work {work:.4e} J, the sheet's energies and dissipation {held:.4e} J"
+    );
     assert!(c.x > 0.02 && c.z > 0.0, "the sheet was not pushed: {c:?}");
+    assert!(
+        work > 0.0 && (held - work).abs() < 0.01 * work,
+        "{held} vs {work}"
+    );
 }
 
 /// A state saved while the sheet rides a ground moving and turning (pairs
