@@ -16,24 +16,14 @@ use common::output_vector as vector;
 use nalgebra::Vector3;
 use origami_fmu::Model;
 
-/// A 0.1 x 0.1 m square of 1 mm plastic (2 GPa, 1200 kg/m^3) in the plane
-/// z = 0 (centred on the origin), under gravity `g`, with the obstacles
-/// `obstacles` (JSON) and the extra keys `extra`.
+/// The 0.1 m plastic square centred on the origin
+/// ([`common::plastic_square`]).
 fn square(g: [f64; 3], obstacles: &str, extra: &str) -> origami_fmu::Scene {
-    let text = format!(
-        r#"{{
-          "frame_unit": "m",
-          "vertices_coords": [[-0.05,-0.05],[0.05,-0.05],[0.05,0.05],[-0.05,0.05]],
-          "edges_vertices": [[0,1],[1,2],[2,3],[3,0]],
-          "edges_assignment": ["B","B","B","B"],
-          "faces_vertices": [[0,1,2,3]],
-          "ancf:material": {{"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200}},
-          "ancf:loads": {{"gravity": [{}, {}, {}]}},
-          "ancf:obstacles": {obstacles}{extra}
-        }}"#,
-        g[0], g[1], g[2]
-    );
-    origami_fmu::scene::from_str(&text).unwrap().0
+    common::plastic_square(
+        [-0.05, -0.05],
+        g,
+        &format!(r#""ancf:obstacles": {obstacles}{extra}"#),
+    )
 }
 
 /// The ground 0.52 mm below the sheet (the sheet lands within the
@@ -313,24 +303,7 @@ fn a_state_on_a_moving_ground_restores_bit_for_bit() {
     let saved = a.save_state();
     let memory = saved.term_memory.last().cloned().unwrap_or_default();
     assert!(memory.len() > 12, "obstacle memory {memory:?}");
-    let run = |m: &mut Model| {
-        let mut out = Vec::new();
-        for _ in 0..8 {
-            drive(m);
-            m.advance(0.01).unwrap();
-            out.extend(m.output_values());
-        }
-        out
-    };
-    let first = run(&mut a);
-    a.restore_state(&saved).unwrap();
-    let again = run(&mut a);
-    let mut b = Model::new(scene).unwrap();
-    b.restore_state(&saved).unwrap();
-    let fresh = run(&mut b);
-    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    assert_eq!(bits(&first), bits(&again), "same model");
-    assert_eq!(bits(&first), bits(&fresh), "fresh model");
+    common::assert_restores_bit_for_bit(scene, &mut a, &saved, (8, drive));
 }
 
 /// A plain master holds its inputs: the ground's height set 2 mm up at a
