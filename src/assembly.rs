@@ -140,13 +140,31 @@ pub struct Evaluation {
     pub obstacle_wrenches: Vec<[f64; 6]>,
 }
 
-/// Dissipative parts of an evaluation's internal force (N, all slots).
+/// Dissipative parts of an evaluation's internal force (N, all slots),
+/// and what the contact forces do on moving obstacles.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DissipativeForce {
     /// Friction.
     pub friction: Vec<f64>,
     /// Normal dashpots.
     pub damping: Vec<f64>,
+    /// The power of the sheet's contact forces on moving obstacles.
+    #[serde(default)]
+    pub obstacles: ObstaclePower,
+}
+
+/// What the contact forces on moving obstacles do on them (W): all of
+/// them, and friction and the dashpots alone (zero for fixed obstacles).
+/// The sheet gets minus the first; the friction and dashpot forces
+/// dissipate their power on the sheet less these.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ObstaclePower {
+    /// All forces'.
+    pub total: f64,
+    /// Friction's.
+    pub friction: f64,
+    /// The normal dashpots'.
+    pub damping: f64,
 }
 
 impl DissipativeForce {
@@ -174,6 +192,18 @@ impl DissipativeForce {
             w(&self.friction, &end.friction),
             w(&self.damping, &end.damping),
         )
+    }
+
+    /// The work of the contact forces on moving obstacles over a step of
+    /// `h` seconds from these (at its start) to `end`'s, by the
+    /// trapezoidal rule.
+    pub fn obstacle_work_to(&self, end: &DissipativeForce, h: f64) -> ObstaclePower {
+        let (a, b) = (&self.obstacles, &end.obstacles);
+        ObstaclePower {
+            total: 0.5 * (a.total + b.total) * h,
+            friction: 0.5 * (a.friction + b.friction) * h,
+            damping: 0.5 * (a.damping + b.damping) * h,
+        }
     }
 }
 
@@ -631,6 +661,7 @@ impl Assembler {
         out.contact_damping_power = 0.0;
         out.dissipative_force.friction.clear();
         out.dissipative_force.damping.clear();
+        out.dissipative_force.obstacles = ObstaclePower::default();
         out.barrier_pairs = 0;
         out.obstacle_wrenches.clear();
         if let Some((vals, co)) = matrix.as_mut() {
@@ -794,6 +825,28 @@ impl Assembler {
             .iter()
             .map(|t| t.max_step_fraction(self, q, dq))
             .fold(1.0, f64::min)
+    }
+
+    /// [`Assembler::max_step_fraction`] of a move from the step start (see
+    /// [`BarrierTerm::max_motion_fraction`]): the predictors'.
+    pub fn max_motion_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        self.barriers
+            .iter()
+            .map(|t| t.max_motion_fraction(self, q, dq))
+            .fold(1.0, f64::min)
+    }
+
+    /// Place the moving bodies of the barrier terms (moving obstacles):
+    /// at the step start and at its end ([`BarrierTerm::place`]).
+    pub fn place_bodies(&mut self, start: &[crate::frame::Motion], end: &[crate::frame::Motion]) {
+        for t in self.barriers.iter_mut() {
+            t.place(start, end);
+        }
+    }
+
+    /// Whether any barrier term has moving bodies.
+    pub fn moves_bodies(&self) -> bool {
+        self.barriers.iter().any(|t| t.moves())
     }
 
     /// The largest fraction in (0, 1] of a Newton correction `q -> q + dq`

@@ -85,6 +85,71 @@ impl Pose {
     }
 }
 
+/// A rigid body's placement with its velocity: the pose from its inputs
+/// (origin and rotation vector), the origin's velocity and the angular
+/// velocity (world axes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    /// Where it is.
+    pub pose: Pose,
+    /// The rotation vector `pose.rotation` was made from (rad).
+    pub rotation_vector: Vector3<f64>,
+    /// Velocity of the origin (m/s).
+    pub velocity: Vector3<f64>,
+    /// Angular velocity (rad/s).
+    pub angular: Vector3<f64>,
+}
+
+impl Motion {
+    /// The number of values [`Motion::values`] gives.
+    pub const VALUES: usize = 12;
+
+    /// At origin `x` and rotation vector `r`, moving with origin velocity
+    /// `v` and angular velocity `w`.
+    pub fn new(x: Vector3<f64>, r: Vector3<f64>, v: Vector3<f64>, w: Vector3<f64>) -> Motion {
+        Motion {
+            pose: Pose::new(x, &r),
+            rotation_vector: r,
+            velocity: v,
+            angular: w,
+        }
+    }
+
+    /// At rest at origin `x`, not turned.
+    pub fn at_rest(x: Vector3<f64>) -> Motion {
+        Motion::new(x, Vector3::zeros(), Vector3::zeros(), Vector3::zeros())
+    }
+
+    /// Origin, rotation vector, velocity and angular velocity in a row.
+    pub fn values(&self) -> [f64; Motion::VALUES] {
+        let mut out = [0.0; Motion::VALUES];
+        for (k, v) in [
+            &self.pose.origin,
+            &self.rotation_vector,
+            &self.velocity,
+            &self.angular,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            out[3 * k..3 * k + 3].copy_from_slice(v.as_slice());
+        }
+        out
+    }
+
+    /// The motion of [`Motion::values`]' row (`x` holds at least
+    /// [`Motion::VALUES`] numbers).
+    pub fn from_values(x: &[f64]) -> Motion {
+        let v = |k: usize| Vector3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
+        Motion::new(v(0), v(1), v(2), v(3))
+    }
+
+    /// The velocity of the body's point at `p`.
+    pub fn point_velocity(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.velocity + self.angular.cross(&(p - self.pose.origin))
+    }
+}
+
 /// One slot a frame holds: which, whether it is a position, and its
 /// reference value relative to the frame (`X - X0` or `G0`).
 #[derive(Clone, Copy, Debug, PartialEq)]

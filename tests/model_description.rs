@@ -210,7 +210,28 @@ fn ground() -> Scene {
             normal: [0.0, 0.0, 1.0],
         },
         friction: 0.3,
+        moving: false,
     });
+    s
+}
+
+/// The same square resting on a moving ground (`"moving": true`, friction
+/// 0.3), its plane 0.26 mm below the sheet's midsurface (in the barrier):
+/// the obstacle's pose inputs `ground.x/y/z/rx/ry/rz`; no numerical
+/// dissipation, no damping and a tight tolerance (its energy balance is
+/// tested).
+fn conveyor() -> Scene {
+    let mut s = ground();
+    s.name = "conveyor".into();
+    s.obstacles[0].moving = true;
+    // Energy-conserving and tight: its test checks the energy balance.
+    s.solver.rho_inf = 1.0;
+    s.solver.tolerance = 1e-6;
+    s.auto_damping = false;
+    s.obstacles[0].shape = origami_fmu::contact::Shape::HalfSpace {
+        point: [0.0, 0.0, -0.00026],
+        normal: [0.0, 0.0, 1.0],
+    };
     s
 }
 
@@ -224,6 +245,7 @@ fn examples() -> Vec<Scene> {
         diagonal_contact(),
         bridge(),
         ground(),
+        conveyor(),
     ]
 }
 

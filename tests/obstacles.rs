@@ -17,27 +17,17 @@ use origami_fmu::element::ElementOptions;
 use origami_fmu::mesh::builders::grid;
 use origami_fmu::scene::Scene;
 
-/// A 0.1 x 0.1 m square of 1 mm plastic (2 GPa, 1200 kg/m^3) in the plane
-/// z = 0, under gravity `g`, with the obstacles `obstacles` (JSON) and the
-/// extra keys `extra`.
-fn square(g: [f64; 3], obstacles: &str, extra: &str) -> origami_fmu::Scene {
-    let text = format!(
-        r#"{{
-          "frame_unit": "m",
-          "vertices_coords": [[0,0],[0.1,0],[0.1,0.1],[0,0.1]],
-          "edges_vertices": [[0,1],[1,2],[2,3],[3,0]],
-          "edges_assignment": ["B","B","B","B"],
-          "faces_vertices": [[0,1,2,3]],
-          "ancf:material": {{"thickness": 1e-3, "youngs_modulus": 2e9, "density": 1200}},
-          "ancf:loads": {{"gravity": [{}, {}, {}]}},
-          "ancf:obstacles": {obstacles}{extra}
-        }}"#,
-        g[0], g[1], g[2]
-    );
-    origami_fmu::scene::from_str(&text).unwrap().0
-}
-
 use common::output_vector as vector;
+
+/// The 0.1 m plastic square with a corner at the origin
+/// ([`common::plastic_square`]).
+fn square(g: [f64; 3], obstacles: &str, extra: &str) -> Scene {
+    common::plastic_square(
+        [0.0, 0.0],
+        g,
+        &format!(r#""ancf:obstacles": {obstacles}{extra}"#),
+    )
+}
 
 fn vertex(m: &Model, i: usize) -> Vector3<f64> {
     vector(m, &format!("vertex[{i}]"))
@@ -190,6 +180,7 @@ fn assembler_with(shape: Shape, friction: f64) -> (Assembler, Vec<f64>) {
         name: "o".into(),
         shape,
         friction,
+        moving: false,
     };
     let term = ObstacleTerm::new(
         &mesh,
@@ -394,9 +385,9 @@ fn bad_obstacles_are_refused_with_the_key_and_the_fault() {
             "",
         ),
         (
-            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "moving": true}]"#,
+            r#"[{"name": "g", "shape": "sphere", "center": [0, 0, 0], "radius": 1, "moving": "yes"}]"#,
             "ancf:obstacles[0].moving",
-            "not supported",
+            "expected true or false",
         ),
         (
             r#"[{"name": "vertex", "shape": "sphere", "center": [0, 0, 0], "radius": 1}]"#,
@@ -721,23 +712,7 @@ fn a_state_on_the_ground_restores_bit_for_bit() {
         !memory.is_empty() && memory.len() % 3 == 0,
         "obstacle memory {memory:?}"
     );
-    let run = |m: &mut Model| {
-        let mut out = Vec::new();
-        for _ in 0..10 {
-            m.advance(0.01).unwrap();
-            out.extend(m.output_values());
-        }
-        out
-    };
-    let first = run(&mut a);
-    a.restore_state(&saved).unwrap();
-    let again = run(&mut a);
-    let mut b = Model::new(scene).unwrap();
-    b.restore_state(&saved).unwrap();
-    let fresh = run(&mut b);
-    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    assert_eq!(bits(&first), bits(&again), "same model");
-    assert_eq!(bits(&first), bits(&fresh), "fresh model");
+    common::assert_restores_bit_for_bit(scene, &mut a, &saved, (10, |_: &mut Model| {}));
 }
 
 /// Friction stops a Newton correction where it would carry a sample

@@ -165,11 +165,23 @@ pub enum MemoryError {
         /// How many contact vertices there are.
         vertices: usize,
     },
-    /// An obstacle pair list whose length is not a multiple of three
-    /// (obstacle, sample, stiffness).
+    /// An obstacle memory shorter than the moving obstacles' motions, or
+    /// whose pair list after them is not a multiple of three (obstacle,
+    /// sample, stiffness).
     ObstaclePairLength {
         /// Values given.
         values: usize,
+        /// Values the moving obstacles' motions take first.
+        motions: usize,
+    },
+    /// A moving obstacle's motion value that is not finite or too large.
+    ObstacleMotion {
+        /// Its place in the list.
+        index: usize,
+        /// The value given.
+        value: f64,
+        /// The largest magnitude taken.
+        max: f64,
     },
     /// An obstacle pair names an obstacle or a contact sample there is not.
     ObstaclePairIndex {
@@ -213,10 +225,15 @@ impl fmt::Display for MemoryError {
                 "{values} values; the pair stiffnesses come in sixes (kind, four vertices, \
                  stiffness)"
             ),
-            MemoryError::ObstaclePairLength { values } => write!(
+            MemoryError::ObstaclePairLength { values, motions } => write!(
                 f,
-                "{values} values; the obstacle pairs' stiffnesses come in threes (obstacle, \
-                 sample, stiffness)"
+                "{values} values; the moving obstacles' motions take the first {motions}, then \
+                 the obstacle pairs' stiffnesses come in threes (obstacle, sample, stiffness)"
+            ),
+            MemoryError::ObstacleMotion { index, value, max } => write!(
+                f,
+                "moving obstacle value {index}: {value} is not a finite number up to {max:e} in \
+                 magnitude"
             ),
             MemoryError::ObstaclePairIndex {
                 pair,

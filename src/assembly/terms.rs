@@ -20,6 +20,7 @@ use super::{
 use crate::crease;
 use crate::dofs::DofLayout;
 use crate::element::MembraneResultants;
+use crate::frame::Motion;
 use crate::solver::LowRank;
 use nalgebra::{SMatrix, SVector};
 
@@ -103,6 +104,24 @@ pub trait BarrierTerm: ForceTerm {
     /// term admits (contact: free of collisions); the stepper limits its
     /// Newton steps and predictors to it.
     fn max_step_fraction(&self, asm: &Assembler, q: &[f64], dq: &[f64]) -> f64;
+
+    /// [`BarrierTerm::max_step_fraction`] of a move from the step start:
+    /// `q` where the term's moving bodies were at the start, `q + dq` where
+    /// they are at the end (the predictors' moves).
+    fn max_motion_fraction(&self, asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
+        self.max_step_fraction(asm, q, dq)
+    }
+
+    /// Place the term's moving bodies (moving obstacles, in scene order):
+    /// `start` at the step start, `end` at the step end, where the forces
+    /// are evaluated.
+    fn place(&mut self, _start: &[Motion], _end: &[Motion]) {}
+
+    /// Whether any of the term's bodies moves: a guess that holds the
+    /// sheet still is then checked for collisions too.
+    fn moves(&self) -> bool {
+        false
+    }
 
     /// Largest fraction in (0, 1] of a Newton correction `q -> q + dq`,
     /// with the velocities moving by `dv_dq dq` alongside from `v`, up to

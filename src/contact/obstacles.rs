@@ -6,7 +6,11 @@
 //! midsurface keeps half its thickness from the obstacle), a per-pair
 //! stiffness raised for fast approaches, a normal dashpot and smoothed
 //! Coulomb friction with the normal force and tangent basis lagged from
-//! the step start. The obstacles are fixed in the world.
+//! the step start. An obstacle is fixed in the world or moved by its pose
+//! inputs ([`ObstacleTerm::place`]): its placement at the step start and at
+//! the step end, where the Newton iterates are; the dashpot and friction act
+//! on the velocity relative to the obstacle's surface, and a step's motion
+//! is checked relative to the obstacle (its start and end placements).
 //!
 //! The pair Hessian is `kappa (b'' n n^T + b' H)`, `H` the distance's
 //! Hessian; every shape is convex, so `H` is positive semi-definite with
@@ -30,8 +34,10 @@ use super::term::{
     slip_factor, speed_stiffness, tangent_basis,
 };
 use crate::assembly::{
-    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
+    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError,
+    ObstaclePower, State,
 };
+use crate::frame::Motion;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use std::collections::HashMap;
@@ -85,6 +91,14 @@ struct Lagged {
     slide: Vector2<f64>,
 }
 
+/// Where the obstacles are for a computation: at the step start or at the
+/// step end (where Newton's iterates are).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum When {
+    Start,
+    End,
+}
+
 /// A pair in the barrier: obstacle, sample, the sample's closest point
 /// data and gap.
 struct Active {
@@ -121,6 +135,12 @@ pub struct ObstacleTerm {
     v_start: Vec<Vector3<f64>>,
     /// Whether a pair was within `margin` of the barrier at the step start.
     near: bool,
+    /// Each obstacle's origin in the scene (where its pose inputs start).
+    origins: Vec<Vector3<f64>>,
+    /// Each moving obstacle's placement at the step start and at the step
+    /// end (None: fixed).
+    start: Vec<Option<Motion>>,
+    end: Vec<Option<Motion>>,
 }
 
 impl ObstacleTerm {
@@ -176,6 +196,9 @@ impl ObstacleTerm {
             x_start: Vec::new(),
             v_start: Vec::new(),
             near: false,
+            origins: obstacles.iter().map(|o| o.shape.origin()).collect(),
+            start: at_rest(obstacles),
+            end: at_rest(obstacles),
         })
     }
 
@@ -209,23 +232,35 @@ impl ObstacleTerm {
         self.surf.positions(q, &mut x);
         let mut range = (f64::INFINITY, f64::NEG_INFINITY);
         for p in &x {
-            let nearest = self
-                .obstacles
-                .iter()
-                .map(|o| o.shape.closest(p).distance - self.xi)
+            let nearest = (0..self.obstacles.len())
+                .map(|k| self.closest(k, p, When::End).distance - self.xi)
                 .fold(f64::INFINITY, f64::min);
             range = (range.0.min(nearest), range.1.max(nearest));
         }
         range
     }
 
-    /// The pairs within the barrier at positions `x`; fails where a sample
-    /// is already within the clearance.
-    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<Active>, EvalError> {
+    /// The first obstacle (its name) that holds a sample of slot vector
+    /// `q` within the clearance, with that sample's gap `d - xi` (m).
+    pub fn overlapped(&self, q: &[f64]) -> Option<(&str, f64)> {
+        let mut x = Vec::new();
+        self.surf.positions(q, &mut x);
+        (0..self.obstacles.len()).find_map(|k| {
+            let gap = x
+                .iter()
+                .map(|p| self.closest(k, p, When::End).distance - self.xi)
+                .fold(f64::INFINITY, f64::min);
+            (gap <= 0.0).then_some((self.obstacles[k].name.as_str(), gap))
+        })
+    }
+
+    /// The pairs within the barrier at positions `x` (the obstacles placed
+    /// `when`); fails where a sample is already within the clearance.
+    fn active(&self, x: &[Vector3<f64>], when: When) -> Result<Vec<Active>, EvalError> {
         let mut out = Vec::new();
         for (k, o) in self.obstacles.iter().enumerate() {
             for (i, p) in x.iter().enumerate() {
-                let c = o.shape.closest(p);
+                let c = self.closest(k, p, when);
                 let gap = c.distance - self.xi;
                 if gap >= self.s_hat {
                     continue;
@@ -258,8 +293,9 @@ impl ObstacleTerm {
         if v.len() != x.len() || i >= x.len() {
             return self.kappa;
         }
-        let n = self.obstacles[k].shape.closest(&x[i]).normal;
-        let approach = (-n.dot(&v[i])).max(0.0);
+        let c = self.closest(k, &x[i], When::Start);
+        let rel = v[i] - self.surface_velocity(k, &x[i], &c, When::Start);
+        let approach = (-c.normal.dot(&rel)).max(0.0);
         speed_stiffness(self.kappa, self.mass, approach, self.s_hat)
     }
 
@@ -277,9 +313,9 @@ impl ObstacleTerm {
     /// `v`.
     fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>]) {
         let mut kappa = HashMap::new();
-        for (k, o) in self.obstacles.iter().enumerate() {
+        for k in 0..self.obstacles.len() {
             for (i, p) in x.iter().enumerate() {
-                let gap = o.shape.closest(p).distance - self.xi;
+                let gap = self.closest(k, p, When::Start).distance - self.xi;
                 if gap >= self.s_hat + self.margin {
                     continue;
                 }
@@ -299,11 +335,12 @@ impl ObstacleTerm {
         self.v_start.clear();
         self.v_start.extend_from_slice(v);
         self.lagged.clear();
-        for a in self.active(x).unwrap_or_default() {
+        for a in self.active(x, When::Start).unwrap_or_default() {
             let kap = self.kappa_of(a.obstacle, a.sample);
             let n = a.closest.normal;
             let basis = tangent_basis(&n);
-            let vi = v.get(a.sample).copied().unwrap_or_default();
+            let vi = v.get(a.sample).copied().unwrap_or_default()
+                - self.surface_velocity(a.obstacle, &x[a.sample], &a.closest, When::Start);
             // Critical for zeta = 1 at the pair's barrier stiffness.
             let k = kap * ddb(a.gap, self.s_hat).max(0.0);
             self.lagged.push(Lagged {
@@ -320,13 +357,35 @@ impl ObstacleTerm {
 
     /// Largest fraction in (0, 1] of the motion `q -> q + dq` over which
     /// no sample comes within the clearance of an obstacle (conservative
-    /// advancement, keeping [`ccd::MIN_SEPARATION`] of each gap).
+    /// advancement, keeping [`ccd::MIN_SEPARATION`] of each gap), the
+    /// obstacles at the step end: a Newton correction's.
     pub fn safe_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        self.fraction(q, dq, When::End)
+    }
+
+    /// [`ObstacleTerm::safe_fraction`] of a motion from the step start,
+    /// `q` where the obstacles were at the start, `q + dq` where they are
+    /// at the end: the motion relative to each moving obstacle.
+    pub fn motion_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        self.fraction(q, dq, When::Start)
+    }
+
+    /// The collision-free fraction of the motion `q -> q + dq`, `q` with
+    /// the obstacles placed `from`, `q + dq` with them at the step end;
+    /// each sample's motion relative to an obstacle is taken as a straight
+    /// line in the obstacle's own frame.
+    fn fraction(&self, q: &[f64], dq: &[f64], from: When) -> f64 {
         let (x, d) = self.samples(q, dq);
         let mut t: f64 = 1.0;
-        for o in &self.obstacles {
-            for (p, dp) in x.iter().zip(&d) {
-                let c0 = o.shape.closest(p);
+        for (k, o) in self.obstacles.iter().enumerate() {
+            for (xi, di) in x.iter().zip(&d) {
+                let (p, dp) = if o.moving {
+                    let p = self.local(k, xi, from);
+                    (p, self.local(k, &(xi + di), When::End) - p)
+                } else {
+                    (*xi, *di)
+                };
+                let c0 = o.shape.closest(&p);
                 // Out of reach over the whole motion (the distance is
                 // 1-Lipschitz).
                 if c0.distance - self.xi > dp.norm() {
@@ -334,7 +393,7 @@ impl ObstacleTerm {
                 }
                 let probe = |s: f64| {
                     let c = o.shape.closest(&(p + dp * s));
-                    (c.distance, (-c.normal.dot(dp)).max(0.0))
+                    (c.distance, (-c.normal.dot(&dp)).max(0.0))
                 };
                 if let Some(s) = ccd::advance_by(probe, self.xi, t) {
                     t = t.min(s);
@@ -344,17 +403,105 @@ impl ObstacleTerm {
         t
     }
 
+    /// Obstacle `k`'s placement `when` (None: fixed).
+    fn placement(&self, k: usize, when: When) -> Option<&Motion> {
+        match when {
+            When::Start => self.start[k].as_ref(),
+            When::End => self.end[k].as_ref(),
+        }
+    }
+
+    /// The point `x` in obstacle `k`'s scene frame (where its shape is
+    /// given), the obstacle placed `when`.
+    fn local(&self, k: usize, x: &Vector3<f64>, when: When) -> Vector3<f64> {
+        match self.placement(k, when) {
+            None => *x,
+            Some(m) => m.pose.rotation.transpose() * (x - m.pose.origin) + self.origins[k],
+        }
+    }
+
+    /// The signed distance of `x` to obstacle `k` placed `when`, with its
+    /// gradient and Hessian in world axes.
+    fn closest(&self, k: usize, x: &Vector3<f64>, when: When) -> Closest {
+        let shape = &self.obstacles[k].shape;
+        match self.placement(k, when) {
+            None => shape.closest(x),
+            Some(m) => {
+                let r = &m.pose.rotation;
+                let c = shape.closest(&self.local(k, x, when));
+                Closest {
+                    distance: c.distance,
+                    normal: r * c.normal,
+                    hessian: r * c.hessian * r.transpose(),
+                }
+            }
+        }
+    }
+
+    /// The velocity of obstacle `k`'s surface (placed `when`) at the point
+    /// closest to `x` (`c` its distance data); zero for a fixed one.
+    fn surface_velocity(
+        &self,
+        k: usize,
+        x: &Vector3<f64>,
+        c: &Closest,
+        when: When,
+    ) -> Vector3<f64> {
+        match self.placement(k, when) {
+            None => Vector3::zeros(),
+            Some(m) => m.point_velocity(&(x - c.distance * c.normal)),
+        }
+    }
+
+    /// The point obstacle `k`'s wrench is taken about: its origin where
+    /// it is now.
+    fn wrench_origin(&self, k: usize) -> Vector3<f64> {
+        match &self.end[k] {
+            None => self.origins[k],
+            Some(m) => m.pose.origin,
+        }
+    }
+
+    /// Place the moving obstacles (in scene order): `start` at the step
+    /// start, `end` at the step end, where the forces are evaluated.
+    pub fn place(&mut self, start: &[Motion], end: &[Motion]) {
+        let moving = self
+            .end
+            .iter_mut()
+            .zip(&mut self.start)
+            .filter(|(e, _)| e.is_some());
+        for ((e, s), (m0, m1)) in moving.zip(start.iter().zip(end)) {
+            *s = Some(*m0);
+            *e = Some(*m1);
+        }
+    }
+
+    /// The moving obstacles' placements at the step start and end (in
+    /// scene order).
+    pub fn placements(&self) -> (Vec<Motion>, Vec<Motion>) {
+        (
+            self.start.iter().flatten().copied().collect(),
+            self.end.iter().flatten().copied().collect(),
+        )
+    }
+
+    /// How many obstacles move.
+    pub fn moving_count(&self) -> usize {
+        self.obstacles.iter().filter(|o| o.moving).count()
+    }
+
     /// The fraction of a Newton correction at which a sliding pair it
     /// would carry through sticking comes closest to rest (as
     /// [`super::ContactTerm::friction_fraction`]); 1 if none.
-    pub fn friction_fraction(&self, v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
+    pub fn friction_fraction(&self, q: &[f64], v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
         let mut t: f64 = 1.0;
         for lg in &self.lagged {
             if self.obstacles[lg.obstacle].friction <= 0.0 || lg.lambda <= 0.0 {
                 continue;
             }
             let m = &self.surf.maps[lg.sample];
-            let (vr, dr) = (eval_map(m, v), eval_map(m, dq) * dv_dq);
+            let vr = self.relative_velocity(lg.obstacle, &eval_map(m, q), eval_map(m, v));
+            let dr = eval_map(m, dq) * dv_dq;
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
             if let Some(stop) = reversal_fraction(u, du, lg.slide, self.eps_v) {
@@ -364,9 +511,19 @@ impl ObstacleTerm {
         t
     }
 
+    /// The velocity `v` of a sample at `x` relative to obstacle `k`'s
+    /// surface at the step end.
+    fn relative_velocity(&self, k: usize, x: &Vector3<f64>, v: Vector3<f64>) -> Vector3<f64> {
+        if !self.obstacles[k].moving {
+            return v;
+        }
+        v - self.surface_velocity(k, x, &self.closest(k, x, When::End), When::End)
+    }
+
     /// Add a sample's force `f` (internal-force sign) to the slots, and
     /// to the wrench on obstacle `k` at the shape's closest point to the
-    /// sample `x`.
+    /// sample `x`; gives the power `f` does on the obstacle (zero for a
+    /// fixed one).
     fn apply(
         &self,
         k: usize,
@@ -375,21 +532,22 @@ impl ObstacleTerm {
         f: &Vector3<f64>,
         force: &mut [f64],
         wrenches: &mut [[f64; 6]],
-    ) {
+    ) -> f64 {
         scatter_map(&self.surf.maps[i], f, force);
-        let shape = &self.obstacles[k].shape;
-        let c = shape.closest(x);
-        let arm = x - c.distance * c.normal - shape.origin();
+        let c = self.closest(k, x, When::End);
+        let arm = x - c.distance * c.normal - self.wrench_origin(k);
         let m = arm.cross(f);
         let w = &mut wrenches[k];
         for a in 0..3 {
             w[a] += f[a];
             w[3 + a] += m[a];
         }
+        f.dot(&self.surface_velocity(k, x, &c, When::End))
     }
 
     /// [`ObstacleTerm::apply`] for a lagged pair's dissipative force `f`
-    /// (sample positions `x`), also added to its part of the force.
+    /// (sample positions `x`), also added to its part of the force; gives
+    /// its power on the obstacle.
     fn apply_lagged(
         &self,
         lg: &Lagged,
@@ -397,9 +555,9 @@ impl ObstacleTerm {
         f: &Vector3<f64>,
         (force, part): (&mut [f64], &mut [f64]),
         wrenches: &mut [[f64; 6]],
-    ) {
-        self.apply(lg.obstacle, lg.sample, &x[lg.sample], f, force, wrenches);
+    ) -> f64 {
         scatter_map(&self.surf.maps[lg.sample], f, part);
+        self.apply(lg.obstacle, lg.sample, &x[lg.sample], f, force, wrenches)
     }
 
     /// The barrier's, dashpots' and friction's forces, energy and matrix
@@ -417,8 +575,9 @@ impl ObstacleTerm {
             out.dissipative_force.zeroed(n);
         }
         let mut wrenches = vec![[0.0; 6]; self.obstacles.len()];
+        let mut power = ObstaclePower::default();
         let mut matrix = matrix;
-        let active = self.active(&x)?;
+        let active = self.active(&x, When::End)?;
         out.barrier_pairs += active.len();
         for a in &active {
             let (k, i) = (a.obstacle, a.sample);
@@ -427,7 +586,7 @@ impl ObstacleTerm {
             let nrm = a.closest.normal;
             out.term_energy += kap * barrier(a.gap, self.s_hat);
             let f = (kap * b1) * nrm;
-            self.apply(k, i, &x[i], &f, &mut out.force, &mut wrenches);
+            power.total += self.apply(k, i, &x[i], &f, &mut out.force, &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut()
                 && co.k != 0.0
             {
@@ -440,12 +599,12 @@ impl ObstacleTerm {
         }
         // Dashpots on the normal velocity along the lagged normals.
         for lg in self.lagged.iter().filter(|lg| lg.c > 0.0) {
-            let vi = v[lg.sample];
+            let vi = self.relative_velocity(lg.obstacle, &x[lg.sample], v[lg.sample]);
             let rate = lg.normal.dot(&vi);
             out.contact_damping_power += lg.c * rate * rate;
             let f = (lg.c * rate) * lg.normal;
             let part = &mut out.dissipative_force.damping;
-            self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
+            power.damping += self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = (co.c * lg.c) * lg.normal * lg.normal.transpose();
                 add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
@@ -457,7 +616,7 @@ impl ObstacleTerm {
             if mu <= 0.0 {
                 continue;
             }
-            let vi = v[lg.sample];
+            let vi = self.relative_velocity(lg.obstacle, &x[lg.sample], v[lg.sample]);
             let u = Vector2::new(lg.basis[0].dot(&vi), lg.basis[1].dot(&vi));
             let slip = slip_factor(u.norm(), self.eps_v);
             let ml = mu * lg.lambda;
@@ -465,38 +624,58 @@ impl ObstacleTerm {
             let f = (ml * slip.0) * ut;
             out.friction_power += f.dot(&vi);
             let part = &mut out.dissipative_force.friction;
-            self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
+            power.friction += self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = friction_matrix(co.c * ml, &lg.basis, u, slip);
                 add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
             }
         }
+        power.total += power.damping + power.friction;
+        out.dissipative_force.obstacles = power;
         out.obstacle_wrenches = wrenches;
         Ok(())
     }
 
-    /// The pair stiffnesses as [`ForceTerm::memory`] gives them: triples
+    /// What [`BarrierTerm::memory`] gives: each moving obstacle's motion
+    /// now ([`Motion::values`]), then the pair stiffnesses as triples
     /// (obstacle, sample, stiffness) in key order.
     fn memory_list(&self) -> Vec<f64> {
+        let mut out: Vec<f64> = self.end.iter().flatten().flat_map(|m| m.values()).collect();
         let mut pairs: Vec<(&(usize, usize), &f64)> = self.pair_kappa.iter().collect();
         pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
-        let mut out = Vec::with_capacity(3 * pairs.len());
+        out.reserve(3 * pairs.len());
         for (&(k, i), &kap) in pairs {
             out.extend([k as f64, i as f64, kap]);
         }
         out
     }
 
-    /// The pair stiffnesses of a memory list (untrusted: a restored
-    /// state's): triples of an obstacle index, a sample index and a
-    /// positive stiffness up to MAX_MAGNITUDE.
-    fn parse_memory(&self, memory: &[f64]) -> Result<HashMap<(usize, usize), f64>, MemoryError> {
-        if !memory.len().is_multiple_of(3) {
+    /// The moving obstacles' motions and the pair stiffnesses of a memory
+    /// list (untrusted: a restored state's): [`Motion::VALUES`] finite
+    /// numbers up to MAX_MAGNITUDE per moving obstacle, then triples of an
+    /// obstacle index, a sample index and a positive stiffness up to
+    /// MAX_MAGNITUDE.
+    #[allow(clippy::type_complexity)]
+    fn parse_memory(
+        &self,
+        memory: &[f64],
+    ) -> Result<(Vec<Motion>, HashMap<(usize, usize), f64>), MemoryError> {
+        let max = crate::scene::limits::MAX_MAGNITUDE;
+        let head = Motion::VALUES * self.moving_count();
+        if memory.len() < head || !(memory.len() - head).is_multiple_of(3) {
             return Err(MemoryError::ObstaclePairLength {
                 values: memory.len(),
+                motions: head,
             });
         }
-        let max = crate::scene::limits::MAX_MAGNITUDE;
+        let (motions, memory) = memory.split_at(head);
+        if let Some(k) = motions.iter().position(|x| x.is_nan() || x.abs() > max) {
+            return Err(MemoryError::ObstacleMotion {
+                index: k,
+                value: motions[k],
+                max,
+            });
+        }
         let index = |x: f64, n: usize, what: &'static str, k: usize| {
             (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
                 .then_some(x as usize)
@@ -520,7 +699,11 @@ impl ObstacleTerm {
             }
             map.insert((o, i), m[2]);
         }
-        Ok(map)
+        let motions = motions
+            .chunks_exact(Motion::VALUES)
+            .map(Motion::from_values)
+            .collect();
+        Ok((motions, map))
     }
 
     /// The samples' values of two slot vectors (positions and velocities,
@@ -595,7 +778,9 @@ impl BarrierTerm for ObstacleTerm {
     }
 
     fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
-        self.pair_kappa = self.parse_memory(memory)?;
+        let (motions, kappa) = self.parse_memory(memory)?;
+        self.pair_kappa = kappa;
+        ObstacleTerm::place(self, &motions, &motions);
         Ok(())
     }
 
@@ -603,15 +788,27 @@ impl BarrierTerm for ObstacleTerm {
         self.safe_fraction(q, dq)
     }
 
+    fn max_motion_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
+        self.motion_fraction(q, dq)
+    }
+
+    fn place(&mut self, start: &[Motion], end: &[Motion]) {
+        ObstacleTerm::place(self, start, end);
+    }
+
+    fn moves(&self) -> bool {
+        self.moving_count() > 0
+    }
+
     fn max_correction_fraction(
         &self,
         _asm: &Assembler,
-        _q: &[f64],
+        q: &[f64],
         v: &[f64],
         dq: &[f64],
         dv_dq: f64,
     ) -> f64 {
-        self.friction_fraction(v, dq, dv_dq)
+        self.friction_fraction(q, v, dq, dv_dq)
     }
 
     fn limits_steps(&self) -> bool {
@@ -621,4 +818,13 @@ impl BarrierTerm for ObstacleTerm {
     fn reports_power(&self) -> bool {
         true
     }
+}
+
+/// The moving obstacles at rest where the scene puts them, None for the
+/// fixed ones.
+fn at_rest(obstacles: &[Obstacle]) -> Vec<Option<Motion>> {
+    obstacles
+        .iter()
+        .map(|o| o.moving.then(|| Motion::at_rest(o.shape.origin())))
+        .collect()
 }

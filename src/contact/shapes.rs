@@ -251,7 +251,8 @@ impl Shape {
 }
 
 /// A rigid obstacle of a scene (`ancf:obstacles`): its name (the prefix of
-/// its outputs), its shape and the friction coefficient against the sheet.
+/// its outputs and inputs), its shape, the friction coefficient against the
+/// sheet, and whether pose inputs move it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Obstacle {
     /// Variable name prefix of its wrench outputs.
@@ -261,4 +262,8 @@ pub struct Obstacle {
     pub shape: Shape,
     /// Coulomb friction coefficient between the sheet and the obstacle.
     pub friction: f64,
+    /// Moved by pose inputs (`NAME.x/y/z`, `NAME.rx/ry/rz`: the origin
+    /// [`Shape::origin`] and a rotation vector about it), else fixed.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub moving: bool,
 }

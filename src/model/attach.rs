@@ -126,44 +126,73 @@ pub(super) struct FrameInput {
 impl FrameInput {
     /// The frame's pose under the input values `u`.
     pub(super) fn pose(&self, u: &[f64]) -> Pose {
-        let p = &u[self.input..self.input + POSE_INPUTS];
-        Pose::new(
-            Vector3::new(p[0], p[1], p[2]),
-            &Vector3::new(p[3], p[4], p[5]),
-        )
+        pose(self.input, u)
     }
 
-    /// The frame's velocity and acceleration: its origin's `[xd, xdd]`
-    /// and its angular `[w, wd]` (world axes), from the inputs `u` and
-    /// their first and second derivatives (the rotation vector's rates
-    /// mapped by the left Jacobian; its rate of change along the path by
-    /// a central difference).
+    /// The frame's velocity and acceleration (see [`rates`]).
     pub(super) fn rates(
         &self,
         u: &[f64],
         d1: &[f64],
         d2: &[f64],
     ) -> ([Vector3<f64>; 2], [Vector3<f64>; 2]) {
-        let at = |x: &[f64], k: usize| {
-            let i = self.input + k;
-            Vector3::new(
-                x.get(i).copied().unwrap_or(0.0),
-                x.get(i + 1).copied().unwrap_or(0.0),
-                x.get(i + 2).copied().unwrap_or(0.0),
-            )
-        };
-        let (r, rd, rdd) = (at(u, 3), at(d1, 3), at(d2, 3));
-        let w = frame::left_jacobian(&r) * rd;
-        let mut wd = frame::left_jacobian(&r) * rdd;
-        let speed = rd.norm();
-        if speed > 0.0 {
-            let h = 1e-4 / speed;
-            let dj = (frame::left_jacobian(&(r + h * rd)) - frame::left_jacobian(&(r - h * rd)))
-                / (2.0 * h);
-            wd += dj * rd;
-        }
-        ([at(d1, 0), at(d2, 0)], [w, wd])
+        rates(self.input, u, d1, d2)
     }
+}
+
+/// The pose of the six pose inputs from `input` (`x, y, z, rx, ry, rz`)
+/// under the input values `u`.
+pub(super) fn pose(input: usize, u: &[f64]) -> Pose {
+    let p = &u[input..input + POSE_INPUTS];
+    Pose::new(
+        Vector3::new(p[0], p[1], p[2]),
+        &Vector3::new(p[3], p[4], p[5]),
+    )
+}
+
+/// The velocity and acceleration of the pose inputs from `input`: the
+/// origin's `[xd, xdd]` and the angular `[w, wd]` (world axes), from the
+/// inputs `u` and their first and second derivatives (the rotation
+/// vector's rates mapped by the left Jacobian; its rate of change along the
+/// path by a central difference).
+pub(super) fn rates(
+    input: usize,
+    u: &[f64],
+    d1: &[f64],
+    d2: &[f64],
+) -> ([Vector3<f64>; 2], [Vector3<f64>; 2]) {
+    let at = |x: &[f64], k: usize| {
+        let i = input + k;
+        Vector3::new(
+            x.get(i).copied().unwrap_or(0.0),
+            x.get(i + 1).copied().unwrap_or(0.0),
+            x.get(i + 2).copied().unwrap_or(0.0),
+        )
+    };
+    let (r, rd, rdd) = (at(u, 3), at(d1, 3), at(d2, 3));
+    let w = frame::left_jacobian(&r) * rd;
+    let mut wd = frame::left_jacobian(&r) * rdd;
+    let speed = rd.norm();
+    if speed > 0.0 {
+        let h = 1e-4 / speed;
+        let dj =
+            (frame::left_jacobian(&(r + h * rd)) - frame::left_jacobian(&(r - h * rd))) / (2.0 * h);
+        wd += dj * rd;
+    }
+    ([at(d1, 0), at(d2, 0)], [w, wd])
+}
+
+/// The motion of the pose inputs from `input` (pose and velocity) under
+/// the inputs `u` and their derivatives `d1`, `d2`.
+pub(super) fn motion(input: usize, u: &[f64], d1: &[f64], d2: &[f64]) -> frame::Motion {
+    let ([v, _], [w, _]) = rates(input, u, d1, d2);
+    let p = &u[input..input + POSE_INPUTS];
+    frame::Motion::new(
+        Vector3::new(p[0], p[1], p[2]),
+        Vector3::new(p[3], p[4], p[5]),
+        v,
+        w,
+    )
 }
 
 /// The initial state of a sheet with attachments, from the inputs `u` and

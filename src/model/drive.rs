@@ -4,7 +4,7 @@
 use super::Model;
 use super::attach::FrameInput;
 use crate::assembly::Assembler;
-use crate::frame::Pose;
+use crate::frame::{Motion, Pose};
 use crate::scene::InputRamp;
 use crate::solver::stepper::Drive;
 
@@ -126,6 +126,8 @@ pub(super) struct InputMap {
     pub(super) force: Vec<(usize, usize)>,
     /// The attachments: their pose inputs and held slots.
     pub(super) frames: Vec<FrameInput>,
+    /// The first pose input of each moving obstacle.
+    pub(super) obstacles: Vec<usize>,
     pub(super) n_dofs: usize,
 }
 
@@ -139,6 +141,9 @@ pub(super) struct DriveValues {
     pub(super) prescribed: Vec<(usize, f64)>,
     /// The attachments' frames.
     pub(super) frames: Vec<Pose>,
+    /// The moving obstacles' placements and velocities (set by
+    /// [`InputMap::move_obstacles`]).
+    pub(super) obstacles: Vec<Motion>,
 }
 
 impl InputMap {
@@ -177,6 +182,22 @@ impl InputMap {
             f.held.prescribe(&pose, &mut d.prescribed);
             d.frames.push(pose);
         }
+    }
+
+    /// The moving obstacles' motions under the inputs `u` and their first
+    /// and second derivatives `d1`, `d2`, into `d`.
+    pub(super) fn move_obstacles(
+        &self,
+        u: &[f64],
+        (d1, d2): (&[f64], &[f64]),
+        d: &mut DriveValues,
+    ) {
+        d.obstacles.clear();
+        d.obstacles.extend(
+            self.obstacles
+                .iter()
+                .map(|&i| super::attach::motion(i, u, d1, d2)),
+        );
     }
 
     /// Work done at once when input `i` jumps from `u[i]` to `new` while

@@ -299,9 +299,13 @@ impl Model {
             &self.state.input_second_derivatives[..],
         );
         attach::start_with_frames(&sys.asm, &sys.inputs, &u, slopes, &mut dynamics);
-        for &(i, x) in &sys.inputs.drive(&u).prescribed {
+        let mut drive = sys.inputs.drive(&u);
+        for &(i, x) in &drive.prescribed {
             dynamics.q[i] = x;
         }
+        // Moving obstacles where their inputs put them.
+        sys.inputs.move_obstacles(&u, slopes, &mut drive);
+        sys.asm.place_bodies(&drive.obstacles, &drive.obstacles);
         let theta_prev = vec![std::f64::consts::PI; sys.asm.creases.len()];
         self.state.dynamics = dynamics;
         self.state.memory.newton = Default::default();

@@ -225,7 +225,8 @@ impl Model {
         )?;
         let flat: Vec<f64> = s.actuators.iter().flatten().copied().collect();
         values("actuators", &flat, &[0, 2 * self.scene.actuators.len()])?;
-        check_memory(&s.memory, running, n, nc)?;
+        let moving = self.scene.obstacles.iter().filter(|o| o.moving).count();
+        check_memory(&s.memory, running, (n, nc, moving))?;
         let checked = self
             .check_parameters(&s.parameters, s.damping_set, s.actuator_set)
             .map_err(|e| e.to_string())?;
@@ -474,8 +475,13 @@ impl Model {
 
 /// The stepper's memory of a saved state: the next step size, the
 /// predictor's counters, the point of the kept iteration matrix (`n`
-/// DOFs, `nc` crease ends; an iteration matrix only once `running`).
-fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result<(), String> {
+/// DOFs, `nc` crease ends, `moving` obstacles; an iteration matrix only
+/// once `running`).
+fn check_memory(
+    m: &StepperMemory,
+    running: bool,
+    (n, nc, moving): (usize, usize, usize),
+) -> Result<(), String> {
     number("memory.h_next", m.h_next)?;
     if m.h_next <= 0.0 {
         return Err(format!(
@@ -512,6 +518,8 @@ fn check_memory(m: &StepperMemory, running: bool, n: usize, nc: usize) -> Result
         values("memory.jacobian.theta_prev", &j.theta_prev, &[nc])?;
         values("memory.jacobian.q_start", &j.q_start, &[0, n])?;
         values("memory.jacobian.v_start", &j.v_start, &[j.q_start.len()])?;
+        let motions = 2 * crate::frame::Motion::VALUES * moving;
+        values("memory.jacobian.obstacles", &j.obstacles, &[0, motions])?;
     }
     Ok(())
 }

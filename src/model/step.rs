@@ -139,6 +139,7 @@ impl Model {
                 reason: e.to_string(),
             })?;
         let mut adv = Advance::new(sys, state, big_h, ramp);
+        moved_obstacles_clear(sys, &adv.d_start, state, t0)?;
         adv.run(sys, state)?;
         let (factor_time, solve_time) = sys.stepper.linear_times(&sys.solver);
         adv.report.factor_time = (factor_time - adv.linear_times.0).as_secs_f64();
@@ -213,6 +214,37 @@ impl Model {
     }
 }
 
+/// Place the moving obstacles where the inputs set at the communication
+/// point `t0` put them (`d`); fails, naming the obstacle, where that is
+/// into the sheet: held pose inputs jump there.
+fn moved_obstacles_clear(
+    sys: &mut System,
+    d: &DriveValues,
+    state: &ModelState,
+    t0: f64,
+) -> Result<(), Error> {
+    if sys.inputs.obstacles.is_empty() {
+        return Ok(());
+    }
+    sys.asm.place_bodies(&d.obstacles, &d.obstacles);
+    let Some((name, gap)) = sys
+        .asm
+        .obstacles()
+        .and_then(|o| o.overlapped(&state.dynamics.q))
+    else {
+        return Ok(());
+    };
+    Err(Error::StepFailed {
+        time: t0,
+        reason: format!(
+            "the pose inputs of obstacle {name} put it into the sheet (gap {} m within the \
+             clearance): held inputs jump at a communication point; give their derivatives \
+             (fmi2SetRealInputDerivatives) or move the obstacle in shorter communication steps",
+            num(gap)
+        ),
+    })
+}
+
 /// One advance in progress: its inputs, the drive of the step at hand, and
 /// the work so far.
 struct Advance {
@@ -273,8 +305,28 @@ impl Advance {
         let mut u = std::mem::take(&mut adv.u);
         adv.inputs_at(0.0, &mut u);
         sys.inputs.drive_into(&u, &mut adv.d_start);
+        adv.move_obstacles(sys, &u, 0.0, true);
         adv.u = u;
         adv
+    }
+
+    /// The moving obstacles' motions at elapsed time `e` under the inputs
+    /// `u` (there), into the drive at the step start (`start`) or end.
+    fn move_obstacles(&mut self, sys: &System, u: &[f64], e: f64, start: bool) {
+        if sys.inputs.obstacles.is_empty() {
+            return;
+        }
+        let s2 = |k: usize| self.second.get(k).copied().unwrap_or(0.0);
+        let d1: Vec<f64> = (0..u.len())
+            .map(|k| (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k] + s2(k) * e)
+            .collect();
+        let d2: Vec<f64> = (0..u.len()).map(s2).collect();
+        let d = if start {
+            &mut self.d_start
+        } else {
+            &mut self.d
+        };
+        sys.inputs.move_obstacles(u, (&d1, &d2), d);
     }
 
     /// The inputs as the master set them at elapsed time `e` of this
@@ -415,7 +467,7 @@ impl Advance {
             };
             match verdict {
                 Verdict::Accept { next } => {
-                    self.accept(sys, state, &out);
+                    self.accept(sys, state, &out, h);
                     s = s_end;
                     k += 1;
                     self.report.steps += 1;
@@ -448,7 +500,12 @@ impl Advance {
         let mut u = std::mem::take(&mut self.u);
         self.inputs_at(s_end, &mut u);
         sys.inputs.drive_into(&u, &mut self.d);
+        self.move_obstacles(sys, &u, s_end, false);
         self.u = u;
+        if !sys.inputs.obstacles.is_empty() {
+            sys.asm
+                .place_bodies(&self.d_start.obstacles, &self.d.obstacles);
+        }
         if sys.asm.before_step(&state.dynamics.q, &state.dynamics.v) {
             // Contact pairs appeared: new blocks, new symbolic analysis.
             sys.rebuild_solver().map_err(|e| Failure {
@@ -473,8 +530,8 @@ impl Advance {
 
     /// Make the attempt's candidate the state: the work the inputs did
     /// over the step, the dissipated work, the crease angles and the
-    /// stepper's memory.
-    fn accept(&mut self, sys: &System, state: &mut ModelState, out: &Outcome) {
+    /// stepper's memory (`h` the step's size).
+    fn accept(&mut self, sys: &System, state: &mut ModelState, out: &Outcome, h: f64) {
         let angles = sys.stepper.crease_angles();
         state.work.input += self.d_start.work_to(
             &self.d,
@@ -491,8 +548,13 @@ impl Advance {
                 &state.dynamics.q,
                 &self.next.q,
             );
-            state.work.friction += wf;
-            state.work.contact_damping += wd;
+            // What moving obstacles take is put in, not dissipated.
+            let on = state
+                .dissipative_force
+                .obstacle_work_to(&ev.dissipative_force, h);
+            state.work.friction += wf - on.friction;
+            state.work.contact_damping += wd - on.damping;
+            state.work.input -= on.total;
             state.dissipative_force.clone_from(&ev.dissipative_force);
         }
         state.work.viscous += viscous_work(

@@ -160,6 +160,11 @@ impl System {
             frames.push(FrameInput { input: idx, held });
             idx += attach::POSE_INPUTS;
         }
+        let mut moving = Vec::new();
+        for _ in sc.obstacles.iter().filter(|o| o.moving) {
+            moving.push(idx);
+            idx += attach::POSE_INPUTS;
+        }
         let mut force = Vec::new();
         for (k, f) in sc.vertex_forces.iter().enumerate() {
             let s = layout.position_slot[f.vertex.index()];
@@ -231,6 +236,7 @@ impl System {
                 motion,
                 force,
                 frames,
+                obstacles: moving,
                 n_dofs: asm.n_dofs(),
             },
             reactions,

@@ -7,6 +7,7 @@ use super::{Error, Model, Phase};
 use crate::assembly::Evaluation;
 use crate::ids::{FoldEdgeId, VertexId};
 use crate::scene::{ActuatorMode, InputTiming, Scene};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// One scalar variable of the model, as the FMU and CSV files name it.
@@ -33,7 +34,7 @@ fn spec(name: String, unit: &str, description: String, start: f64) -> VariableSp
 
 /// The inputs of `scene`: one per actuator, then the x, y, z of each
 /// vertex force and each prescribed vertex motion, then each attachment's
-/// pose (x, y, z, rx, ry, rz).
+/// pose (x, y, z, rx, ry, rz), then each moving obstacle's.
 pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
     let mut v = Vec::new();
     for a in &scene.actuators {
@@ -71,27 +72,44 @@ pub(super) fn input_table(scene: &Scene) -> Vec<VariableSpec> {
     }
     for a in &scene.attachments {
         let o = super::attach::origin(scene, a);
-        for (c, start) in ["x", "y", "z"].iter().zip(o.iter()) {
-            v.push(spec(
-                format!("{}.{c}", a.name),
-                "m",
-                format!("origin of attachment {}'s frame, {c}", a.name),
-                *start,
-            ));
-        }
-        for c in ["x", "y", "z"] {
-            v.push(spec(
-                format!("{}.r{c}", a.name),
-                "rad",
-                format!(
-                    "rotation vector of attachment {}'s frame (axis times angle), {c}",
-                    a.name
-                ),
-                0.0,
-            ));
-        }
+        let what = format!("attachment {}'s frame", a.name);
+        pose_inputs(&a.name, &what, &o, &mut v);
+    }
+    for o in scene.obstacles.iter().filter(|o| o.moving) {
+        let what = format!("obstacle {} ({})", o.name, origin_name(&o.shape));
+        pose_inputs(&o.name, &what, &o.shape.origin(), &mut v);
     }
     v
+}
+
+/// The six pose inputs `NAME.x/y/z` (the origin of `what`, starting at
+/// `origin`) and `NAME.rx/ry/rz` (its rotation vector, starting at 0).
+fn pose_inputs(name: &str, what: &str, origin: &Vector3<f64>, v: &mut Vec<VariableSpec>) {
+    for (c, start) in ["x", "y", "z"].iter().zip(origin.iter()) {
+        v.push(spec(
+            format!("{name}.{c}"),
+            "m",
+            format!("origin of {what}, {c}"),
+            *start,
+        ));
+    }
+    for c in ["x", "y", "z"] {
+        v.push(spec(
+            format!("{name}.r{c}"),
+            "rad",
+            format!("rotation vector of {what} (axis times angle), {c}"),
+            0.0,
+        ));
+    }
+}
+
+/// The point an obstacle's pose inputs and wrench outputs refer to.
+fn origin_name(shape: &crate::contact::Shape) -> &'static str {
+    match shape {
+        crate::contact::Shape::HalfSpace { .. } => "its plane's point",
+        crate::contact::Shape::Capsule { .. } => "its segment's midpoint",
+        _ => "its centre",
+    }
 }
 
 /// The outputs of `scene`, as its output groups select: vertex positions,
@@ -186,12 +204,7 @@ fn wrench_outputs(scene: &Scene, v: &mut Vec<VariableSpec>) {
     }
     for o in &scene.obstacles {
         let what = format!("obstacle {}", o.name);
-        let about = match o.shape {
-            crate::contact::Shape::HalfSpace { .. } => "its plane's point",
-            crate::contact::Shape::Capsule { .. } => "its segment's midpoint",
-            _ => "its centre",
-        };
-        wrench(&o.name, &what, about, true);
+        wrench(&o.name, &what, origin_name(&o.shape), true);
     }
 }
 

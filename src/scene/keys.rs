@@ -13,7 +13,7 @@
 //! | `ancf:motions` | `[{name, vertex}]` |
 //! | `ancf:attachments` | `[{name, vertices}]` |
 //! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
-//! | `ancf:obstacles` | `[{name, shape, ...its parameters, friction}]` |
+//! | `ancf:obstacles` | `[{name, shape, ...its parameters, friction, moving}]` |
 //! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, quadrature}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies", "reactions"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
@@ -796,8 +796,8 @@ fn vector3(o: &Obj, f: &str) -> Result<[f64; 3], SceneError> {
     Ok(out)
 }
 
-/// `ancf:obstacles`: rigid shapes fixed in the world that the sheet
-/// touches through the contact barrier.
+/// `ancf:obstacles`: rigid shapes, fixed in the world or moved by pose
+/// inputs, that the sheet touches through the contact barrier.
 fn key_obstacles(
     v: &Value,
     p: &mut PhysicsKeys,
@@ -826,7 +826,7 @@ fn key_obstacles(
         let o = Obj::new(&key, item, fields)?;
         let name = expect_string(o.required("name")?, &o.path("name"))?;
         check_name(&o.path("name"), name)?;
-        obstacle_fixed(&o)?;
+        let moving = obstacle_moving(&o)?;
         let shape = obstacle_shape(&o, shape_name)?;
         shape
             .check()
@@ -837,6 +837,7 @@ fn key_obstacles(
                 name: name.to_string(),
                 shape,
                 friction: friction.unwrap_or(0.0),
+                moving,
             },
             friction,
             key,
@@ -866,15 +867,12 @@ fn obstacle_shape_name<'a>(item: &'a Value, key: &str) -> Result<&'a str, SceneE
     Ok(shape_name)
 }
 
-/// An obstacle's `moving`: only false (or absent) for now.
-fn obstacle_fixed(o: &Obj) -> Result<(), SceneError> {
+/// An obstacle's `moving`: true for pose inputs, false (or absent) for
+/// an obstacle fixed in the world.
+fn obstacle_moving(o: &Obj) -> Result<bool, SceneError> {
     match o.get("moving") {
-        None | Some(Value::Bool(false)) => Ok(()),
-        Some(Value::Bool(true)) => Err(SceneError::invalid(
-            o.path("moving"),
-            "moving obstacles (pose inputs) are not supported yet; obstacles are fixed \
-             in the world",
-        )),
+        None => Ok(false),
+        Some(Value::Bool(b)) => Ok(*b),
         Some(other) => Err(SceneError::invalid(
             o.path("moving"),
             format!("expected true or false, found {}", type_name(other)),

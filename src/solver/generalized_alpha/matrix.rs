@@ -3,6 +3,7 @@
 
 use super::{Coefficients, Workspace};
 use crate::assembly::{Assembler, Evaluation, MatrixCoeffs, State};
+use crate::frame::Motion;
 use crate::solver::SparseSolver;
 use crate::solver::stepper::{Drive, Dynamics, StepError};
 
@@ -32,6 +33,10 @@ pub struct JacobianPoint {
     /// Velocities at the step start.
     #[serde(default)]
     pub v_start: Vec<f64>,
+    /// The moving obstacles' motions at the step start, then at its end
+    /// ([`crate::frame::Motion::values`] each): where the barrier had them.
+    #[serde(default)]
+    pub obstacles: Vec<f64>,
 }
 
 /// Factor the iteration matrix formed at `q` (its sparse values in
@@ -51,10 +56,12 @@ pub(super) fn factor(
 }
 
 /// Record in `ws` that the solver now holds the matrix formed at `next`
-/// for the step from `cur` of size `h` under `drive` (the buffers of `jp`,
-/// the point taken out of `ws` before factoring, reused).
+/// for the step from `cur` of size `h` under `drive`, the moving obstacles
+/// where `asm` has them (the buffers of `jp`, the point taken out of `ws`
+/// before factoring, reused).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn record(
+    asm: &Assembler,
     ws: &mut Workspace,
     jp: Option<JacobianPoint>,
     h: f64,
@@ -74,6 +81,11 @@ pub(super) fn record(
     jp.theta_prev.extend_from_slice(drive.theta_prev);
     jp.q_start.clone_from(&cur.q);
     jp.v_start.clone_from(&cur.v);
+    jp.obstacles.clear();
+    if let Some((start, end)) = asm.obstacles().map(|o| o.placements()) {
+        jp.obstacles
+            .extend(start.iter().chain(&end).flat_map(|m| m.values()));
+    }
     ws.jacobian = Some(jp);
 }
 
@@ -96,6 +108,16 @@ pub(super) fn restore(
         return Ok(());
     };
     ws.matrix.resize(asm.nnz(), 0.0);
+    if !p.obstacles.is_empty() {
+        // The moving obstacles where the matrix was formed.
+        let m: Vec<Motion> = p
+            .obstacles
+            .chunks_exact(Motion::VALUES)
+            .map(Motion::from_values)
+            .collect();
+        let (start, end) = m.split_at(m.len() / 2);
+        asm.place_bodies(start, end);
+    }
     if !p.q_start.is_empty() {
         // The lagged data the matrix was formed with (the next step lags
         // again from its own start).

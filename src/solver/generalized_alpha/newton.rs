@@ -213,7 +213,7 @@ impl Newton {
     ) -> Result<(), StepError> {
         let jp = ws.jacobian.take();
         matrix::factor(ctx.asm, solver, &ws.matrix, &next.q, self.coeffs)?;
-        matrix::record(ws, jp, ctx.h, next, ctx.cur, ctx.drive);
+        matrix::record(ctx.asm, ws, jp, ctx.h, next, ctx.cur, ctx.drive);
         out.factorizations += 1;
         self.refresh = false;
         ws.secant.clear();

@@ -94,12 +94,13 @@ fn residual_size(
     for &(i, x) in ctx.drive.prescribed {
         guess.q[i] = x;
     }
-    // A guess the surfaces cannot reach without touching is no guess.
-    if which == Guess::Extrapolated {
+    // A guess the surfaces cannot reach without touching is no guess (a
+    // held one can meet a moving obstacle).
+    if which == Guess::Extrapolated || asm.moves_bodies() {
         for i in 0..cur.q.len() {
             ws.dq[i] = guess.q[i] - cur.q[i];
         }
-        if asm.max_step_fraction(&cur.q, &ws.dq) < 1.0 {
+        if asm.max_motion_fraction(&cur.q, &ws.dq) < 1.0 {
             return f64::INFINITY;
         }
     }
