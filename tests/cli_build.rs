@@ -327,3 +327,36 @@ fn simulate_refuses_more_steps_than_it_can_write() {
     assert!(!err.contains("000000000000"), "short numbers: {err}");
     assert!(!out.exists());
 }
+
+/// `check` names each obstacle's wrench outputs and, for a moving one, its
+/// pose inputs (the input list has them too).
+#[test]
+fn check_lists_obstacles_and_a_moving_ones_pose_inputs() {
+    let dir = scratch("obstacles");
+    let mut fold: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("scenes/miura_on_ground.fold")).unwrap(),
+    )
+    .unwrap();
+    let check = |path: &Path| {
+        let r = bin().arg("check").arg(path).output().unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        String::from_utf8_lossy(&r.stdout).into_owned()
+    };
+    let text = check(&root().join("scenes/miura_on_ground.fold"));
+    assert!(
+        text.contains("obstacles (1): wrench outputs ground.force/moment\n"),
+        "{text}"
+    );
+    fold["ancf:obstacles"][0]["moving"] = serde_json::json!(true);
+    let path = dir.join("moving.fold");
+    std::fs::write(&path, fold.to_string()).unwrap();
+    let text = check(&path);
+    assert!(
+        text.contains(
+            "obstacles (1): wrench outputs ground.force/moment (moving: pose inputs \
+             ground.x/y/z, ground.rx/ry/rz)"
+        ) && text.contains("inputs (7): fold, ground.x, ground.y, ground.z, ground.rx"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -174,7 +174,14 @@ fn variable_lines(o: &mut String, scene: &scene::Scene, model: &Model) {
         let names: Vec<String> = scene
             .obstacles
             .iter()
-            .map(|ob| format!("{}.force/moment", ob.name))
+            .map(|ob| {
+                let moving = if ob.moving {
+                    format!(" (moving: pose inputs {0}.x/y/z, {0}.rx/ry/rz)", ob.name)
+                } else {
+                    String::new()
+                };
+                format!("{}.force/moment{moving}", ob.name)
+            })
             .collect();
         let _ = writeln!(
             o,
