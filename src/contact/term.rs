@@ -11,8 +11,8 @@
 //! `c` is lagged from the step start, like friction),
 //! and friction `mu lambda f1(|u|) u/|u|` on the tangential relative
 //! velocity `u` (`f1` rises as `2y/eps - (y/eps)^2` up to the stick
-//! velocity `eps`). Gradients and Hessians are exact (forward-mode duals);
-//! the iteration matrix takes the Hessian projected to positive
+//! velocity `eps`). Gradients and Hessians are exact (closed forms per
+//! closest-feature type, [`super::distance_derivatives`]); the iteration matrix takes the Hessian projected to positive
 //! semi-definite per pair. Every Newton step is limited by continuous
 //! collision detection ([`ContactTerm::safe_fraction`]), so no iterate and no
 //! output ever has two surfaces closer than the thickness, and stopped
@@ -28,7 +28,10 @@
 use super::broad::{Aabb, overlapping};
 use super::ccd;
 use super::distance::{self, V3};
-use super::scalar::{Dual1, Dual2, Real};
+use super::distance_derivatives::{
+    edge_edge_mollifier_derivatives, edge_edge_sq_derivatives, point_triangle_sq_derivatives,
+};
+use super::scalar::{Dual2, Real};
 use super::surface::ContactSurface;
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
@@ -1258,13 +1261,30 @@ pub(crate) fn tangent_basis(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
 }
 
 impl ContactTerm {
-    /// Pair energy `kappa m(x) b(s(x))` in the scalar type `T`: the
-    /// squared distance `D` in `T`, then `kappa b(sqrt(D) - xi)` by one
-    /// chain rule in `D` (its derivatives in closed form: fewer dual
-    /// operations than `sqrt`, `ln` and the products through `T`).
-    fn energy<T: Real>(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> T {
-        let xs: [V3<T>; 4] = lift(x);
-        let d2 = distance_sq(&p.kind, &xs);
+    /// Pair energy `kappa m(x) b(s(x))` with its gradient and Hessian in the
+    /// 12 stencil coordinates, from the closed-form derivatives of the
+    /// squared distance `D` (and of the edge-edge mollifier `m`).
+    fn energy_derivatives(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> Dual2<12> {
+        let [a, b, c, d] = x;
+        match p.kind {
+            Kind::PointTriangle { .. } => {
+                let ty = distance::point_triangle_type(a, b, c, d);
+                self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x))
+            }
+            Kind::EdgeEdge { eps_x, .. } => {
+                let ty = distance::edge_edge_type(a, b, c, d);
+                let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x));
+                match edge_edge_mollifier_derivatives(x, eps_x) {
+                    Some(m) => f * m,
+                    None => f,
+                }
+            }
+        }
+    }
+
+    /// `kappa b(sqrt(D) - xi)` of the squared distance `D` by one chain
+    /// rule in `D` (its derivatives in closed form).
+    fn barrier_of_sq<T: Real>(&self, p: &Pair, d2: T) -> T {
         let dv = d2.val();
         let r = dv.sqrt();
         let s = r - p.xi;
@@ -1273,15 +1293,11 @@ impl ContactTerm {
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
         let k = self.kappa_of(p);
-        let f = d2.map(
+        d2.map(
             k * barrier(s, s_hat),
             k * b1 * sd,
             k * (b2 * sd * sd + b1 * sdd),
-        );
-        match p.kind {
-            Kind::PointTriangle { .. } => f,
-            Kind::EdgeEdge { .. } => f * mollifier(&p.kind, &xs),
-        }
+        )
     }
 
     /// Crease stops: a crease cannot fold past flat, where the facets across
@@ -1557,21 +1573,11 @@ impl ForceTerm for ContactTerm {
         for (p, _) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let (energy, grad, hess) = if let Some((_, co)) = matrix.as_ref() {
-                let e = self.energy::<Dual2<12>>(&p, &xs);
-                let h = if co.k != 0.0 {
-                    Some(if self.project { project_psd(&e.h) } else { e.h })
-                } else {
-                    None
-                };
-                (e.v, e.g, h)
-            } else {
-                let e = self.energy::<Dual1<12>>(&p, &xs);
-                (e.v, e.g, None)
-            };
-            out.term_energy += energy;
-            self.scatter_force(&ids, &grad, &mut out.force);
-            if let (Some((_, co)), Some(h)) = (matrix.as_ref(), hess) {
+            let e = self.energy_derivatives(&p, &xs);
+            out.term_energy += e.v;
+            self.scatter_force(&ids, &e.g, &mut out.force);
+            if let Some((_, co)) = matrix.as_ref().filter(|(_, co)| co.k != 0.0) {
+                let h = if self.project { project_psd(&e.h) } else { e.h };
                 self.scatter_matrix(&ids, &(co.k * h), &mut batch);
             }
         }
