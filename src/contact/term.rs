@@ -1236,17 +1236,44 @@ fn mollifier<T: Real>(kind: &Kind, x: &[V3<T>; 4]) -> T {
     }
 }
 
-/// A symmetric matrix with its negative eigenvalues set to zero.
+/// A pair Hessian with its negative eigenvalues set to zero. The pair
+/// energy depends on its four points only through their differences, so
+/// its Hessian lives in the 9 dimensions orthogonal to the translations:
+/// the eigensolve runs there (a 9x9 in place of a 12x12, the same result).
 fn project_psd(h: &SMatrix<f64, 12, 12>) -> SMatrix<f64, 12, 12> {
-    let eig = h.symmetric_eigen();
+    let q = translation_free_frame();
+    let eig = (q.transpose() * h * q).symmetric_eigen();
     if eig.eigenvalues.iter().all(|&l| l >= 0.0) {
         return *h;
     }
-    let mut l = eig.eigenvalues;
-    for v in l.iter_mut() {
-        *v = v.max(0.0);
+    let v = q * eig.eigenvectors;
+    let mut vl = v;
+    for (mut col, l) in vl.column_iter_mut().zip(eig.eigenvalues.iter()) {
+        col *= l.max(0.0);
     }
-    eig.eigenvectors * SMatrix::<f64, 12, 12>::from_diagonal(&l) * eig.eigenvectors.transpose()
+    vl * v.transpose()
+}
+
+/// An orthonormal basis (12 x 9) of the motions of four points in 3D that
+/// leave their centroid in place: the Helmert contrasts
+/// `(1, -1, 0, 0) / sqrt 2`, `(1, 1, -2, 0) / sqrt 6`, `(1, 1, 1, -3) / sqrt 12`,
+/// each per coordinate.
+fn translation_free_frame() -> SMatrix<f64, 12, 9> {
+    let contrasts = [
+        [1.0, -1.0, 0.0, 0.0],
+        [1.0, 1.0, -2.0, 0.0],
+        [1.0, 1.0, 1.0, -3.0],
+    ];
+    let mut q = SMatrix::<f64, 12, 9>::zeros();
+    for (j, c) in contrasts.iter().enumerate() {
+        let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for (k, ck) in c.iter().enumerate() {
+            for d in 0..3 {
+                q[(3 * k + d, 3 * j + d)] = ck / norm;
+            }
+        }
+    }
+    q
 }
 
 /// An orthonormal basis of the plane normal to `n` (unit).
@@ -1680,5 +1707,35 @@ mod tests {
             tight > 500,
             "the bound is informative ({tight} of 2000 below 0.5)"
         );
+    }
+
+    /// The projection in the translation-free frame equals the full 12x12
+    /// eigen-projection on Hessians of functions of point differences, and
+    /// the frame is orthonormal and orthogonal to the translations.
+    #[test]
+    fn projection_in_the_translation_free_frame_equals_the_full_one() {
+        let q = translation_free_frame();
+        assert!((q.transpose() * q - SMatrix::<f64, 9, 9>::identity()).norm() < 1e-14);
+        for d in 0..3 {
+            let t = SVector::<f64, 12>::from_fn(|i, _| if i % 3 == d { 1.0 } else { 0.0 });
+            assert!((q.transpose() * t).norm() < 1e-14);
+        }
+        let mut rng = XorShift(40);
+        for _ in 0..200 {
+            let m = SMatrix::<f64, 9, 9>::from_fn(|_, _| rng.range(-1.0, 1.0));
+            let h = q * (m + m.transpose()) * q.transpose();
+            let eig = h.symmetric_eigen();
+            let l = eig.eigenvalues.map(|l| l.max(0.0));
+            let full = eig.eigenvectors
+                * SMatrix::<f64, 12, 12>::from_diagonal(&l)
+                * eig.eigenvectors.transpose();
+            let got = project_psd(&h);
+            assert!(
+                (got - full).norm() < 1e-12 * h.norm(),
+                "{}",
+                (got - full).norm()
+            );
+            assert!(got.symmetric_eigen().eigenvalues.min() > -1e-12 * h.norm());
+        }
     }
 }
