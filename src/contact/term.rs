@@ -117,6 +117,16 @@ struct Pair {
 }
 
 impl Pair {
+    /// Whether the pair's primitives at `xs` are farther than `d` apart by
+    /// an axis-aligned bound (false says nothing).
+    fn apart(&self, xs: &[Vector3<f64>; 4], d: f64) -> bool {
+        let k = match self.kind {
+            Kind::PointTriangle { .. } => 1,
+            Kind::EdgeEdge { .. } => 2,
+        };
+        distance::axis_apart(xs, k, d)
+    }
+
     fn ids(&self) -> [usize; 4] {
         match self.kind {
             Kind::PointTriangle { p, t } => [p, t[0], t[1], t[2]],
@@ -499,7 +509,10 @@ impl ContactTerm {
         // sweep, keep the pairs that are (the boxes of tilted facets
         // overlap far more often than the facets come near).
         if dx.is_none() {
-            out.retain(|p| distance_sq::<f64>(&p.kind, &lift(&self.points(x, p))) <= pad * pad);
+            out.retain(|p| {
+                let xs = self.points(x, p);
+                !p.apart(&xs, pad) && distance_sq::<f64>(&p.kind, &lift(&xs)) <= pad * pad
+            });
         }
         // A canonical order: sums over pairs do not depend on the search.
         out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
@@ -754,9 +767,13 @@ impl ContactTerm {
         let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
         for p in &self.cache.pairs {
             let xs = self.points(x, p);
-            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
+            let s_hat = self.s_hat_of(p);
+            let inside = || {
+                !p.apart(&xs, p.xi + s_hat)
+                    && distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi < s_hat
+            };
             let k = match self.pair_kappa.get(&key(p)) {
-                Some(&k) if s < self.s_hat_of(p) => k,
+                Some(&k) if inside() => k,
                 _ => self.pair_stiffness(p, x, v),
             };
             kappa.insert(key(p), k);
@@ -907,6 +924,9 @@ impl ContactTerm {
         let mut out = Vec::new();
         for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
+            if p.apart(&xs, p.xi + self.s_hat_of(&p)) {
+                continue;
+            }
             let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
             if s >= self.s_hat_of(&p) {
                 continue;
