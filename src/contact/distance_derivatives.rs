@@ -176,6 +176,37 @@ pub fn edge_edge_sq_derivatives(ty: EdgeEdgeType, x: &[Vector3<f64>; 4]) -> Dual
     }
 }
 
+/// The stencil points the formula of point-triangle type `ty` depends on:
+/// its derivatives vanish on the other points' coordinates (and, being a
+/// function of differences, on translations).
+pub fn point_triangle_points(ty: PointTriangleType) -> &'static [usize] {
+    match ty {
+        PointTriangleType::Vertex(0) => &[0, 1],
+        PointTriangleType::Vertex(1) => &[0, 2],
+        PointTriangleType::Vertex(_) => &[0, 3],
+        PointTriangleType::Edge(0) => &[0, 1, 2],
+        PointTriangleType::Edge(1) => &[0, 2, 3],
+        PointTriangleType::Edge(_) => &[0, 3, 1],
+        PointTriangleType::Face => &[0, 1, 2, 3],
+    }
+}
+
+/// The stencil points the formula of edge-edge type `ty` depends on (the
+/// mollifier depends on all four).
+pub fn edge_edge_points(ty: EdgeEdgeType) -> &'static [usize] {
+    match ty {
+        EdgeEdgeType::Points(0, 0) => &[0, 2],
+        EdgeEdgeType::Points(0, _) => &[0, 3],
+        EdgeEdgeType::Points(_, 0) => &[1, 2],
+        EdgeEdgeType::Points(_, _) => &[1, 3],
+        EdgeEdgeType::PointAEdgeB(0) => &[0, 2, 3],
+        EdgeEdgeType::PointAEdgeB(_) => &[1, 2, 3],
+        EdgeEdgeType::EdgeAPointB(0) => &[2, 0, 1],
+        EdgeEdgeType::EdgeAPointB(_) => &[3, 0, 1],
+        EdgeEdgeType::LineLine => &[0, 1, 2, 3],
+    }
+}
+
 /// IPC's edge-edge mollifier (see
 /// [`edge_edge_mollifier`](super::distance::edge_edge_mollifier)) with its
 /// gradient and Hessian: m(c) = 2 c / eps_x - c^2 / eps_x^2 of
@@ -260,6 +291,20 @@ mod tests {
         }
     }
 
+    /// The derivatives vanish on the coordinates of points outside
+    /// `points` and along translations.
+    fn assert_supported_on(got: &Dual2<12>, points: &[usize]) {
+        for k in (0..4).filter(|k| !points.contains(k)) {
+            assert_eq!(got.g.fixed_rows::<3>(3 * k).norm(), 0.0);
+            assert_eq!(got.h.fixed_rows::<3>(3 * k).norm(), 0.0);
+        }
+        for d in 0..3 {
+            let t = SVector::<f64, 12>::from_fn(|i, _| if i % 3 == d { 1.0 } else { 0.0 });
+            assert!(got.g.dot(&t).abs() <= 1e-12 * got.g.norm());
+            assert!((got.h * t).norm() <= 1e-12 * got.h.norm());
+        }
+    }
+
     fn pt_of_type(ty: PointTriangleType, x: &[Vector3<f64>; 4]) -> f64 {
         let v = x.map(V3::from);
         point_triangle_sq_of_type(ty, &v[0], &v[1], &v[2], &v[3])
@@ -282,6 +327,7 @@ mod tests {
             let s = V3::<Dual2<12>>::stencil(&x);
             let want = point_triangle_sq_of_type(ty, &s[0], &s[1], &s[2], &s[3]);
             assert_matches(&got, &want, &format!("{ty:?}"));
+            assert_supported_on(&got, point_triangle_points(ty));
             *seen.entry(ty).or_insert(0) += 1;
             if k % 20 == 0 {
                 assert_matches_differences(
@@ -306,6 +352,7 @@ mod tests {
             let s = V3::<Dual2<12>>::stencil(&x);
             let want = edge_edge_sq_of_type(ty, &s[0], &s[1], &s[2], &s[3]);
             assert_matches(&got, &want, &format!("{ty:?}"));
+            assert_supported_on(&got, edge_edge_points(ty));
             *seen.entry(ty).or_insert(0) += 1;
             if k % 20 == 0 {
                 assert_matches_differences(

@@ -29,7 +29,8 @@ use super::broad::{Aabb, overlapping};
 use super::ccd;
 use super::distance::{self, V3};
 use super::distance_derivatives::{
-    edge_edge_mollifier_derivatives, edge_edge_sq_derivatives, point_triangle_sq_derivatives,
+    edge_edge_mollifier_derivatives, edge_edge_points, edge_edge_sq_derivatives,
+    point_triangle_points, point_triangle_sq_derivatives,
 };
 use super::scalar::{Dual2, Real};
 use super::surface::ContactSurface;
@@ -1257,11 +1258,29 @@ fn mollifier<T: Real>(kind: &Kind, x: &[V3<T>; 4]) -> T {
 }
 
 /// A pair Hessian with its negative eigenvalues set to zero. The pair
-/// energy depends on its four points only through their differences, so
-/// its Hessian lives in the 9 dimensions orthogonal to the translations:
-/// the eigensolve runs there (a 9x9 in place of a 12x12, the same result).
-fn project_psd(h: &SMatrix<f64, 12, 12>) -> SMatrix<f64, 12, 12> {
-    let q = translation_free_frame();
+/// energy depends only on the differences of the stencil points its
+/// formula involves (`points`: 2, 3 or 4), so its Hessian lives in their
+/// translation-free motions: the eigensolve runs there (3x3, 6x6 or 9x9 in
+/// place of a 12x12, the same result).
+fn project_psd(h: &SMatrix<f64, 12, 12>, points: &[usize]) -> SMatrix<f64, 12, 12> {
+    match points.len() {
+        2 => project_psd_in(h, &translation_free_frame::<3>(points)),
+        3 => project_psd_in(h, &translation_free_frame::<6>(points)),
+        _ => project_psd_in(h, &translation_free_frame::<9>(&[0, 1, 2, 3])),
+    }
+}
+
+/// `h` projected to positive semi-definite, given an orthonormal basis `q`
+/// of a subspace that holds its range.
+fn project_psd_in<const N: usize>(
+    h: &SMatrix<f64, 12, 12>,
+    q: &SMatrix<f64, 12, N>,
+) -> SMatrix<f64, 12, 12>
+where
+    nalgebra::Const<N>: nalgebra::DimSub<nalgebra::U1>,
+    nalgebra::DefaultAllocator:
+        nalgebra::allocator::Allocator<nalgebra::DimDiff<nalgebra::Const<N>, nalgebra::U1>>,
+{
     let eig = (q.transpose() * h * q).symmetric_eigen();
     if eig.eigenvalues.iter().all(|&l| l >= 0.0) {
         return *h;
@@ -1274,22 +1293,19 @@ fn project_psd(h: &SMatrix<f64, 12, 12>) -> SMatrix<f64, 12, 12> {
     vl * v.transpose()
 }
 
-/// An orthonormal basis (12 x 9) of the motions of four points in 3D that
-/// leave their centroid in place: the Helmert contrasts
-/// `(1, -1, 0, 0) / sqrt 2`, `(1, 1, -2, 0) / sqrt 6`, `(1, 1, 1, -3) / sqrt 12`,
-/// each per coordinate.
-fn translation_free_frame() -> SMatrix<f64, 12, 9> {
-    let contrasts = [
-        [1.0, -1.0, 0.0, 0.0],
-        [1.0, 1.0, -2.0, 0.0],
-        [1.0, 1.0, 1.0, -3.0],
-    ];
-    let mut q = SMatrix::<f64, 12, 9>::zeros();
-    for (j, c) in contrasts.iter().enumerate() {
-        let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
-        for (k, ck) in c.iter().enumerate() {
+/// An orthonormal basis (12 x N, N = 3 (points - 1)) of the motions of the
+/// stencil's `points` that leave their centroid in place (the other points
+/// fixed): the Helmert contrasts `(1, -1) / sqrt 2`, `(1, 1, -2) / sqrt 6`,
+/// `(1, 1, 1, -3) / sqrt 12` over the points, each per coordinate.
+fn translation_free_frame<const N: usize>(points: &[usize]) -> SMatrix<f64, 12, N> {
+    debug_assert_eq!(N, 3 * (points.len() - 1));
+    let mut q = SMatrix::<f64, 12, N>::zeros();
+    for j in 1..points.len() {
+        let norm = ((j * (j + 1)) as f64).sqrt();
+        for (k, &pt) in points[..=j].iter().enumerate() {
+            let c = if k < j { 1.0 } else { -(j as f64) } / norm;
             for d in 0..3 {
-                q[(3 * k + d, 3 * j + d)] = ck / norm;
+                q[(3 * pt + d, 3 * (j - 1) + d)] = c;
             }
         }
     }
@@ -1311,19 +1327,21 @@ impl ContactTerm {
     /// Pair energy `kappa m(x) b(s(x))` with its gradient and Hessian in the
     /// 12 stencil coordinates, from the closed-form derivatives of the
     /// squared distance `D` (and of the edge-edge mollifier `m`).
-    fn energy_derivatives(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> Dual2<12> {
+    /// Also the stencil points the energy depends on.
+    fn energy_derivatives(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> (Dual2<12>, &'static [usize]) {
         let [a, b, c, d] = x;
         match p.kind {
             Kind::PointTriangle { .. } => {
                 let ty = distance::point_triangle_type(a, b, c, d);
-                self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x))
+                let f = self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x));
+                (f, point_triangle_points(ty))
             }
             Kind::EdgeEdge { eps_x, .. } => {
                 let ty = distance::edge_edge_type(a, b, c, d);
                 let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x));
                 match edge_edge_mollifier_derivatives(x, eps_x) {
-                    Some(m) => f * m,
-                    None => f,
+                    Some(m) => (f * m, &[0, 1, 2, 3]),
+                    None => (f, edge_edge_points(ty)),
                 }
             }
         }
@@ -1620,11 +1638,15 @@ impl ForceTerm for ContactTerm {
         for (p, _) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let e = self.energy_derivatives(&p, &xs);
+            let (e, points) = self.energy_derivatives(&p, &xs);
             out.term_energy += e.v;
             self.scatter_force(&ids, &e.g, &mut out.force);
             if let Some((_, co)) = matrix.as_ref().filter(|(_, co)| co.k != 0.0) {
-                let h = if self.project { project_psd(&e.h) } else { e.h };
+                let h = if self.project {
+                    project_psd(&e.h, points)
+                } else {
+                    e.h
+                };
                 self.scatter_matrix(&ids, &(co.k * h), &mut batch);
             }
         }
@@ -1729,33 +1751,39 @@ mod tests {
         );
     }
 
-    /// The projection in the translation-free frame equals the full 12x12
-    /// eigen-projection on Hessians of functions of point differences, and
-    /// the frame is orthonormal and orthogonal to the translations.
+    /// The projection in the translation-free frame of the points a pair
+    /// Hessian involves equals the full 12x12 eigen-projection, and the
+    /// frames are orthonormal and orthogonal to the translations.
     #[test]
     fn projection_in_the_translation_free_frame_equals_the_full_one() {
-        let q = translation_free_frame();
-        assert!((q.transpose() * q - SMatrix::<f64, 9, 9>::identity()).norm() < 1e-14);
-        for d in 0..3 {
-            let t = SVector::<f64, 12>::from_fn(|i, _| if i % 3 == d { 1.0 } else { 0.0 });
-            assert!((q.transpose() * t).norm() < 1e-14);
+        fn check<const N: usize>(points: &[usize], rng: &mut XorShift) {
+            let q = translation_free_frame::<N>(points);
+            assert!((q.transpose() * q - SMatrix::<f64, N, N>::identity()).norm() < 1e-14);
+            for d in 0..3 {
+                let t = SVector::<f64, 12>::from_fn(|i, _| if i % 3 == d { 1.0 } else { 0.0 });
+                assert!((q.transpose() * t).norm() < 1e-14);
+            }
+            for _ in 0..100 {
+                let m = SMatrix::<f64, N, N>::from_fn(|_, _| rng.range(-1.0, 1.0));
+                let h = q * (m + m.transpose()) * q.transpose();
+                let eig = h.symmetric_eigen();
+                let l = eig.eigenvalues.map(|l| l.max(0.0));
+                let full = eig.eigenvectors
+                    * SMatrix::<f64, 12, 12>::from_diagonal(&l)
+                    * eig.eigenvectors.transpose();
+                let got = project_psd(&h, points);
+                let e = (got - full).norm();
+                assert!(e < 1e-12 * h.norm(), "{points:?}: {e}");
+                assert!(got.symmetric_eigen().eigenvalues.min() > -1e-12 * h.norm());
+            }
         }
         let mut rng = XorShift(40);
-        for _ in 0..200 {
-            let m = SMatrix::<f64, 9, 9>::from_fn(|_, _| rng.range(-1.0, 1.0));
-            let h = q * (m + m.transpose()) * q.transpose();
-            let eig = h.symmetric_eigen();
-            let l = eig.eigenvalues.map(|l| l.max(0.0));
-            let full = eig.eigenvectors
-                * SMatrix::<f64, 12, 12>::from_diagonal(&l)
-                * eig.eigenvectors.transpose();
-            let got = project_psd(&h);
-            assert!(
-                (got - full).norm() < 1e-12 * h.norm(),
-                "{}",
-                (got - full).norm()
-            );
-            assert!(got.symmetric_eigen().eigenvalues.min() > -1e-12 * h.norm());
+        for points in [[0, 2].as_slice(), &[1, 3], &[3, 0]] {
+            check::<3>(points, &mut rng);
         }
+        for points in [[0, 1, 2].as_slice(), &[0, 3, 1], &[2, 0, 1]] {
+            check::<6>(points, &mut rng);
+        }
+        check::<9>(&[0, 1, 2, 3], &mut rng);
     }
 }
