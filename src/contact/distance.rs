@@ -356,6 +356,19 @@ pub fn edge_edge_distance_sq<T: Real>(a0: &V3<T>, a1: &V3<T>, b0: &V3<T>, b1: &V
     edge_edge_sq_of_type(ty, a0, a1, b0, b1)
 }
 
+/// Whether the first `k` points and the rest of a stencil are at least `d`
+/// apart along a coordinate axis: then the distance between their convex
+/// hulls (the point, segment or triangle) is at least `d`, which a pair
+/// filter learns without the closest-feature search.
+pub fn axis_apart(x: &[Vector3<f64>; 4], k: usize, d: f64) -> bool {
+    let (a, b) = x.split_at(k);
+    (0..3).any(|c| {
+        let lo = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
+        let hi = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
+        lo(b) - hi(a) >= d || lo(a) - hi(b) >= d
+    })
+}
+
 /// IPC's mollifier for nearly parallel edges: with c = |(a1 - a0) x (b1 - b0)|^2,
 /// m = 2 c / eps_x - c^2 / eps_x^2 for c < eps_x, else 1 (C1 at c = eps_x).
 pub fn edge_edge_mollifier<T: Real>(
@@ -695,6 +708,30 @@ mod tests {
             });
         }
         assert!(seen.len() >= 3, "{seen:?}");
+    }
+
+    #[test]
+    fn axis_apart_is_a_lower_bound_on_the_distance() {
+        let mut rng = XorShift(0xa515);
+        let (mut apart, mut near) = (0, 0);
+        for _ in 0..2000 {
+            let x: [Vector3<f64>; 4] = std::array::from_fn(|_| rand_point(&mut rng, 1.0));
+            let d = rng.range(0.0, 1.0);
+            let pt = point_triangle_distance_sq(&f(&x[0]), &f(&x[1]), &f(&x[2]), &f(&x[3]));
+            let ee = edge_edge_distance_sq(&f(&x[0]), &f(&x[1]), &f(&x[2]), &f(&x[3]));
+            for (k, dist_sq) in [(1, pt), (2, ee)] {
+                if axis_apart(&x, k, d) {
+                    assert!(
+                        dist_sq.sqrt() >= d * (1.0 - 1e-12),
+                        "{k}: {dist_sq} < {d}^2"
+                    );
+                    apart += 1;
+                } else if dist_sq.sqrt() < d {
+                    near += 1;
+                }
+            }
+        }
+        assert!(apart > 200 && near > 200, "{apart} apart, {near} near");
     }
 
     #[test]

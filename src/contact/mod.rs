@@ -8,6 +8,7 @@ pub mod broad;
 pub mod ccd;
 pub mod check;
 pub mod distance;
+pub mod distance_derivatives;
 pub mod intersect;
 pub mod obstacles;
 pub mod scalar;

@@ -11,8 +11,8 @@
 //! `c` is lagged from the step start, like friction),
 //! and friction `mu lambda f1(|u|) u/|u|` on the tangential relative
 //! velocity `u` (`f1` rises as `2y/eps - (y/eps)^2` up to the stick
-//! velocity `eps`). Gradients and Hessians are exact (forward-mode duals);
-//! the iteration matrix takes the Hessian projected to positive
+//! velocity `eps`). Gradients and Hessians are exact (closed forms per
+//! closest-feature type, [`super::distance_derivatives`]); the iteration matrix takes the Hessian projected to positive
 //! semi-definite per pair. Every Newton step is limited by continuous
 //! collision detection ([`ContactTerm::safe_fraction`]), so no iterate and no
 //! output ever has two surfaces closer than the thickness, and stopped
@@ -28,7 +28,11 @@
 use super::broad::{Aabb, overlapping};
 use super::ccd;
 use super::distance::{self, V3};
-use super::scalar::{Dual1, Dual2, Real};
+use super::distance_derivatives::{
+    edge_edge_mollifier_derivatives, edge_edge_points, edge_edge_sq_derivatives,
+    point_triangle_points, point_triangle_sq_derivatives,
+};
+use super::scalar::{Dual2, Real};
 use super::surface::ContactSurface;
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
@@ -114,6 +118,16 @@ struct Pair {
 }
 
 impl Pair {
+    /// Whether the pair's primitives at `xs` are farther than `d` apart by
+    /// an axis-aligned bound (false says nothing).
+    fn apart(&self, xs: &[Vector3<f64>; 4], d: f64) -> bool {
+        let k = match self.kind {
+            Kind::PointTriangle { .. } => 1,
+            Kind::EdgeEdge { .. } => 2,
+        };
+        distance::axis_apart(xs, k, d)
+    }
+
     fn ids(&self) -> [usize; 4] {
         match self.kind {
             Kind::PointTriangle { p, t } => [p, t[0], t[1], t[2]],
@@ -496,7 +510,10 @@ impl ContactTerm {
         // sweep, keep the pairs that are (the boxes of tilted facets
         // overlap far more often than the facets come near).
         if dx.is_none() {
-            out.retain(|p| distance_sq::<f64>(&p.kind, &lift(&self.points(x, p))) <= pad * pad);
+            out.retain(|p| {
+                let xs = self.points(x, p);
+                !p.apart(&xs, pad) && distance_sq::<f64>(&p.kind, &lift(&xs)) <= pad * pad
+            });
         }
         // A canonical order: sums over pairs do not depend on the search.
         out.sort_unstable_by_key(|p| (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids()));
@@ -751,9 +768,13 @@ impl ContactTerm {
         let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
         for p in &self.cache.pairs {
             let xs = self.points(x, p);
-            let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
+            let s_hat = self.s_hat_of(p);
+            let inside = || {
+                !p.apart(&xs, p.xi + s_hat)
+                    && distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi < s_hat
+            };
             let k = match self.pair_kappa.get(&key(p)) {
-                Some(&k) if s < self.s_hat_of(p) => k,
+                Some(&k) if inside() => k,
                 _ => self.pair_stiffness(p, x, v),
             };
             kappa.insert(key(p), k);
@@ -904,6 +925,9 @@ impl ContactTerm {
         let mut out = Vec::new();
         for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
             let xs = self.points(x, &p);
+            if p.apart(&xs, p.xi + self.s_hat_of(&p)) {
+                continue;
+            }
             let s = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi;
             if s >= self.s_hat_of(&p) {
                 continue;
@@ -1233,17 +1257,59 @@ fn mollifier<T: Real>(kind: &Kind, x: &[V3<T>; 4]) -> T {
     }
 }
 
-/// A symmetric matrix with its negative eigenvalues set to zero.
-fn project_psd(h: &SMatrix<f64, 12, 12>) -> SMatrix<f64, 12, 12> {
-    let eig = h.symmetric_eigen();
+/// A pair Hessian with its negative eigenvalues set to zero. The pair
+/// energy depends only on the differences of the stencil points its
+/// formula involves (`points`: 2, 3 or 4), so its Hessian lives in their
+/// translation-free motions: the eigensolve runs there (3x3, 6x6 or 9x9 in
+/// place of a 12x12, the same result).
+fn project_psd(h: &SMatrix<f64, 12, 12>, points: &[usize]) -> SMatrix<f64, 12, 12> {
+    match points.len() {
+        2 => project_psd_in(h, &translation_free_frame::<3>(points)),
+        3 => project_psd_in(h, &translation_free_frame::<6>(points)),
+        _ => project_psd_in(h, &translation_free_frame::<9>(&[0, 1, 2, 3])),
+    }
+}
+
+/// `h` projected to positive semi-definite, given an orthonormal basis `q`
+/// of a subspace that holds its range.
+fn project_psd_in<const N: usize>(
+    h: &SMatrix<f64, 12, 12>,
+    q: &SMatrix<f64, 12, N>,
+) -> SMatrix<f64, 12, 12>
+where
+    nalgebra::Const<N>: nalgebra::DimSub<nalgebra::U1>,
+    nalgebra::DefaultAllocator:
+        nalgebra::allocator::Allocator<nalgebra::DimDiff<nalgebra::Const<N>, nalgebra::U1>>,
+{
+    let eig = (q.transpose() * h * q).symmetric_eigen();
     if eig.eigenvalues.iter().all(|&l| l >= 0.0) {
         return *h;
     }
-    let mut l = eig.eigenvalues;
-    for v in l.iter_mut() {
-        *v = v.max(0.0);
+    let v = q * eig.eigenvectors;
+    let mut vl = v;
+    for (mut col, l) in vl.column_iter_mut().zip(eig.eigenvalues.iter()) {
+        col *= l.max(0.0);
     }
-    eig.eigenvectors * SMatrix::<f64, 12, 12>::from_diagonal(&l) * eig.eigenvectors.transpose()
+    vl * v.transpose()
+}
+
+/// An orthonormal basis (12 x N, N = 3 (points - 1)) of the motions of the
+/// stencil's `points` that leave their centroid in place (the other points
+/// fixed): the Helmert contrasts `(1, -1) / sqrt 2`, `(1, 1, -2) / sqrt 6`,
+/// `(1, 1, 1, -3) / sqrt 12` over the points, each per coordinate.
+fn translation_free_frame<const N: usize>(points: &[usize]) -> SMatrix<f64, 12, N> {
+    debug_assert_eq!(N, 3 * (points.len() - 1));
+    let mut q = SMatrix::<f64, 12, N>::zeros();
+    for j in 1..points.len() {
+        let norm = ((j * (j + 1)) as f64).sqrt();
+        for (k, &pt) in points[..=j].iter().enumerate() {
+            let c = if k < j { 1.0 } else { -(j as f64) } / norm;
+            for d in 0..3 {
+                q[(3 * pt + d, 3 * (j - 1) + d)] = c;
+            }
+        }
+    }
+    q
 }
 
 /// An orthonormal basis of the plane normal to `n` (unit).
@@ -1258,13 +1324,32 @@ pub(crate) fn tangent_basis(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
 }
 
 impl ContactTerm {
-    /// Pair energy `kappa m(x) b(s(x))` in the scalar type `T`: the
-    /// squared distance `D` in `T`, then `kappa b(sqrt(D) - xi)` by one
-    /// chain rule in `D` (its derivatives in closed form: fewer dual
-    /// operations than `sqrt`, `ln` and the products through `T`).
-    fn energy<T: Real>(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> T {
-        let xs: [V3<T>; 4] = lift(x);
-        let d2 = distance_sq(&p.kind, &xs);
+    /// Pair energy `kappa m(x) b(s(x))` with its gradient and Hessian in the
+    /// 12 stencil coordinates, from the closed-form derivatives of the
+    /// squared distance `D` (and of the edge-edge mollifier `m`).
+    /// Also the stencil points the energy depends on.
+    fn energy_derivatives(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> (Dual2<12>, &'static [usize]) {
+        let [a, b, c, d] = x;
+        match p.kind {
+            Kind::PointTriangle { .. } => {
+                let ty = distance::point_triangle_type(a, b, c, d);
+                let f = self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x));
+                (f, point_triangle_points(ty))
+            }
+            Kind::EdgeEdge { eps_x, .. } => {
+                let ty = distance::edge_edge_type(a, b, c, d);
+                let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x));
+                match edge_edge_mollifier_derivatives(x, eps_x) {
+                    Some(m) => (f * m, &[0, 1, 2, 3]),
+                    None => (f, edge_edge_points(ty)),
+                }
+            }
+        }
+    }
+
+    /// `kappa b(sqrt(D) - xi)` of the squared distance `D` by one chain
+    /// rule in `D` (its derivatives in closed form).
+    fn barrier_of_sq<T: Real>(&self, p: &Pair, d2: T) -> T {
         let dv = d2.val();
         let r = dv.sqrt();
         let s = r - p.xi;
@@ -1273,15 +1358,11 @@ impl ContactTerm {
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
         let k = self.kappa_of(p);
-        let f = d2.map(
+        d2.map(
             k * barrier(s, s_hat),
             k * b1 * sd,
             k * (b2 * sd * sd + b1 * sdd),
-        );
-        match p.kind {
-            Kind::PointTriangle { .. } => f,
-            Kind::EdgeEdge { .. } => f * mollifier(&p.kind, &xs),
-        }
+        )
     }
 
     /// Crease stops: a crease cannot fold past flat, where the facets across
@@ -1557,21 +1638,15 @@ impl ForceTerm for ContactTerm {
         for (p, _) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let (energy, grad, hess) = if let Some((_, co)) = matrix.as_ref() {
-                let e = self.energy::<Dual2<12>>(&p, &xs);
-                let h = if co.k != 0.0 {
-                    Some(if self.project { project_psd(&e.h) } else { e.h })
+            let (e, points) = self.energy_derivatives(&p, &xs);
+            out.term_energy += e.v;
+            self.scatter_force(&ids, &e.g, &mut out.force);
+            if let Some((_, co)) = matrix.as_ref().filter(|(_, co)| co.k != 0.0) {
+                let h = if self.project {
+                    project_psd(&e.h, points)
                 } else {
-                    None
+                    e.h
                 };
-                (e.v, e.g, h)
-            } else {
-                let e = self.energy::<Dual1<12>>(&p, &xs);
-                (e.v, e.g, None)
-            };
-            out.term_energy += energy;
-            self.scatter_force(&ids, &grad, &mut out.force);
-            if let (Some((_, co)), Some(h)) = (matrix.as_ref(), hess) {
                 self.scatter_matrix(&ids, &(co.k * h), &mut batch);
             }
         }
@@ -1674,5 +1749,41 @@ mod tests {
             tight > 500,
             "the bound is informative ({tight} of 2000 below 0.5)"
         );
+    }
+
+    /// The projection in the translation-free frame of the points a pair
+    /// Hessian involves equals the full 12x12 eigen-projection, and the
+    /// frames are orthonormal and orthogonal to the translations.
+    #[test]
+    fn projection_in_the_translation_free_frame_equals_the_full_one() {
+        fn check<const N: usize>(points: &[usize], rng: &mut XorShift) {
+            let q = translation_free_frame::<N>(points);
+            assert!((q.transpose() * q - SMatrix::<f64, N, N>::identity()).norm() < 1e-14);
+            for d in 0..3 {
+                let t = SVector::<f64, 12>::from_fn(|i, _| if i % 3 == d { 1.0 } else { 0.0 });
+                assert!((q.transpose() * t).norm() < 1e-14);
+            }
+            for _ in 0..100 {
+                let m = SMatrix::<f64, N, N>::from_fn(|_, _| rng.range(-1.0, 1.0));
+                let h = q * (m + m.transpose()) * q.transpose();
+                let eig = h.symmetric_eigen();
+                let l = eig.eigenvalues.map(|l| l.max(0.0));
+                let full = eig.eigenvectors
+                    * SMatrix::<f64, 12, 12>::from_diagonal(&l)
+                    * eig.eigenvectors.transpose();
+                let got = project_psd(&h, points);
+                let e = (got - full).norm();
+                assert!(e < 1e-12 * h.norm(), "{points:?}: {e}");
+                assert!(got.symmetric_eigen().eigenvalues.min() > -1e-12 * h.norm());
+            }
+        }
+        let mut rng = XorShift(40);
+        for points in [[0, 2].as_slice(), &[1, 3], &[3, 0]] {
+            check::<3>(points, &mut rng);
+        }
+        for points in [[0, 1, 2].as_slice(), &[0, 3, 1], &[2, 0, 1]] {
+            check::<6>(points, &mut rng);
+        }
+        check::<9>(&[0, 1, 2, 3], &mut rng);
     }
 }
