@@ -260,16 +260,7 @@ fn a_rod_swept_through_a_floating_sheet_pushes_it_aside() {
     }
     let c = corners(&m);
     let work = out(&m, "energy.input_work");
-    let held: f64 = [
-        "energy.kinetic",
-        "energy.strain",
-        "energy.crease",
-        "energy.contact",
-        "energy.dissipated",
-    ]
-    .iter()
-    .map(|n| out(&m, n))
-    .sum();
+    let held = common::energy_and_dissipated(&m);
     eprintln!(
         "steps {steps}; corners' mean {c:?}; largest rod force at an output {pushed:.3e} N; \
          rod's work {work:.4e} J, the sheet's energies and dissipation {held:.4e} J"

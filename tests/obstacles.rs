@@ -603,19 +603,7 @@ fn the_energy_balance_closes_with_obstacles() {
     let mut m = Model::new(square([0.0, 0.0, -9.81], ground, extra)).unwrap();
     m.initialize().unwrap();
     let out = |m: &Model, name: &str| m.output(m.output_id(name).unwrap()).unwrap();
-    let total = |m: &Model| {
-        [
-            "energy.kinetic",
-            "energy.strain",
-            "energy.crease",
-            "energy.contact",
-            "energy.dissipated",
-        ]
-        .iter()
-        .map(|n| out(m, n))
-        .sum::<f64>()
-            - out(m, "energy.input_work")
-    };
+    let total = |m: &Model| common::energy_and_dissipated(m) - out(m, "energy.input_work");
     let fall = m.mass_properties().0 * 9.81 * 0.002;
     let e0 = total(&m);
     let mut worst: f64 = 0.0;

@@ -499,8 +499,12 @@ impl ObstacleTerm {
             if self.obstacles[lg.obstacle].friction <= 0.0 || lg.lambda <= 0.0 {
                 continue;
             }
-            let m = &self.surf.maps[lg.sample];
-            let vr = self.relative_velocity(lg.obstacle, &eval_map(m, q), eval_map(m, v));
+            let (k, m) = (lg.obstacle, &self.surf.maps[lg.sample]);
+            let mut vr = eval_map(m, v);
+            if self.obstacles[k].moving {
+                let x = eval_map(m, q);
+                vr = self.relative_velocity(k, &x, &self.closest(k, &x, When::End), vr);
+            }
             let dr = eval_map(m, dq) * dv_dq;
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
@@ -512,29 +516,34 @@ impl ObstacleTerm {
     }
 
     /// The velocity `v` of a sample at `x` relative to obstacle `k`'s
-    /// surface at the step end.
-    fn relative_velocity(&self, k: usize, x: &Vector3<f64>, v: Vector3<f64>) -> Vector3<f64> {
+    /// surface at the step end (`c` the sample's distance data there).
+    fn relative_velocity(
+        &self,
+        k: usize,
+        x: &Vector3<f64>,
+        c: &Closest,
+        v: Vector3<f64>,
+    ) -> Vector3<f64> {
         if !self.obstacles[k].moving {
             return v;
         }
-        v - self.surface_velocity(k, x, &self.closest(k, x, When::End), When::End)
+        v - self.surface_velocity(k, x, c, When::End)
     }
 
     /// Add a sample's force `f` (internal-force sign) to the slots, and
     /// to the wrench on obstacle `k` at the shape's closest point to the
-    /// sample `x`; gives the power `f` does on the obstacle (zero for a
-    /// fixed one).
+    /// sample `x` (`c` its distance data at the step end); gives the power
+    /// `f` does on the obstacle (zero for a fixed one).
     fn apply(
         &self,
         k: usize,
         i: usize,
-        x: &Vector3<f64>,
+        (x, c): (&Vector3<f64>, &Closest),
         f: &Vector3<f64>,
         force: &mut [f64],
         wrenches: &mut [[f64; 6]],
     ) -> f64 {
         scatter_map(&self.surf.maps[i], f, force);
-        let c = self.closest(k, x, When::End);
         let arm = x - c.distance * c.normal - self.wrench_origin(k);
         let m = arm.cross(f);
         let w = &mut wrenches[k];
@@ -542,22 +551,22 @@ impl ObstacleTerm {
             w[a] += f[a];
             w[3 + a] += m[a];
         }
-        f.dot(&self.surface_velocity(k, x, &c, When::End))
+        f.dot(&self.surface_velocity(k, x, c, When::End))
     }
 
     /// [`ObstacleTerm::apply`] for a lagged pair's dissipative force `f`
-    /// (sample positions `x`), also added to its part of the force; gives
-    /// its power on the obstacle.
+    /// (its sample at `x` with distance data `c`), also added to its part
+    /// of the force; gives its power on the obstacle.
     fn apply_lagged(
         &self,
         lg: &Lagged,
-        x: &[Vector3<f64>],
+        at: (&Vector3<f64>, &Closest),
         f: &Vector3<f64>,
         (force, part): (&mut [f64], &mut [f64]),
         wrenches: &mut [[f64; 6]],
     ) -> f64 {
         scatter_map(&self.surf.maps[lg.sample], f, part);
-        self.apply(lg.obstacle, lg.sample, &x[lg.sample], f, force, wrenches)
+        self.apply(lg.obstacle, lg.sample, at, f, force, wrenches)
     }
 
     /// The barrier's, dashpots' and friction's forces, energy and matrix
@@ -586,7 +595,8 @@ impl ObstacleTerm {
             let nrm = a.closest.normal;
             out.term_energy += kap * barrier(a.gap, self.s_hat);
             let f = (kap * b1) * nrm;
-            power.total += self.apply(k, i, &x[i], &f, &mut out.force, &mut wrenches);
+            let at = (&x[i], &a.closest);
+            power.total += self.apply(k, i, at, &f, &mut out.force, &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut()
                 && co.k != 0.0
             {
@@ -597,26 +607,39 @@ impl ObstacleTerm {
                 add_matrix(asm, &self.surf.maps[i], &(co.k * h), vals);
             }
         }
+        // Each lagged sample's distance data at the step end, for both loops.
+        let closest: Vec<Closest> = self
+            .lagged
+            .iter()
+            .map(|lg| self.closest(lg.obstacle, &x[lg.sample], When::End))
+            .collect();
         // Dashpots on the normal velocity along the lagged normals.
-        for lg in self.lagged.iter().filter(|lg| lg.c > 0.0) {
-            let vi = self.relative_velocity(lg.obstacle, &x[lg.sample], v[lg.sample]);
+        for (lg, c) in self
+            .lagged
+            .iter()
+            .zip(&closest)
+            .filter(|(lg, _)| lg.c > 0.0)
+        {
+            let at = (&x[lg.sample], c);
+            let vi = self.relative_velocity(lg.obstacle, at.0, c, v[lg.sample]);
             let rate = lg.normal.dot(&vi);
             out.contact_damping_power += lg.c * rate * rate;
             let f = (lg.c * rate) * lg.normal;
             let part = &mut out.dissipative_force.damping;
-            power.damping += self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
+            power.damping += self.apply_lagged(lg, at, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = (co.c * lg.c) * lg.normal * lg.normal.transpose();
                 add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
             }
         }
         // Friction with the lagged normal forces and bases.
-        for lg in &self.lagged {
+        for (lg, c) in self.lagged.iter().zip(&closest) {
             let mu = self.obstacles[lg.obstacle].friction;
             if mu <= 0.0 {
                 continue;
             }
-            let vi = self.relative_velocity(lg.obstacle, &x[lg.sample], v[lg.sample]);
+            let at = (&x[lg.sample], c);
+            let vi = self.relative_velocity(lg.obstacle, at.0, c, v[lg.sample]);
             let u = Vector2::new(lg.basis[0].dot(&vi), lg.basis[1].dot(&vi));
             let slip = slip_factor(u.norm(), self.eps_v);
             let ml = mu * lg.lambda;
@@ -624,7 +647,7 @@ impl ObstacleTerm {
             let f = (ml * slip.0) * ut;
             out.friction_power += f.dot(&vi);
             let part = &mut out.dissipative_force.friction;
-            power.friction += self.apply_lagged(lg, &x, &f, (&mut out.force, part), &mut wrenches);
+            power.friction += self.apply_lagged(lg, at, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = friction_matrix(co.c * ml, &lg.basis, u, slip);
                 add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);

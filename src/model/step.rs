@@ -316,11 +316,10 @@ impl Advance {
         if sys.inputs.obstacles.is_empty() {
             return;
         }
-        let s2 = |k: usize| self.second.get(k).copied().unwrap_or(0.0);
-        let d1: Vec<f64> = (0..u.len())
-            .map(|k| (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k] + s2(k) * e)
+        let d1: Vec<f64> = (0..u.len()).map(|k| self.command_rate(k, e)).collect();
+        let d2: Vec<f64> = (0..u.len())
+            .map(|k| self.second.get(k).copied().unwrap_or(0.0))
             .collect();
-        let d2: Vec<f64> = (0..u.len()).map(s2).collect();
         let d = if start {
             &mut self.d_start
         } else {
@@ -370,8 +369,15 @@ impl Advance {
         if self.tau > 0.0 {
             actuator_response(self.tau, self.act0[k], self.u0[k], [slope, s2], e)
         } else {
-            [self.command(k, e), slope + s2 * e]
+            [self.command(k, e), self.command_rate(k, e)]
         }
+    }
+
+    /// Input `k`'s rate of change as the master set it, at elapsed time
+    /// `e` (the derivative of [`Advance::command`]).
+    fn command_rate(&self, k: usize, e: f64) -> f64 {
+        let s2 = self.second.get(k).copied().unwrap_or(0.0);
+        (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k] + s2 * e
     }
 
     fn too_many(&self, cap: usize) -> Error {

@@ -279,3 +279,19 @@ pub fn plastic_square(corner: [f64; 2], g: [f64; 3], keys: &str) -> Scene {
     );
     origami_fmu::scene::from_str(&text).unwrap().0
 }
+
+/// Kinetic, strain, crease and contact energy plus the work dissipated so
+/// far, from the outputs (J): less `energy.input_work`, it is constant.
+#[allow(dead_code)]
+pub fn energy_and_dissipated(m: &Model) -> f64 {
+    [
+        "energy.kinetic",
+        "energy.strain",
+        "energy.crease",
+        "energy.contact",
+        "energy.dissipated",
+    ]
+    .iter()
+    .map(|n| m.output(m.output_id(n).unwrap()).unwrap())
+    .sum()
+}
