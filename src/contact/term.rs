@@ -231,10 +231,17 @@ pub struct ContactTerm {
     /// own padding: the next step start takes it instead of searching
     /// again at the same positions.
     spare: std::sync::Mutex<Option<CandidateCache>>,
-    /// Barrier stiffness of each candidate pair (N/m), set while the pair
-    /// is outside the barrier and kept while it is inside (see
-    /// [`ContactTerm::pair_stiffness`]).
-    pair_kappa: HashMap<PairKey, f64>,
+    /// Barrier stiffness of each of `cache.pairs` (N/m, by index), set at
+    /// the step start while the pair is outside the barrier and kept while
+    /// it is inside (see [`ContactTerm::pair_stiffness`]). Pairs with one
+    /// key hold one value (the map the saved state lists).
+    kappas: Vec<f64>,
+    /// The stiffnesses a restored state listed, by key: in force until the
+    /// next step start sets `kappas` from them.
+    restored: Option<HashMap<PairKey, f64>>,
+    /// The slot pairs `cache.pairs`' matrices need (see
+    /// [`ContactTerm::pattern_pairs`]), found once per search.
+    blocks: Vec<(usize, usize)>,
     /// Contact-vertex positions and velocities at the last step start.
     x_start: Vec<Vector3<f64>>,
     v_start: Vec<Vector3<f64>>,
@@ -329,7 +336,9 @@ impl ContactTerm {
             touching: false,
             cache: CandidateCache::default(),
             spare: Default::default(),
-            pair_kappa: HashMap::new(),
+            kappas: Vec::new(),
+            restored: None,
+            blocks: Vec::new(),
             x_start: Vec::new(),
             v_start: Vec::new(),
             flat_width: settings.thickness / edge,
@@ -376,7 +385,7 @@ impl ContactTerm {
         // them while no vertex moved more than `slack`.
         let slack = 0.5 * (self.cache.pad + 2.0 * self.cache_margin - self.xi - reach);
         if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
-            return self.report_over(&x, &self.cache.pairs, reach);
+            return self.report_over(&x, &self.cache.pairs, true, reach);
         }
         // The next step starts here and would search again: search once,
         // as it would (a wider search than the report needs), and leave it.
@@ -386,7 +395,7 @@ impl ContactTerm {
             x0: x,
             pad,
         };
-        let r = self.report_over(&searched.x0, &searched.pairs, reach);
+        let r = self.report_over(&searched.x0, &searched.pairs, false, reach);
         if let Ok(mut spare) = self.spare.lock() {
             *spare = Some(searched);
         }
@@ -596,22 +605,25 @@ impl ContactTerm {
     /// motions up to the margin), unless the last search covers `x`
     /// with half its margin to spare. (Pairs are in a canonical order, so
     /// which search found them does not change a result.)
-    fn cache_at(&mut self, x: &[Vector3<f64>]) {
+    /// Returns the cache it replaced, if it searched.
+    fn cache_at(&mut self, x: &[Vector3<f64>]) -> Option<CandidateCache> {
         let pad = self.xi + self.s_hat;
         let margin = self.cache_margin;
         if self.cache.covers(x, None, pad, 0.5 * margin) {
-            return;
+            return None;
         }
         let spare = self.spare.get_mut().ok().and_then(Option::take);
-        if let Some(c) = spare.filter(|c| c.pad == pad && c.x0 == x) {
-            self.cache = c;
-            return;
-        }
-        self.cache = CandidateCache {
-            pairs: self.candidates(x, None, pad + 2.0 * margin),
-            x0: x.to_vec(),
-            pad,
+        let cache = match spare.filter(|c| c.pad == pad && c.x0 == x) {
+            Some(c) => c,
+            None => CandidateCache {
+                pairs: self.candidates(x, None, pad + 2.0 * margin),
+                x0: x.to_vec(),
+                pad,
+            },
         };
+        let old = std::mem::replace(&mut self.cache, cache);
+        self.blocks = self.cache_blocks();
+        Some(old)
     }
 
     fn edge_pair(&self, a: [usize; 2], b: [usize; 2], mass: f64) -> Pair {
@@ -642,6 +654,14 @@ impl ContactTerm {
     /// candidates): blocks between every two facets sharing a vertex would
     /// multiply the factorization's work on a large flat sheet.
     fn pattern_pairs(&self, asm: &Assembler) -> Vec<(usize, usize)> {
+        let mut out = self.blocks.clone();
+        out.retain(|&(a, b)| !asm.has_pair(a, b));
+        out
+    }
+
+    /// Every slot pair `(a, b)`, `a < b`, among the slots of each of
+    /// `cache.pairs` (sorted).
+    fn cache_blocks(&self) -> Vec<(usize, usize)> {
         // Pairs between the same facets share their slots: each set once.
         let mut sets: Vec<Vec<usize>> = self
             .cache
@@ -659,7 +679,7 @@ impl ContactTerm {
         for slots in &sets {
             for &a in slots {
                 for &b in slots {
-                    if a < b && !asm.has_pair(a, b) {
+                    if a < b {
                         out.push((a, b));
                     }
                 }
@@ -730,17 +750,29 @@ impl ContactTerm {
     pub fn report(&self, q: &[f64], search: f64) -> ContactReport {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
-        self.report_over(&x, &self.candidates(&x, None, search + self.xi), search)
+        self.report_over(
+            &x,
+            &self.candidates(&x, None, search + self.xi),
+            false,
+            search,
+        )
     }
 
     /// The report over `pairs` at contact-vertex positions `x`, the
     /// smallest gap capped at `search`.
-    fn report_over(&self, x: &[Vector3<f64>], pairs: &[Pair], search: f64) -> ContactReport {
+    /// `cached`: `pairs` are the candidate cache's.
+    fn report_over(
+        &self,
+        x: &[Vector3<f64>],
+        pairs: &[Pair],
+        cached: bool,
+        search: f64,
+    ) -> ContactReport {
         let mut r = ContactReport {
             min_gap: search,
             ..Default::default()
         };
-        for p in pairs {
+        for (i, p) in pairs.iter().enumerate() {
             let xs = self.points(x, p);
             let d = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt();
             let s = d - p.xi;
@@ -748,7 +780,7 @@ impl ContactTerm {
             if s < self.s_hat_of(p) {
                 r.pairs += 1;
                 if s > 0.0 {
-                    r.normal_force += self.normal_force(p, &xs, s);
+                    r.normal_force += self.normal_force(p, &xs, s, self.kappa_at(pairs, i, cached));
                 }
             }
         }
@@ -756,30 +788,48 @@ impl ContactTerm {
     }
 
     /// Normal force of a pair at gap `s` (N): `-kappa m(x) b'(s)`.
-    fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64) -> f64 {
-        self.kappa_of(p) * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat_of(p))
+    fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64, kappa: f64) -> f64 {
+        kappa * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat_of(p))
     }
 
     /// Dashpot coefficients, friction's normal forces and bases from
     /// contact-vertex positions `x`.
-    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>]) {
+    /// `old` is the candidate cache the step start replaced, if it did.
+    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>], old: Option<&CandidateCache>) {
         // Pair stiffnesses: kept for pairs inside the barrier (their energy
-        // is not zero), set anew for the others.
-        let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
-        for p in &self.cache.pairs {
+        // is not zero), set anew for the others. The last ones are by index
+        // while the cache is the same, else by key.
+        let restored = self.restored.take();
+        let old_kappas = std::mem::take(&mut self.kappas);
+        let last = |i: usize, p: &Pair| -> Option<f64> {
+            match (&restored, old) {
+                (Some(map), _) => map.get(&key(p)).copied(),
+                (None, Some(c)) => find_key(&c.pairs, p).and_then(|j| old_kappas.get(j).copied()),
+                (None, None) => old_kappas.get(i).copied(),
+            }
+        };
+        let mut kappas = Vec::with_capacity(self.cache.pairs.len());
+        for (i, p) in self.cache.pairs.iter().enumerate() {
             let xs = self.points(x, p);
             let s_hat = self.s_hat_of(p);
             let inside = || {
                 !p.apart(&xs, p.xi + s_hat)
                     && distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi < s_hat
             };
-            let k = match self.pair_kappa.get(&key(p)) {
-                Some(&k) if inside() => k,
+            let k = match last(i, p) {
+                Some(k) if inside() => k,
                 _ => self.pair_stiffness(p, x, v),
             };
-            kappa.insert(key(p), k);
+            kappas.push(k);
         }
-        self.pair_kappa = kappa;
+        // Pairs with one key (adjacent in the canonical order) take the
+        // last one's value, as a map by key keeps it.
+        for i in (1..kappas.len()).rev() {
+            if key(&self.cache.pairs[i - 1]) == key(&self.cache.pairs[i]) {
+                kappas[i - 1] = kappas[i];
+            }
+        }
+        self.kappas = kappas;
         self.x_start.clear();
         self.x_start.extend_from_slice(x);
         self.v_start.clear();
@@ -787,11 +837,11 @@ impl ContactTerm {
         self.lagged.clear();
         let act = self.active(x).unwrap_or_default();
         self.touching = !act.is_empty();
-        for (p, s) in act {
+        for (p, s, kappa) in act {
             let xs = self.points(x, &p);
             let (w, n) = self.closest(&p, &xs);
             // Critical for zeta = 1 at the pair's barrier stiffness.
-            let k = self.kappa_of(&p) * ddb(s, self.s_hat_of(&p)).max(0.0);
+            let k = kappa * ddb(s, self.s_hat_of(&p)).max(0.0);
             let basis = tangent_basis(&n);
             let ids = p.ids();
             let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
@@ -801,7 +851,7 @@ impl ContactTerm {
                 w,
                 normal: n,
                 basis,
-                lambda: self.normal_force(&p, &xs, s),
+                lambda: self.normal_force(&p, &xs, s, kappa),
                 slide: Vector2::new(basis[0].dot(&vr), basis[1].dot(&vr)),
             });
         }
@@ -908,9 +958,19 @@ impl ContactTerm {
     /// map, having come closer than the candidate search's margin in one
     /// step, takes the stiffness of that step start).
     fn kappa_of(&self, p: &Pair) -> f64 {
-        match self.pair_kappa.get(&key(p)) {
-            Some(&k) => k,
-            None => self.pair_stiffness(p, &self.x_start, &self.v_start),
+        let set = match &self.restored {
+            Some(map) => map.get(&key(p)).copied(),
+            None => find_key(&self.cache.pairs, p).and_then(|i| self.kappas.get(i).copied()),
+        };
+        set.unwrap_or_else(|| self.pair_stiffness(p, &self.x_start, &self.v_start))
+    }
+
+    /// The stiffness of the `i`th pair of `pairs`, which are the cache's
+    /// when `cached`.
+    fn kappa_at(&self, pairs: &[Pair], i: usize, cached: bool) -> f64 {
+        match self.kappas.get(i) {
+            Some(&k) if cached && self.restored.is_none() => k,
+            _ => self.kappa_of(&pairs[i]),
         }
     }
 
@@ -919,11 +979,14 @@ impl ContactTerm {
         [x[ids[0]], x[ids[1]], x[ids[2]], x[ids[3]]]
     }
 
-    /// The active pairs at positions `x` (gap below the barrier width).
-    /// Fails when a pair is already closer than the thickness.
-    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, EvalError> {
+    /// The active pairs at positions `x` (gap below the barrier width),
+    /// with their gaps and stiffnesses. Fails when a pair is already closer
+    /// than the thickness.
+    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64, f64)>, EvalError> {
         let mut out = Vec::new();
-        for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
+        let pairs = self.near_pairs(x, None, self.xi + self.s_hat);
+        let cached = matches!(pairs, std::borrow::Cow::Borrowed(_));
+        for (i, &p) in pairs.iter().enumerate() {
             let xs = self.points(x, &p);
             if p.apart(&xs, p.xi + self.s_hat_of(&p)) {
                 continue;
@@ -941,7 +1004,7 @@ impl ContactTerm {
                     gap: s,
                 });
             }
-            out.push((p, s));
+            out.push((p, s, self.kappa_at(&pairs, i, cached)));
         }
         Ok(out)
     }
@@ -1208,6 +1271,12 @@ fn key(p: &Pair) -> PairKey {
     (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
 }
 
+/// The index of a pair with `p`'s key in `pairs` (in the canonical order).
+fn find_key(pairs: &[Pair], p: &Pair) -> Option<usize> {
+    let k = key(p);
+    pairs.binary_search_by(|q| key(q).cmp(&k)).ok()
+}
+
 /// The barrier stiffness a pair of sample mass `mass` approaching at
 /// `approach` (m/s) takes: `kappa`, or enough to stop it at
 /// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2` (see
@@ -1328,17 +1397,22 @@ impl ContactTerm {
     /// 12 stencil coordinates, from the closed-form derivatives of the
     /// squared distance `D` (and of the edge-edge mollifier `m`).
     /// Also the stencil points the energy depends on.
-    fn energy_derivatives(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> (Dual2<12>, &'static [usize]) {
+    fn energy_derivatives(
+        &self,
+        p: &Pair,
+        x: &[Vector3<f64>; 4],
+        k: f64,
+    ) -> (Dual2<12>, &'static [usize]) {
         let [a, b, c, d] = x;
         match p.kind {
             Kind::PointTriangle { .. } => {
                 let ty = distance::point_triangle_type(a, b, c, d);
-                let f = self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x));
+                let f = self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x), k);
                 (f, point_triangle_points(ty))
             }
             Kind::EdgeEdge { eps_x, .. } => {
                 let ty = distance::edge_edge_type(a, b, c, d);
-                let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x));
+                let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x), k);
                 match edge_edge_mollifier_derivatives(x, eps_x) {
                     Some(m) => (f * m, &[0, 1, 2, 3]),
                     None => (f, edge_edge_points(ty)),
@@ -1347,9 +1421,9 @@ impl ContactTerm {
         }
     }
 
-    /// `kappa b(sqrt(D) - xi)` of the squared distance `D` by one chain
-    /// rule in `D` (its derivatives in closed form).
-    fn barrier_of_sq<T: Real>(&self, p: &Pair, d2: T) -> T {
+    /// `k b(sqrt(D) - xi)` of the squared distance `D` by one chain rule
+    /// in `D` (its derivatives in closed form), `k` the pair's stiffness.
+    fn barrier_of_sq<T: Real>(&self, p: &Pair, d2: T, k: f64) -> T {
         let dv = d2.val();
         let r = dv.sqrt();
         let s = r - p.xi;
@@ -1357,7 +1431,6 @@ impl ContactTerm {
         let (b1, b2) = (db(s, s_hat), ddb(s, s_hat));
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
-        let k = self.kappa_of(p);
         d2.map(
             k * barrier(s, s_hat),
             k * b1 * sd,
@@ -1560,11 +1633,21 @@ impl BarrierTerm for ContactTerm {
     /// The pairs' barrier stiffnesses: six numbers a pair (edge-edge or
     /// not, its four contact vertices, the stiffness), in key order.
     fn memory(&self) -> Vec<f64> {
-        let mut pairs: Vec<(&PairKey, &f64)> = self.pair_kappa.iter().collect();
-        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
+        let mut pairs: Vec<(PairKey, f64)> = match &self.restored {
+            Some(map) => map.iter().map(|(k, &v)| (*k, v)).collect(),
+            None => self
+                .cache
+                .pairs
+                .iter()
+                .map(key)
+                .zip(self.kappas.iter().copied())
+                .collect(),
+        };
+        pairs.sort_unstable_by_key(|a| a.0);
+        pairs.dedup_by(|a, b| a.0 == b.0);
         let mut out = Vec::with_capacity(6 * pairs.len());
-        for ((edge, ids), &k) in pairs {
-            out.push(if *edge { 1.0 } else { 0.0 });
+        for ((edge, ids), k) in pairs {
+            out.push(if edge { 1.0 } else { 0.0 });
             out.extend(ids.iter().map(|&i| i as f64));
             out.push(k);
         }
@@ -1576,7 +1659,7 @@ impl BarrierTerm for ContactTerm {
     }
 
     fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
-        self.pair_kappa = self.parse_memory(memory)?;
+        self.restored = Some(self.parse_memory(memory)?);
         Ok(())
     }
 
@@ -1615,8 +1698,8 @@ impl ForceTerm for ContactTerm {
         let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
         self.surf.positions(v, &mut vx);
-        self.cache_at(&x);
-        self.lag_at(&x, &vx);
+        let old = self.cache_at(&x);
+        self.lag_at(&x, &vx, old.as_ref());
         self.creases_near_flat = self.near_flat(q);
     }
 
@@ -1635,10 +1718,10 @@ impl ForceTerm for ContactTerm {
         let mut batch = MatrixBatch::default();
         let active = self.active(&x)?;
         out.barrier_pairs += active.len();
-        for (p, _) in active {
+        for (p, _, kappa) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let (e, points) = self.energy_derivatives(&p, &xs);
+            let (e, points) = self.energy_derivatives(&p, &xs, kappa);
             out.term_energy += e.v;
             self.scatter_force(&ids, &e.g, &mut out.force);
             if let Some((_, co)) = matrix.as_ref().filter(|(_, co)| co.k != 0.0) {
