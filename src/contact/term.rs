@@ -283,6 +283,10 @@ const NEIGHBOUR_MIN: f64 = 0.02;
 /// the ends stopped.
 const STOP_POINTS: usize = 9;
 
+/// Slots of a pair's four points kept on the stack (each point maps to
+/// its facet's 12 slots or fewer).
+const MAX_PAIR_SLOTS: usize = 48;
+
 /// A pair's identity: edge-edge or not, and its four contact vertices.
 type PairKey = (bool, [usize; 4]);
 
@@ -1033,40 +1037,8 @@ impl ContactTerm {
     /// Add a pair's 12 x 12 matrix `h` (its four points' coordinates) to
     /// `batch`, mapped to the slots through the points' weights.
     fn scatter_matrix(&self, ids: &[usize; 4], h: &SMatrix<f64, 12, 12>, batch: &mut MatrixBatch) {
-        // The slots of the four points and each point's weight on them.
-        let mut slots: Vec<usize> = Vec::with_capacity(48);
-        self.pair_slots(ids, &mut slots);
-        let ns = slots.len();
-        let mut w = vec![[0.0; 4]; ns];
-        for (k, &i) in ids.iter().enumerate() {
-            for &(s, c) in &self.surf.maps[i] {
-                let a = slots.binary_search(&s).expect("slot listed");
-                w[a][k] += c;
-            }
-        }
-        let dense = batch.group(slots);
-        let n3 = 3 * ns;
-        for b in 0..ns {
-            for l in 0..4 {
-                if w[b][l] == 0.0 {
-                    continue;
-                }
-                for a in 0..ns {
-                    for k in 0..4 {
-                        let c = w[a][k] * w[b][l];
-                        if c == 0.0 {
-                            continue;
-                        }
-                        for y in 0..3 {
-                            let col = &mut dense[(3 * b + y) * n3 + 3 * a..][..3];
-                            for x in 0..3 {
-                                col[x] += c * h[(3 * k + x, 3 * l + y)];
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        let maps = ids.map(|i| &self.surf.maps[i]);
+        batch.add_mapped(&maps, h.as_slice());
     }
 }
 
@@ -1082,21 +1054,95 @@ struct MatrixBatch {
     index: std::collections::HashMap<Vec<usize>, usize>,
     /// Sorted slots and the dense column-major matrix over their coordinates.
     groups: Vec<(Vec<usize>, Vec<f64>)>,
+    /// The group used last (pairs in canonical order often share it).
+    last: Option<usize>,
 }
 
 impl MatrixBatch {
     /// The (zeroed when new) dense matrix of the group of `slots`.
-    fn group(&mut self, slots: Vec<usize>) -> &mut [f64] {
-        let k = match self.index.get(&slots) {
-            Some(&k) => k,
-            None => {
-                let n3 = 3 * slots.len();
-                self.index.insert(slots.clone(), self.groups.len());
-                self.groups.push((slots, vec![0.0; n3 * n3]));
-                self.groups.len() - 1
-            }
+    fn group(&mut self, slots: &[usize]) -> &mut [f64] {
+        let k = match self.last.filter(|&k| self.groups[k].0 == slots) {
+            Some(k) => k,
+            None => match self.index.get(slots) {
+                Some(&k) => k,
+                None => {
+                    let n3 = 3 * slots.len();
+                    self.index.insert(slots.to_vec(), self.groups.len());
+                    self.groups.push((slots.to_vec(), vec![0.0; n3 * n3]));
+                    self.groups.len() - 1
+                }
+            },
         };
+        self.last = Some(k);
         &mut self.groups[k].1
+    }
+
+    /// Add `W^T h W`: `h` (column-major) over the coordinates of the points
+    /// `maps` (up to four), `W` their weights on the slots.
+    fn add_mapped(&mut self, maps: &[&super::surface::VertexMap], h: &[f64]) {
+        let np = maps.len();
+        let nh = 3 * np;
+        assert!(np <= 4 && h.len() == nh * nh, "up to four points' matrix");
+        // The points' slots (sorted, once each) and each point's weight on
+        // them, on the stack unless they are many.
+        let total: usize = maps.iter().map(|m| m.len()).sum();
+        let (mut slot_stack, mut w_stack) = ([0usize; MAX_PAIR_SLOTS], [[0.0; 4]; MAX_PAIR_SLOTS]);
+        let (mut slot_heap, mut w_heap) = (Vec::new(), Vec::new());
+        let (slots, w): (&mut [usize], &mut [[f64; 4]]) = if total <= MAX_PAIR_SLOTS {
+            (&mut slot_stack[..total], &mut w_stack[..total])
+        } else {
+            slot_heap.resize(total, 0);
+            w_heap.resize(total, [0.0; 4]);
+            (&mut slot_heap, &mut w_heap)
+        };
+        for (k, &(s, _)) in maps.iter().flat_map(|m| m.iter()).enumerate() {
+            slots[k] = s;
+        }
+        slots.sort_unstable();
+        let mut ns = 0;
+        for a in 0..total {
+            if a == 0 || slots[a] != slots[ns - 1] {
+                slots[ns] = slots[a];
+                ns += 1;
+            }
+        }
+        let slots = &slots[..ns];
+        for (k, m) in maps.iter().enumerate() {
+            for &(s, c) in m.iter() {
+                let a = slots.binary_search(&s).expect("slot listed");
+                w[a][k] += c;
+            }
+        }
+        let dense = self.group(slots);
+        let n3 = 3 * ns;
+        // Column (b, y) in two stages: the points' column
+        // `t = sum_l w[b][l] h[.., (l, y)]`, then `sum_k w[a][k] t[(k, ..)]`
+        // into each slot a.
+        for b in 0..ns {
+            for y in 0..3 {
+                let mut t = [0.0; 12];
+                for l in 0..np {
+                    let c = w[b][l];
+                    if c != 0.0 {
+                        let hc = &h[(3 * l + y) * nh..][..nh];
+                        for (tr, hr) in t.iter_mut().zip(hc) {
+                            *tr += c * hr;
+                        }
+                    }
+                }
+                let col = &mut dense[(3 * b + y) * n3..][..n3];
+                for a in 0..ns {
+                    for k in 0..np {
+                        let c = w[a][k];
+                        if c != 0.0 {
+                            for x in 0..3 {
+                                col[3 * a + x] += c * t[3 * k + x];
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Add every group to the matrix values `vals` (blocks the pattern
@@ -1559,43 +1605,7 @@ impl ContactTerm {
         h: &SMatrix<f64, 9, 9>,
         batch: &mut MatrixBatch,
     ) {
-        let mut slots: Vec<usize> = maps
-            .iter()
-            .flat_map(|m| m.iter().map(|&(s, _)| s))
-            .collect();
-        slots.sort_unstable();
-        slots.dedup();
-        let ns = slots.len();
-        let mut wt = vec![[0.0; 3]; ns];
-        for (j, m) in maps.iter().enumerate() {
-            for &(s, w) in m {
-                let a = slots.binary_search(&s).expect("slot listed");
-                wt[a][j] += w;
-            }
-        }
-        let dense = batch.group(slots);
-        let n3 = 3 * ns;
-        for bs in 0..ns {
-            for l in 0..3 {
-                if wt[bs][l] == 0.0 {
-                    continue;
-                }
-                for a in 0..ns {
-                    for k in 0..3 {
-                        let c = wt[a][k] * wt[bs][l];
-                        if c == 0.0 {
-                            continue;
-                        }
-                        for y in 0..3 {
-                            let col = &mut dense[(3 * bs + y) * n3 + 3 * a..][..3];
-                            for x in 0..3 {
-                                col[x] += c * h[(3 * k + x, 3 * l + y)];
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        batch.add_mapped(&maps.each_ref(), h.as_slice());
     }
 
     /// Closest-point weights (relative velocity `sum w_i v_i`) and the unit
