@@ -1077,22 +1077,21 @@ impl MatrixBatch {
         &mut self.groups[k].1
     }
 
-    /// Add `W^T h W`: `h` (column-major) over the coordinates of the points
-    /// `maps` (up to four), `W` their weights on the slots.
-    fn add_mapped(&mut self, maps: &[&super::surface::VertexMap], h: &[f64]) {
-        let np = maps.len();
-        let nh = 3 * np;
-        assert!(np <= 4 && h.len() == nh * nh, "up to four points' matrix");
+    /// Add `W^T h W`: `h` (column-major) over the coordinates of the `N`
+    /// points `maps`, `W` their weights on the slots.
+    fn add_mapped<const N: usize>(&mut self, maps: &[&super::surface::VertexMap; N], h: &[f64]) {
+        let nh = 3 * N;
+        assert_eq!(h.len(), nh * nh, "a matrix over the points' coordinates");
         // The points' slots (sorted, once each) and each point's weight on
         // them, on the stack unless they are many.
         let total: usize = maps.iter().map(|m| m.len()).sum();
-        let (mut slot_stack, mut w_stack) = ([0usize; MAX_PAIR_SLOTS], [[0.0; 4]; MAX_PAIR_SLOTS]);
+        let (mut slot_stack, mut w_stack) = ([0usize; MAX_PAIR_SLOTS], [[0.0; N]; MAX_PAIR_SLOTS]);
         let (mut slot_heap, mut w_heap) = (Vec::new(), Vec::new());
-        let (slots, w): (&mut [usize], &mut [[f64; 4]]) = if total <= MAX_PAIR_SLOTS {
+        let (slots, w): (&mut [usize], &mut [[f64; N]]) = if total <= MAX_PAIR_SLOTS {
             (&mut slot_stack[..total], &mut w_stack[..total])
         } else {
             slot_heap.resize(total, 0);
-            w_heap.resize(total, [0.0; 4]);
+            w_heap.resize(total, [0.0; N]);
             (&mut slot_heap, &mut w_heap)
         };
         for (k, &(s, _)) in maps.iter().flat_map(|m| m.iter()).enumerate() {
@@ -1107,6 +1106,7 @@ impl MatrixBatch {
             }
         }
         let slots = &slots[..ns];
+        let w = &mut w[..ns];
         for (k, m) in maps.iter().enumerate() {
             for &(s, c) in m.iter() {
                 let a = slots.binary_search(&s).expect("slot listed");
@@ -1116,27 +1116,27 @@ impl MatrixBatch {
         let dense = self.group(slots);
         let n3 = 3 * ns;
         // Column (b, y) in two stages: the points' column
-        // `t = sum_l w[b][l] h[.., (l, y)]`, then `sum_k w[a][k] t[(k, ..)]`
-        // into each slot a.
-        for b in 0..ns {
+        // `t = sum_l w[b][l] h[.., (l, y)]`, then `sum_k w[a][k] t[k]` into
+        // each slot a.
+        for (b, wb) in w.iter().enumerate() {
             for y in 0..3 {
-                let mut t = [0.0; 12];
-                for l in 0..np {
-                    let c = w[b][l];
+                let mut t = [[0.0; 3]; N];
+                for (l, &c) in wb.iter().enumerate() {
                     if c != 0.0 {
                         let hc = &h[(3 * l + y) * nh..][..nh];
-                        for (tr, hr) in t.iter_mut().zip(hc) {
-                            *tr += c * hr;
+                        for (tk, hk) in t.iter_mut().zip(hc.chunks_exact(3)) {
+                            for x in 0..3 {
+                                tk[x] += c * hk[x];
+                            }
                         }
                     }
                 }
                 let col = &mut dense[(3 * b + y) * n3..][..n3];
-                for a in 0..ns {
-                    for k in 0..np {
-                        let c = w[a][k];
+                for (ca, wa) in col.chunks_exact_mut(3).zip(w.iter()) {
+                    for (&c, tk) in wa.iter().zip(&t) {
                         if c != 0.0 {
                             for x in 0..3 {
-                                col[3 * a + x] += c * t[3 * k + x];
+                                ca[x] += c * tk[x];
                             }
                         }
                     }
