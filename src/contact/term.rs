@@ -175,6 +175,8 @@ impl CandidateCache {
 /// infinite where a pair enters the barrier, into Newton's residual).
 #[derive(Clone, Debug)]
 struct Lagged {
+    /// The pair's key (its four contact vertices in `.1`).
+    key: PairKey,
     ids: [usize; 4],
     /// Normal dashpot coefficient (N s/m).
     c: f64,
@@ -850,6 +852,7 @@ impl ContactTerm {
             let ids = p.ids();
             let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
             self.lagged.push(Lagged {
+                key: key(&p),
                 ids,
                 c: 2.0 * self.zeta * (k * p.mass).sqrt(),
                 w,
@@ -1608,6 +1611,39 @@ impl ContactTerm {
         batch.add_mapped(&maps.each_ref(), h.as_slice());
     }
 
+    /// The iteration matrix of a lagged pair's dashpot and friction (`co.c`
+    /// times their velocity derivatives) over its four points, at contact
+    /// vertex velocities `v` (none if neither acts).
+    fn lagged_matrix(
+        &self,
+        lg: &Lagged,
+        v: &[Vector3<f64>],
+        co: &MatrixCoeffs,
+    ) -> Option<SMatrix<f64, 12, 12>> {
+        if lg.c <= 0.0 && self.mu <= 0.0 {
+            return None;
+        }
+        let mut k3 = Matrix3::zeros();
+        if lg.c > 0.0 {
+            k3 += (co.c * lg.c) * lg.normal * lg.normal.transpose();
+        }
+        if self.mu > 0.0 {
+            // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
+            let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
+            let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
+            let slip = slip_factor(u.norm(), self.eps_v);
+            k3 += friction_matrix(co.c * self.mu * lg.lambda, &lg.basis, u, slip);
+        }
+        let mut h = SMatrix::<f64, 12, 12>::zeros();
+        for a in 0..4 {
+            for b in 0..4 {
+                h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
+                    .copy_from(&(lg.w[a] * lg.w[b] * k3));
+            }
+        }
+        Some(h)
+    }
+
     /// Closest-point weights (relative velocity `sum w_i v_i`) and the unit
     /// normal of a pair.
     fn closest(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> ([f64; 4], Vector3<f64>) {
@@ -1728,19 +1764,47 @@ impl ForceTerm for ContactTerm {
         let mut batch = MatrixBatch::default();
         let active = self.active(&x)?;
         out.barrier_pairs += active.len();
+        // Matrices: each pair's barrier, dashpot and friction parts summed
+        // (the lagged pairs are in the same canonical order) and scattered
+        // once; lagged pairs out of the barrier on their own.
+        let mut next_lagged = 0;
         for (p, _, kappa) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
             let (e, points) = self.energy_derivatives(&p, &xs, kappa);
             out.term_energy += e.v;
             self.scatter_force(&ids, &e.g, &mut out.force);
-            if let Some((_, co)) = matrix.as_ref().filter(|(_, co)| co.k != 0.0) {
-                let h = if self.project {
-                    project_psd(&e.h, points)
-                } else {
-                    e.h
+            if let Some((_, co)) = matrix.as_ref() {
+                let kp = key(&p);
+                let lagged = &self.lagged;
+                while next_lagged < lagged.len() && lagged[next_lagged].key < kp {
+                    let lg = &lagged[next_lagged];
+                    if let Some(h) = self.lagged_matrix(lg, &v, co) {
+                        self.scatter_matrix(&lg.ids, &h, &mut batch);
+                    }
+                    next_lagged += 1;
+                }
+                let mut h = match (co.k == 0.0, self.project) {
+                    (true, _) => None,
+                    (false, true) => Some(co.k * project_psd(&e.h, points)),
+                    (false, false) => Some(co.k * e.h),
                 };
-                self.scatter_matrix(&ids, &(co.k * h), &mut batch);
+                while next_lagged < lagged.len() && lagged[next_lagged].key == kp {
+                    if let Some(hl) = self.lagged_matrix(&lagged[next_lagged], &v, co) {
+                        h = Some(h.map_or(hl, |h| h + hl));
+                    }
+                    next_lagged += 1;
+                }
+                if let Some(h) = h {
+                    self.scatter_matrix(&ids, &h, &mut batch);
+                }
+            }
+        }
+        if let Some((_, co)) = matrix.as_ref() {
+            for lg in &self.lagged[next_lagged..] {
+                if let Some(h) = self.lagged_matrix(lg, &v, co) {
+                    self.scatter_matrix(&lg.ids, &h, &mut batch);
+                }
             }
         }
         self.crease_stops(asm, st, out, matrix.as_ref().map(|(_, co)| *co), &mut batch)?;
@@ -1759,24 +1823,13 @@ impl ForceTerm for ContactTerm {
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.damping);
-            if let Some((_, co)) = matrix.as_ref() {
-                let k3 = (co.c * lg.c) * lg.normal * lg.normal.transpose();
-                let mut h = SMatrix::<f64, 12, 12>::zeros();
-                for a in 0..4 {
-                    for b in 0..4 {
-                        h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
-                            .copy_from(&(lg.w[a] * lg.w[b] * k3));
-                    }
-                }
-                self.scatter_matrix(&lg.ids, &h, &mut batch);
-            }
         }
         // Friction with the lagged normal forces and bases.
         for lg in self.lagged.iter().filter(|_| self.mu > 0.0) {
             let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let y = u.norm();
-            let (phi, dphi_y) = slip_factor(y, self.eps_v);
+            let (phi, _) = slip_factor(y, self.eps_v);
             let ml = self.mu * lg.lambda;
             let ut = lg.basis[0] * u.x + lg.basis[1] * u.y;
             let fr = ml * phi * ut;
@@ -1787,18 +1840,6 @@ impl ForceTerm for ContactTerm {
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.friction);
-            if let Some((_, co)) = matrix.as_ref() {
-                // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
-                let k3 = friction_matrix(co.c * ml, &lg.basis, u, (phi, dphi_y));
-                let mut h = SMatrix::<f64, 12, 12>::zeros();
-                for a in 0..4 {
-                    for b in 0..4 {
-                        h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
-                            .copy_from(&(lg.w[a] * lg.w[b] * k3));
-                    }
-                }
-                self.scatter_matrix(&lg.ids, &h, &mut batch);
-            }
         }
         if let Some((vals, _)) = matrix.as_mut() {
             batch.flush(asm, vals);
