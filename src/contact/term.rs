@@ -707,6 +707,13 @@ impl ContactTerm {
         let mut t: f64 = 1.0;
         for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
             let (xs, ds) = (self.points(&x, p), self.points(&d, p));
+            // Apart along an axis by more than the thickness and both
+            // primitives' largest move up to `t`: no contact before `t`
+            // (the swept boxes of a broad phase, per pair).
+            let reach = ds.iter().map(|v| v.amax()).fold(0.0, f64::max);
+            if p.apart(&xs, p.xi + 2.0 * t * reach) {
+                continue;
+            }
             let toi = match p.kind {
                 Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, p.xi, t),
                 Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, p.xi, t),
