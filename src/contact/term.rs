@@ -35,7 +35,8 @@ use super::distance_derivatives::{
 use super::scalar::{Dual2, Real};
 use super::surface::ContactSurface;
 use crate::assembly::{
-    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
+    Assembler, BarrierTerm, BlockPosition, EvalError, Evaluation, ForceTerm, MatrixCoeffs,
+    MemoryError, State,
 };
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
@@ -233,6 +234,8 @@ pub struct ContactTerm {
     /// own padding: the next step start takes it instead of searching
     /// again at the same positions.
     spare: std::sync::Mutex<Option<CandidateCache>>,
+    /// Where the matrix blocks of the pairs' slot groups sit.
+    positions: std::sync::Mutex<BlockPositions>,
     /// Barrier stiffness of each of `cache.pairs` (N/m, by index), set at
     /// the step start while the pair is outside the barrier and kept while
     /// it is inside (see [`ContactTerm::pair_stiffness`]). Pairs with one
@@ -342,6 +345,7 @@ impl ContactTerm {
             touching: false,
             cache: CandidateCache::default(),
             spare: Default::default(),
+            positions: Default::default(),
             kappas: Vec::new(),
             restored: None,
             blocks: Vec::new(),
@@ -1156,20 +1160,52 @@ impl MatrixBatch {
     }
 
     /// Add every group to the matrix values `vals` (blocks the pattern
-    /// lacks are left out: the pattern holds every facet pair in reach).
-    fn flush(self, asm: &Assembler, vals: &mut [f64]) {
+    /// lacks are left out: the pattern holds every facet pair in reach),
+    /// at the blocks' positions kept in `known` (found where new).
+    fn flush(self, asm: &Assembler, vals: &mut [f64], known: &mut BlockPositions) {
+        if known.pattern != asm.pattern_id() || known.count > MAX_KEPT_POSITIONS {
+            *known = BlockPositions {
+                pattern: asm.pattern_id(),
+                ..Default::default()
+            };
+        }
         for (slots, dense) in self.groups {
             let ns = slots.len();
             let n3 = 3 * ns;
+            let at = match known.groups.get(&slots) {
+                Some(at) => at,
+                None => {
+                    let at: Vec<BlockPosition> = (0..ns * ns)
+                        .map(|k| asm.block_position(slots[k % ns], slots[k / ns]))
+                        .collect();
+                    known.count += at.len();
+                    known.groups.entry(slots).or_insert(at)
+                }
+            };
             for b in 0..ns {
                 for a in 0..ns {
-                    let blk = Matrix3::from_fn(|x, y| dense[(3 * b + y) * n3 + 3 * a + x]);
-                    asm.try_add_block(slots[a], slots[b], &blk, vals);
+                    let col = |y: usize| 3 * b + y;
+                    asm.add_block_at(at[b * ns + a], |x, y| dense[col(y) * n3 + 3 * a + x], vals);
                 }
             }
         }
     }
 }
+
+/// The matrix positions of slot groups' blocks (column-major over each
+/// group's slots), kept across evaluations while the pattern is the same:
+/// a stack's pairs meet the same groups at every evaluation.
+#[derive(Debug, Default)]
+struct BlockPositions {
+    /// The pattern they were found in ([`Assembler::pattern_id`]).
+    pattern: u64,
+    groups: HashMap<Vec<usize>, Vec<BlockPosition>>,
+    /// Positions kept in all.
+    count: usize,
+}
+
+/// Block positions kept at most (then found anew): 16 bytes each.
+const MAX_KEPT_POSITIONS: usize = 1 << 22;
 
 /// The crease stops' points: [`STOP_POINTS`] along every crease edge.
 fn stop_points(
@@ -1849,7 +1885,8 @@ impl ForceTerm for ContactTerm {
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.friction);
         }
         if let Some((vals, _)) = matrix.as_mut() {
-            batch.flush(asm, vals);
+            let mut known = self.positions.lock().unwrap_or_else(|e| e.into_inner());
+            batch.flush(asm, vals, &mut known);
         }
         Ok(())
     }
