@@ -259,7 +259,23 @@ pub struct Assembler {
     /// Whether the iteration matrix takes the shell's membrane geometric
     /// stiffness from the step start ([`Assembler::lag_membrane_stiffness`]).
     lag_membrane: bool,
+    /// Identifies the matrix pattern (see [`Assembler::pattern_id`]).
+    pattern_id: u64,
 }
+
+/// Where a slot block sits in the iteration matrix's values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockPosition {
+    /// A slot is fixed: the block is not in the matrix.
+    Fixed,
+    /// The pattern lacks the block.
+    Missing,
+    /// Rows from `offset` in the free columns `column..column + 3`.
+    At { column: usize, offset: usize },
+}
+
+/// The last pattern id given out (ids are unique in the process).
+static PATTERN_IDS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 impl Assembler {
     /// Build layout, elements, springs and the pattern. `fixed_slots` are
@@ -376,6 +392,7 @@ impl Assembler {
             terms: terms::built_in().into_iter().chain(extra).collect(),
             barriers: Vec::new(),
             lag_membrane: false,
+            pattern_id: 0,
         };
         asm.build_pattern();
         asm.set_physics(physics);
@@ -479,6 +496,14 @@ impl Assembler {
         self.row_idx = row_idx;
         self.slot_ptr = slot_ptr;
         self.slot_idx = slot_idx;
+        self.pattern_id = PATTERN_IDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+    }
+
+    /// An id of the matrix pattern and the free DOFs' numbering, unique in
+    /// the process: positions in the matrix values found under one id hold
+    /// while the id is the same (a copy of the assembler keeps it).
+    pub fn pattern_id(&self) -> u64 {
+        self.pattern_id
     }
 
     /// Whether slots `a` and `b` couple in the pattern.
@@ -974,23 +999,51 @@ impl Assembler {
         k: &nalgebra::Matrix3<f64>,
         vals: &mut [f64],
     ) -> bool {
+        match self.block_position(a, b) {
+            BlockPosition::Fixed => true,
+            BlockPosition::Missing => false,
+            at => {
+                self.add_block_at(at, |x, y| k[(x, y)], vals);
+                true
+            }
+        }
+    }
+
+    /// Where the block of slots `a` (rows) and `b` (columns) sits in the
+    /// matrix values (valid while [`Assembler::pattern_id`] is the same).
+    pub fn block_position(&self, a: usize, b: usize) -> BlockPosition {
         if self.free[3 * a] == FIXED || self.free[3 * b] == FIXED {
-            return true;
+            return BlockPosition::Fixed;
         }
         let r0 = self.free[3 * a];
         // The three columns of a slot hold the same rows: one search.
         let c0 = self.free[3 * b];
         let rows = &self.row_idx[self.col_ptr[c0]..self.col_ptr[c0 + 1]];
-        let Ok(k0) = rows.binary_search(&r0) else {
-            return false;
-        };
-        for y in 0..3 {
-            let start = self.col_ptr[c0 + y] + k0;
-            for x in 0..3 {
-                vals[start + x] += k[(x, y)];
+        match rows.binary_search(&r0) {
+            Ok(k0) => BlockPosition::At {
+                column: c0,
+                offset: k0,
+            },
+            Err(_) => BlockPosition::Missing,
+        }
+    }
+
+    /// Add the block `k(x, y)` at a position [`Assembler::block_position`]
+    /// found (nothing where it is fixed or missing).
+    pub fn add_block_at(
+        &self,
+        at: BlockPosition,
+        k: impl Fn(usize, usize) -> f64,
+        vals: &mut [f64],
+    ) {
+        if let BlockPosition::At { column, offset } = at {
+            for y in 0..3 {
+                let start = self.col_ptr[column + y] + offset;
+                for x in 0..3 {
+                    vals[start + x] += k(x, y);
+                }
             }
         }
-        true
     }
 
     /// Strain energy (membrane + bending) and crease spring energy at `q`,

@@ -118,6 +118,74 @@ fn tilted_pair(settings: &ContactSettings) -> (Assembler, Vec<f64>) {
     (asm, q)
 }
 
+/// An evaluation from the step start's candidate cache, with the pair
+/// stiffnesses it set by the cache's index, and one from a search of its
+/// own in a term that had no step start, with those stiffnesses restored by
+/// key from the first one's memory, find the same pairs, energy and forces,
+/// bit for bit, for moves of a micrometre to millimetres. The step start
+/// sees panel B approach at 1-4 m/s (faster farther out), which raises the
+/// pairs' stiffnesses each by its own approach.
+#[test]
+fn the_step_starts_candidate_cache_changes_no_evaluation() {
+    let settings = fd_settings(0.0, 0.0);
+    let (mut started, q) = tilted_pair(&settings);
+    let (mut fresh, _) = tilted_pair(&settings);
+    let mut v = vec![0.0; q.len()];
+    for vx in 4..8 {
+        let s = started.layout.position_slot[vx];
+        v[3 * s + 2] = -1.0 - 20.0 * q[3 * s];
+    }
+    started.before_step(&q, &v);
+    let memory = started.term_memory();
+    // (The contact term is the last: the barriers follow the other terms.)
+    let kappas: Vec<f64> = memory.last().unwrap().chunks(6).map(|m| m[5]).collect();
+    assert!(
+        kappas.iter().any(|&k| k > 10.0) && kappas.iter().any(|&k| k != kappas[0]),
+        "the approach raises the stiffnesses, not all alike"
+    );
+    fresh.restore_term_memory(&memory).unwrap();
+    let zeros = vec![0.0; q.len()];
+    let mut rng = origami_fmu::rng::XorShift(0x9e37_79b9_7f4a_7c15);
+    // Panel B's corners (vertices 4-7) moved in its plane by up to `size`
+    // per coordinate and down by `down` (its lowest corner starts 5e-5 m
+    // into the barrier's width of 1e-4 m).
+    let moved = |size: f64, down: f64, rng: &mut origami_fmu::rng::XorShift| {
+        let mut y = q.clone();
+        for vx in 4..8 {
+            let s = started.layout.position_slot[vx];
+            y[3 * s] += rng.range(-size, size);
+            y[3 * s + 1] += rng.range(-size, size);
+            y[3 * s + 2] -= down;
+        }
+        y
+    };
+    let mut touching = 0;
+    for (size, down) in [(1e-6, 1e-5), (1e-5, 2e-5), (1e-4, 3e-5), (2e-3, 4e-5)] {
+        for _ in 0..5 {
+            let y = moved(size, down, &mut rng);
+            let a = eval_at(&started, &y, &zeros, None);
+            let b = eval_at(&fresh, &y, &zeros, None);
+            assert_eq!(a.barrier_pairs, b.barrier_pairs, "moved by {size} m");
+            assert_eq!(
+                a.term_energy.to_bits(),
+                b.term_energy.to_bits(),
+                "moved by {size} m"
+            );
+            assert!(
+                a.force
+                    .iter()
+                    .zip(&b.force)
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            );
+            touching += usize::from(a.barrier_pairs > 0);
+        }
+    }
+    assert!(
+        touching >= 15,
+        "the moves put pairs in the barrier ({touching} of 20)"
+    );
+}
+
 fn fd_settings(friction: f64, damping_ratio: f64) -> ContactSettings {
     ContactSettings {
         thickness: 1e-3,

@@ -35,7 +35,8 @@ use super::distance_derivatives::{
 use super::scalar::{Dual2, Real};
 use super::surface::ContactSurface;
 use crate::assembly::{
-    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
+    Assembler, BarrierTerm, BlockPosition, EvalError, Evaluation, ForceTerm, MatrixCoeffs,
+    MemoryError, State,
 };
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
@@ -175,6 +176,8 @@ impl CandidateCache {
 /// infinite where a pair enters the barrier, into Newton's residual).
 #[derive(Clone, Debug)]
 struct Lagged {
+    /// The pair's key (its four contact vertices in `.1`).
+    key: PairKey,
     ids: [usize; 4],
     /// Normal dashpot coefficient (N s/m).
     c: f64,
@@ -231,10 +234,19 @@ pub struct ContactTerm {
     /// own padding: the next step start takes it instead of searching
     /// again at the same positions.
     spare: std::sync::Mutex<Option<CandidateCache>>,
-    /// Barrier stiffness of each candidate pair (N/m), set while the pair
-    /// is outside the barrier and kept while it is inside (see
-    /// [`ContactTerm::pair_stiffness`]).
-    pair_kappa: HashMap<PairKey, f64>,
+    /// Where the matrix blocks of the pairs' slot groups sit.
+    positions: std::sync::Mutex<BlockPositions>,
+    /// Barrier stiffness of each of `cache.pairs` (N/m, by index), set at
+    /// the step start while the pair is outside the barrier and kept while
+    /// it is inside (see [`ContactTerm::pair_stiffness`]). Pairs with one
+    /// key hold one value (the map the saved state lists).
+    kappas: Vec<f64>,
+    /// The stiffnesses a restored state listed, by key: in force until the
+    /// next step start sets `kappas` from them.
+    restored: Option<HashMap<PairKey, f64>>,
+    /// The slot pairs `cache.pairs`' matrices need (see
+    /// [`ContactTerm::pattern_pairs`]), found once per search.
+    blocks: Vec<(usize, usize)>,
     /// Contact-vertex positions and velocities at the last step start.
     x_start: Vec<Vector3<f64>>,
     v_start: Vec<Vector3<f64>>,
@@ -275,6 +287,10 @@ const NEIGHBOUR_MIN: f64 = 0.02;
 /// other along it (at a sixteenth of a facet from the crease) with only
 /// the ends stopped.
 const STOP_POINTS: usize = 9;
+
+/// Slots of a pair's four points kept on the stack (each point maps to
+/// its facet's 12 slots or fewer).
+const MAX_PAIR_SLOTS: usize = 48;
 
 /// A pair's identity: edge-edge or not, and its four contact vertices.
 type PairKey = (bool, [usize; 4]);
@@ -329,7 +345,10 @@ impl ContactTerm {
             touching: false,
             cache: CandidateCache::default(),
             spare: Default::default(),
-            pair_kappa: HashMap::new(),
+            positions: Default::default(),
+            kappas: Vec::new(),
+            restored: None,
+            blocks: Vec::new(),
             x_start: Vec::new(),
             v_start: Vec::new(),
             flat_width: settings.thickness / edge,
@@ -376,7 +395,7 @@ impl ContactTerm {
         // them while no vertex moved more than `slack`.
         let slack = 0.5 * (self.cache.pad + 2.0 * self.cache_margin - self.xi - reach);
         if slack >= 0.0 && self.cache.covers(&x, None, self.cache.pad, slack) {
-            return self.report_over(&x, &self.cache.pairs, reach);
+            return self.report_over(&x, &self.cache.pairs, true, reach);
         }
         // The next step starts here and would search again: search once,
         // as it would (a wider search than the report needs), and leave it.
@@ -386,7 +405,7 @@ impl ContactTerm {
             x0: x,
             pad,
         };
-        let r = self.report_over(&searched.x0, &searched.pairs, reach);
+        let r = self.report_over(&searched.x0, &searched.pairs, false, reach);
         if let Ok(mut spare) = self.spare.lock() {
             *spare = Some(searched);
         }
@@ -596,22 +615,25 @@ impl ContactTerm {
     /// motions up to the margin), unless the last search covers `x`
     /// with half its margin to spare. (Pairs are in a canonical order, so
     /// which search found them does not change a result.)
-    fn cache_at(&mut self, x: &[Vector3<f64>]) {
+    /// Returns the cache it replaced, if it searched.
+    fn cache_at(&mut self, x: &[Vector3<f64>]) -> Option<CandidateCache> {
         let pad = self.xi + self.s_hat;
         let margin = self.cache_margin;
         if self.cache.covers(x, None, pad, 0.5 * margin) {
-            return;
+            return None;
         }
         let spare = self.spare.get_mut().ok().and_then(Option::take);
-        if let Some(c) = spare.filter(|c| c.pad == pad && c.x0 == x) {
-            self.cache = c;
-            return;
-        }
-        self.cache = CandidateCache {
-            pairs: self.candidates(x, None, pad + 2.0 * margin),
-            x0: x.to_vec(),
-            pad,
+        let cache = match spare.filter(|c| c.pad == pad && c.x0 == x) {
+            Some(c) => c,
+            None => CandidateCache {
+                pairs: self.candidates(x, None, pad + 2.0 * margin),
+                x0: x.to_vec(),
+                pad,
+            },
         };
+        let old = std::mem::replace(&mut self.cache, cache);
+        self.blocks = self.cache_blocks();
+        Some(old)
     }
 
     fn edge_pair(&self, a: [usize; 2], b: [usize; 2], mass: f64) -> Pair {
@@ -642,6 +664,14 @@ impl ContactTerm {
     /// candidates): blocks between every two facets sharing a vertex would
     /// multiply the factorization's work on a large flat sheet.
     fn pattern_pairs(&self, asm: &Assembler) -> Vec<(usize, usize)> {
+        let mut out = self.blocks.clone();
+        out.retain(|&(a, b)| !asm.has_pair(a, b));
+        out
+    }
+
+    /// Every slot pair `(a, b)`, `a < b`, among the slots of each of
+    /// `cache.pairs` (sorted).
+    fn cache_blocks(&self) -> Vec<(usize, usize)> {
         // Pairs between the same facets share their slots: each set once.
         let mut sets: Vec<Vec<usize>> = self
             .cache
@@ -659,7 +689,7 @@ impl ContactTerm {
         for slots in &sets {
             for &a in slots {
                 for &b in slots {
-                    if a < b && !asm.has_pair(a, b) {
+                    if a < b {
                         out.push((a, b));
                     }
                 }
@@ -681,6 +711,13 @@ impl ContactTerm {
         let mut t: f64 = 1.0;
         for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
             let (xs, ds) = (self.points(&x, p), self.points(&d, p));
+            // Apart along an axis by more than the thickness and both
+            // primitives' largest move up to `t`: no contact before `t`
+            // (the swept boxes of a broad phase, per pair).
+            let reach = ds.iter().map(|v| v.amax()).fold(0.0, f64::max);
+            if p.apart(&xs, p.xi + 2.0 * t * reach) {
+                continue;
+            }
             let toi = match p.kind {
                 Kind::PointTriangle { .. } => ccd::point_triangle_toi(xs, ds, p.xi, t),
                 Kind::EdgeEdge { .. } => ccd::edge_edge_toi(xs, ds, p.xi, t),
@@ -730,17 +767,29 @@ impl ContactTerm {
     pub fn report(&self, q: &[f64], search: f64) -> ContactReport {
         let mut x = Vec::new();
         self.surf.positions(q, &mut x);
-        self.report_over(&x, &self.candidates(&x, None, search + self.xi), search)
+        self.report_over(
+            &x,
+            &self.candidates(&x, None, search + self.xi),
+            false,
+            search,
+        )
     }
 
     /// The report over `pairs` at contact-vertex positions `x`, the
     /// smallest gap capped at `search`.
-    fn report_over(&self, x: &[Vector3<f64>], pairs: &[Pair], search: f64) -> ContactReport {
+    /// `cached`: `pairs` are the candidate cache's.
+    fn report_over(
+        &self,
+        x: &[Vector3<f64>],
+        pairs: &[Pair],
+        cached: bool,
+        search: f64,
+    ) -> ContactReport {
         let mut r = ContactReport {
             min_gap: search,
             ..Default::default()
         };
-        for p in pairs {
+        for (i, p) in pairs.iter().enumerate() {
             let xs = self.points(x, p);
             let d = distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt();
             let s = d - p.xi;
@@ -748,7 +797,7 @@ impl ContactTerm {
             if s < self.s_hat_of(p) {
                 r.pairs += 1;
                 if s > 0.0 {
-                    r.normal_force += self.normal_force(p, &xs, s);
+                    r.normal_force += self.normal_force(p, &xs, s, self.kappa_at(pairs, i, cached));
                 }
             }
         }
@@ -756,30 +805,48 @@ impl ContactTerm {
     }
 
     /// Normal force of a pair at gap `s` (N): `-kappa m(x) b'(s)`.
-    fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64) -> f64 {
-        self.kappa_of(p) * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat_of(p))
+    fn normal_force(&self, p: &Pair, xs: &[Vector3<f64>; 4], s: f64, kappa: f64) -> f64 {
+        kappa * mollifier::<f64>(&p.kind, &lift(xs)) * -db(s, self.s_hat_of(p))
     }
 
     /// Dashpot coefficients, friction's normal forces and bases from
     /// contact-vertex positions `x`.
-    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>]) {
+    /// `old` is the candidate cache the step start replaced, if it did.
+    fn lag_at(&mut self, x: &[Vector3<f64>], v: &[Vector3<f64>], old: Option<&CandidateCache>) {
         // Pair stiffnesses: kept for pairs inside the barrier (their energy
-        // is not zero), set anew for the others.
-        let mut kappa = HashMap::with_capacity(self.cache.pairs.len());
-        for p in &self.cache.pairs {
+        // is not zero), set anew for the others. The last ones are by index
+        // while the cache is the same, else by key.
+        let restored = self.restored.take();
+        let old_kappas = std::mem::take(&mut self.kappas);
+        let last = |i: usize, p: &Pair| -> Option<f64> {
+            match (&restored, old) {
+                (Some(map), _) => map.get(&key(p)).copied(),
+                (None, Some(c)) => find_key(&c.pairs, p).and_then(|j| old_kappas.get(j).copied()),
+                (None, None) => old_kappas.get(i).copied(),
+            }
+        };
+        let mut kappas = Vec::with_capacity(self.cache.pairs.len());
+        for (i, p) in self.cache.pairs.iter().enumerate() {
             let xs = self.points(x, p);
             let s_hat = self.s_hat_of(p);
             let inside = || {
                 !p.apart(&xs, p.xi + s_hat)
                     && distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi < s_hat
             };
-            let k = match self.pair_kappa.get(&key(p)) {
-                Some(&k) if inside() => k,
+            let k = match last(i, p) {
+                Some(k) if inside() => k,
                 _ => self.pair_stiffness(p, x, v),
             };
-            kappa.insert(key(p), k);
+            kappas.push(k);
         }
-        self.pair_kappa = kappa;
+        // Pairs with one key (adjacent in the canonical order) take the
+        // last one's value, as a map by key keeps it.
+        for i in (1..kappas.len()).rev() {
+            if key(&self.cache.pairs[i - 1]) == key(&self.cache.pairs[i]) {
+                kappas[i - 1] = kappas[i];
+            }
+        }
+        self.kappas = kappas;
         self.x_start.clear();
         self.x_start.extend_from_slice(x);
         self.v_start.clear();
@@ -787,21 +854,22 @@ impl ContactTerm {
         self.lagged.clear();
         let act = self.active(x).unwrap_or_default();
         self.touching = !act.is_empty();
-        for (p, s) in act {
+        for (p, s, kappa) in act {
             let xs = self.points(x, &p);
             let (w, n) = self.closest(&p, &xs);
             // Critical for zeta = 1 at the pair's barrier stiffness.
-            let k = self.kappa_of(&p) * ddb(s, self.s_hat_of(&p)).max(0.0);
+            let k = kappa * ddb(s, self.s_hat_of(&p)).max(0.0);
             let basis = tangent_basis(&n);
             let ids = p.ids();
             let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
             self.lagged.push(Lagged {
+                key: key(&p),
                 ids,
                 c: 2.0 * self.zeta * (k * p.mass).sqrt(),
                 w,
                 normal: n,
                 basis,
-                lambda: self.normal_force(&p, &xs, s),
+                lambda: self.normal_force(&p, &xs, s, kappa),
                 slide: Vector2::new(basis[0].dot(&vr), basis[1].dot(&vr)),
             });
         }
@@ -908,9 +976,19 @@ impl ContactTerm {
     /// map, having come closer than the candidate search's margin in one
     /// step, takes the stiffness of that step start).
     fn kappa_of(&self, p: &Pair) -> f64 {
-        match self.pair_kappa.get(&key(p)) {
-            Some(&k) => k,
-            None => self.pair_stiffness(p, &self.x_start, &self.v_start),
+        let set = match &self.restored {
+            Some(map) => map.get(&key(p)).copied(),
+            None => find_key(&self.cache.pairs, p).and_then(|i| self.kappas.get(i).copied()),
+        };
+        set.unwrap_or_else(|| self.pair_stiffness(p, &self.x_start, &self.v_start))
+    }
+
+    /// The stiffness of the `i`th pair of `pairs`, which are the cache's
+    /// when `cached`.
+    fn kappa_at(&self, pairs: &[Pair], i: usize, cached: bool) -> f64 {
+        match self.kappas.get(i) {
+            Some(&k) if cached && self.restored.is_none() => k,
+            _ => self.kappa_of(&pairs[i]),
         }
     }
 
@@ -919,11 +997,14 @@ impl ContactTerm {
         [x[ids[0]], x[ids[1]], x[ids[2]], x[ids[3]]]
     }
 
-    /// The active pairs at positions `x` (gap below the barrier width).
-    /// Fails when a pair is already closer than the thickness.
-    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64)>, EvalError> {
+    /// The active pairs at positions `x` (gap below the barrier width),
+    /// with their gaps and stiffnesses. Fails when a pair is already closer
+    /// than the thickness.
+    fn active(&self, x: &[Vector3<f64>]) -> Result<Vec<(Pair, f64, f64)>, EvalError> {
         let mut out = Vec::new();
-        for &p in self.near_pairs(x, None, self.xi + self.s_hat).iter() {
+        let pairs = self.near_pairs(x, None, self.xi + self.s_hat);
+        let cached = matches!(pairs, std::borrow::Cow::Borrowed(_));
+        for (i, &p) in pairs.iter().enumerate() {
             let xs = self.points(x, &p);
             if p.apart(&xs, p.xi + self.s_hat_of(&p)) {
                 continue;
@@ -941,7 +1022,7 @@ impl ContactTerm {
                     gap: s,
                 });
             }
-            out.push((p, s));
+            out.push((p, s, self.kappa_at(&pairs, i, cached)));
         }
         Ok(out)
     }
@@ -970,40 +1051,8 @@ impl ContactTerm {
     /// Add a pair's 12 x 12 matrix `h` (its four points' coordinates) to
     /// `batch`, mapped to the slots through the points' weights.
     fn scatter_matrix(&self, ids: &[usize; 4], h: &SMatrix<f64, 12, 12>, batch: &mut MatrixBatch) {
-        // The slots of the four points and each point's weight on them.
-        let mut slots: Vec<usize> = Vec::with_capacity(48);
-        self.pair_slots(ids, &mut slots);
-        let ns = slots.len();
-        let mut w = vec![[0.0; 4]; ns];
-        for (k, &i) in ids.iter().enumerate() {
-            for &(s, c) in &self.surf.maps[i] {
-                let a = slots.binary_search(&s).expect("slot listed");
-                w[a][k] += c;
-            }
-        }
-        let dense = batch.group(slots);
-        let n3 = 3 * ns;
-        for b in 0..ns {
-            for l in 0..4 {
-                if w[b][l] == 0.0 {
-                    continue;
-                }
-                for a in 0..ns {
-                    for k in 0..4 {
-                        let c = w[a][k] * w[b][l];
-                        if c == 0.0 {
-                            continue;
-                        }
-                        for y in 0..3 {
-                            let col = &mut dense[(3 * b + y) * n3 + 3 * a..][..3];
-                            for x in 0..3 {
-                                col[x] += c * h[(3 * k + x, 3 * l + y)];
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        let maps = ids.map(|i| &self.surf.maps[i]);
+        batch.add_mapped(&maps, h.as_slice());
     }
 }
 
@@ -1019,38 +1068,144 @@ struct MatrixBatch {
     index: std::collections::HashMap<Vec<usize>, usize>,
     /// Sorted slots and the dense column-major matrix over their coordinates.
     groups: Vec<(Vec<usize>, Vec<f64>)>,
+    /// The group used last (pairs in canonical order often share it).
+    last: Option<usize>,
 }
 
 impl MatrixBatch {
     /// The (zeroed when new) dense matrix of the group of `slots`.
-    fn group(&mut self, slots: Vec<usize>) -> &mut [f64] {
-        let k = match self.index.get(&slots) {
-            Some(&k) => k,
-            None => {
-                let n3 = 3 * slots.len();
-                self.index.insert(slots.clone(), self.groups.len());
-                self.groups.push((slots, vec![0.0; n3 * n3]));
-                self.groups.len() - 1
-            }
+    fn group(&mut self, slots: &[usize]) -> &mut [f64] {
+        let k = match self.last.filter(|&k| self.groups[k].0 == slots) {
+            Some(k) => k,
+            None => match self.index.get(slots) {
+                Some(&k) => k,
+                None => {
+                    let n3 = 3 * slots.len();
+                    self.index.insert(slots.to_vec(), self.groups.len());
+                    self.groups.push((slots.to_vec(), vec![0.0; n3 * n3]));
+                    self.groups.len() - 1
+                }
+            },
         };
+        self.last = Some(k);
         &mut self.groups[k].1
     }
 
+    /// Add `W^T h W`: `h` (column-major) over the coordinates of the `N`
+    /// points `maps`, `W` their weights on the slots.
+    fn add_mapped<const N: usize>(&mut self, maps: &[&super::surface::VertexMap; N], h: &[f64]) {
+        let nh = 3 * N;
+        assert_eq!(h.len(), nh * nh, "a matrix over the points' coordinates");
+        // The points' slots (sorted, once each) and each point's weight on
+        // them, on the stack unless they are many.
+        let total: usize = maps.iter().map(|m| m.len()).sum();
+        let (mut slot_stack, mut w_stack) = ([0usize; MAX_PAIR_SLOTS], [[0.0; N]; MAX_PAIR_SLOTS]);
+        let (mut slot_heap, mut w_heap) = (Vec::new(), Vec::new());
+        let (slots, w): (&mut [usize], &mut [[f64; N]]) = if total <= MAX_PAIR_SLOTS {
+            (&mut slot_stack[..total], &mut w_stack[..total])
+        } else {
+            slot_heap.resize(total, 0);
+            w_heap.resize(total, [0.0; N]);
+            (&mut slot_heap, &mut w_heap)
+        };
+        for (k, &(s, _)) in maps.iter().flat_map(|m| m.iter()).enumerate() {
+            slots[k] = s;
+        }
+        slots.sort_unstable();
+        let mut ns = 0;
+        for a in 0..total {
+            if a == 0 || slots[a] != slots[ns - 1] {
+                slots[ns] = slots[a];
+                ns += 1;
+            }
+        }
+        let slots = &slots[..ns];
+        let w = &mut w[..ns];
+        for (k, m) in maps.iter().enumerate() {
+            for &(s, c) in m.iter() {
+                let a = slots.binary_search(&s).expect("slot listed");
+                w[a][k] += c;
+            }
+        }
+        let dense = self.group(slots);
+        let n3 = 3 * ns;
+        // Column (b, y) in two stages: the points' column
+        // `t = sum_l w[b][l] h[.., (l, y)]`, then `sum_k w[a][k] t[k]` into
+        // each slot a.
+        for (b, wb) in w.iter().enumerate() {
+            for y in 0..3 {
+                let mut t = [[0.0; 3]; N];
+                for (l, &c) in wb.iter().enumerate() {
+                    if c != 0.0 {
+                        let hc = &h[(3 * l + y) * nh..][..nh];
+                        for (tk, hk) in t.iter_mut().zip(hc.chunks_exact(3)) {
+                            for x in 0..3 {
+                                tk[x] += c * hk[x];
+                            }
+                        }
+                    }
+                }
+                let col = &mut dense[(3 * b + y) * n3..][..n3];
+                for (ca, wa) in col.chunks_exact_mut(3).zip(w.iter()) {
+                    for (&c, tk) in wa.iter().zip(&t) {
+                        if c != 0.0 {
+                            for x in 0..3 {
+                                ca[x] += c * tk[x];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Add every group to the matrix values `vals` (blocks the pattern
-    /// lacks are left out: the pattern holds every facet pair in reach).
-    fn flush(self, asm: &Assembler, vals: &mut [f64]) {
+    /// lacks are left out: the pattern holds every facet pair in reach),
+    /// at the blocks' positions kept in `known` (found where new).
+    fn flush(self, asm: &Assembler, vals: &mut [f64], known: &mut BlockPositions) {
+        if known.pattern != asm.pattern_id() || known.count > MAX_KEPT_POSITIONS {
+            *known = BlockPositions {
+                pattern: asm.pattern_id(),
+                ..Default::default()
+            };
+        }
         for (slots, dense) in self.groups {
             let ns = slots.len();
             let n3 = 3 * ns;
+            let at = match known.groups.get(&slots) {
+                Some(at) => at,
+                None => {
+                    let at: Vec<BlockPosition> = (0..ns * ns)
+                        .map(|k| asm.block_position(slots[k % ns], slots[k / ns]))
+                        .collect();
+                    known.count += at.len();
+                    known.groups.entry(slots).or_insert(at)
+                }
+            };
             for b in 0..ns {
                 for a in 0..ns {
-                    let blk = Matrix3::from_fn(|x, y| dense[(3 * b + y) * n3 + 3 * a + x]);
-                    asm.try_add_block(slots[a], slots[b], &blk, vals);
+                    let col = |y: usize| 3 * b + y;
+                    asm.add_block_at(at[b * ns + a], |x, y| dense[col(y) * n3 + 3 * a + x], vals);
                 }
             }
         }
     }
 }
+
+/// The matrix positions of slot groups' blocks (column-major over each
+/// group's slots), kept across evaluations while the pattern is the same:
+/// a stack's pairs meet the same groups at every evaluation.
+#[derive(Debug, Default)]
+struct BlockPositions {
+    /// The pattern they were found in ([`Assembler::pattern_id`]).
+    pattern: u64,
+    groups: HashMap<Vec<usize>, Vec<BlockPosition>>,
+    /// Positions kept in all.
+    count: usize,
+}
+
+/// Block positions kept at most (then found anew): 16 bytes each.
+const MAX_KEPT_POSITIONS: usize = 1 << 22;
 
 /// The crease stops' points: [`STOP_POINTS`] along every crease edge.
 fn stop_points(
@@ -1208,6 +1363,12 @@ fn key(p: &Pair) -> PairKey {
     (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
 }
 
+/// The index of a pair with `p`'s key in `pairs` (in the canonical order).
+fn find_key(pairs: &[Pair], p: &Pair) -> Option<usize> {
+    let k = key(p);
+    pairs.binary_search_by(|q| key(q).cmp(&k)).ok()
+}
+
 /// The barrier stiffness a pair of sample mass `mass` approaching at
 /// `approach` (m/s) takes: `kappa`, or enough to stop it at
 /// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2` (see
@@ -1328,17 +1489,22 @@ impl ContactTerm {
     /// 12 stencil coordinates, from the closed-form derivatives of the
     /// squared distance `D` (and of the edge-edge mollifier `m`).
     /// Also the stencil points the energy depends on.
-    fn energy_derivatives(&self, p: &Pair, x: &[Vector3<f64>; 4]) -> (Dual2<12>, &'static [usize]) {
+    fn energy_derivatives(
+        &self,
+        p: &Pair,
+        x: &[Vector3<f64>; 4],
+        k: f64,
+    ) -> (Dual2<12>, &'static [usize]) {
         let [a, b, c, d] = x;
         match p.kind {
             Kind::PointTriangle { .. } => {
                 let ty = distance::point_triangle_type(a, b, c, d);
-                let f = self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x));
+                let f = self.barrier_of_sq(p, point_triangle_sq_derivatives(ty, x), k);
                 (f, point_triangle_points(ty))
             }
             Kind::EdgeEdge { eps_x, .. } => {
                 let ty = distance::edge_edge_type(a, b, c, d);
-                let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x));
+                let f = self.barrier_of_sq(p, edge_edge_sq_derivatives(ty, x), k);
                 match edge_edge_mollifier_derivatives(x, eps_x) {
                     Some(m) => (f * m, &[0, 1, 2, 3]),
                     None => (f, edge_edge_points(ty)),
@@ -1347,9 +1513,9 @@ impl ContactTerm {
         }
     }
 
-    /// `kappa b(sqrt(D) - xi)` of the squared distance `D` by one chain
-    /// rule in `D` (its derivatives in closed form).
-    fn barrier_of_sq<T: Real>(&self, p: &Pair, d2: T) -> T {
+    /// `k b(sqrt(D) - xi)` of the squared distance `D` by one chain rule
+    /// in `D` (its derivatives in closed form), `k` the pair's stiffness.
+    fn barrier_of_sq<T: Real>(&self, p: &Pair, d2: T, k: f64) -> T {
         let dv = d2.val();
         let r = dv.sqrt();
         let s = r - p.xi;
@@ -1357,7 +1523,6 @@ impl ContactTerm {
         let (b1, b2) = (db(s, s_hat), ddb(s, s_hat));
         // ds/dD and d2s/dD2.
         let (sd, sdd) = (0.5 / r, -0.25 / (r * dv));
-        let k = self.kappa_of(p);
         d2.map(
             k * barrier(s, s_hat),
             k * b1 * sd,
@@ -1486,43 +1651,40 @@ impl ContactTerm {
         h: &SMatrix<f64, 9, 9>,
         batch: &mut MatrixBatch,
     ) {
-        let mut slots: Vec<usize> = maps
-            .iter()
-            .flat_map(|m| m.iter().map(|&(s, _)| s))
-            .collect();
-        slots.sort_unstable();
-        slots.dedup();
-        let ns = slots.len();
-        let mut wt = vec![[0.0; 3]; ns];
-        for (j, m) in maps.iter().enumerate() {
-            for &(s, w) in m {
-                let a = slots.binary_search(&s).expect("slot listed");
-                wt[a][j] += w;
+        batch.add_mapped(&maps.each_ref(), h.as_slice());
+    }
+
+    /// The iteration matrix of a lagged pair's dashpot and friction (`co.c`
+    /// times their velocity derivatives) over its four points, at contact
+    /// vertex velocities `v` (none if neither acts).
+    fn lagged_matrix(
+        &self,
+        lg: &Lagged,
+        v: &[Vector3<f64>],
+        co: &MatrixCoeffs,
+    ) -> Option<SMatrix<f64, 12, 12>> {
+        if lg.c <= 0.0 && self.mu <= 0.0 {
+            return None;
+        }
+        let mut k3 = Matrix3::zeros();
+        if lg.c > 0.0 {
+            k3 += (co.c * lg.c) * lg.normal * lg.normal.transpose();
+        }
+        if self.mu > 0.0 {
+            // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
+            let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
+            let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
+            let slip = slip_factor(u.norm(), self.eps_v);
+            k3 += friction_matrix(co.c * self.mu * lg.lambda, &lg.basis, u, slip);
+        }
+        let mut h = SMatrix::<f64, 12, 12>::zeros();
+        for a in 0..4 {
+            for b in 0..4 {
+                h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
+                    .copy_from(&(lg.w[a] * lg.w[b] * k3));
             }
         }
-        let dense = batch.group(slots);
-        let n3 = 3 * ns;
-        for bs in 0..ns {
-            for l in 0..3 {
-                if wt[bs][l] == 0.0 {
-                    continue;
-                }
-                for a in 0..ns {
-                    for k in 0..3 {
-                        let c = wt[a][k] * wt[bs][l];
-                        if c == 0.0 {
-                            continue;
-                        }
-                        for y in 0..3 {
-                            let col = &mut dense[(3 * bs + y) * n3 + 3 * a..][..3];
-                            for x in 0..3 {
-                                col[x] += c * h[(3 * k + x, 3 * l + y)];
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        Some(h)
     }
 
     /// Closest-point weights (relative velocity `sum w_i v_i`) and the unit
@@ -1560,11 +1722,21 @@ impl BarrierTerm for ContactTerm {
     /// The pairs' barrier stiffnesses: six numbers a pair (edge-edge or
     /// not, its four contact vertices, the stiffness), in key order.
     fn memory(&self) -> Vec<f64> {
-        let mut pairs: Vec<(&PairKey, &f64)> = self.pair_kappa.iter().collect();
-        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
+        let mut pairs: Vec<(PairKey, f64)> = match &self.restored {
+            Some(map) => map.iter().map(|(k, &v)| (*k, v)).collect(),
+            None => self
+                .cache
+                .pairs
+                .iter()
+                .map(key)
+                .zip(self.kappas.iter().copied())
+                .collect(),
+        };
+        pairs.sort_unstable_by_key(|a| a.0);
+        pairs.dedup_by(|a, b| a.0 == b.0);
         let mut out = Vec::with_capacity(6 * pairs.len());
-        for ((edge, ids), &k) in pairs {
-            out.push(if *edge { 1.0 } else { 0.0 });
+        for ((edge, ids), k) in pairs {
+            out.push(if edge { 1.0 } else { 0.0 });
             out.extend(ids.iter().map(|&i| i as f64));
             out.push(k);
         }
@@ -1576,7 +1748,7 @@ impl BarrierTerm for ContactTerm {
     }
 
     fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
-        self.pair_kappa = self.parse_memory(memory)?;
+        self.restored = Some(self.parse_memory(memory)?);
         Ok(())
     }
 
@@ -1615,8 +1787,8 @@ impl ForceTerm for ContactTerm {
         let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
         self.surf.positions(v, &mut vx);
-        self.cache_at(&x);
-        self.lag_at(&x, &vx);
+        let old = self.cache_at(&x);
+        self.lag_at(&x, &vx, old.as_ref());
         self.creases_near_flat = self.near_flat(q);
     }
 
@@ -1635,19 +1807,47 @@ impl ForceTerm for ContactTerm {
         let mut batch = MatrixBatch::default();
         let active = self.active(&x)?;
         out.barrier_pairs += active.len();
-        for (p, _) in active {
+        // Matrices: each pair's barrier, dashpot and friction parts summed
+        // (the lagged pairs are in the same canonical order) and scattered
+        // once; lagged pairs out of the barrier on their own.
+        let mut next_lagged = 0;
+        for (p, _, kappa) in active {
             let ids = p.ids();
             let xs = self.points(&x, &p);
-            let (e, points) = self.energy_derivatives(&p, &xs);
+            let (e, points) = self.energy_derivatives(&p, &xs, kappa);
             out.term_energy += e.v;
             self.scatter_force(&ids, &e.g, &mut out.force);
-            if let Some((_, co)) = matrix.as_ref().filter(|(_, co)| co.k != 0.0) {
-                let h = if self.project {
-                    project_psd(&e.h, points)
-                } else {
-                    e.h
+            if let Some((_, co)) = matrix.as_ref() {
+                let kp = key(&p);
+                let lagged = &self.lagged;
+                while next_lagged < lagged.len() && lagged[next_lagged].key < kp {
+                    let lg = &lagged[next_lagged];
+                    if let Some(h) = self.lagged_matrix(lg, &v, co) {
+                        self.scatter_matrix(&lg.ids, &h, &mut batch);
+                    }
+                    next_lagged += 1;
+                }
+                let mut h = match (co.k == 0.0, self.project) {
+                    (true, _) => None,
+                    (false, true) => Some(co.k * project_psd(&e.h, points)),
+                    (false, false) => Some(co.k * e.h),
                 };
-                self.scatter_matrix(&ids, &(co.k * h), &mut batch);
+                while next_lagged < lagged.len() && lagged[next_lagged].key == kp {
+                    if let Some(hl) = self.lagged_matrix(&lagged[next_lagged], &v, co) {
+                        h = Some(h.map_or(hl, |h| h + hl));
+                    }
+                    next_lagged += 1;
+                }
+                if let Some(h) = h {
+                    self.scatter_matrix(&ids, &h, &mut batch);
+                }
+            }
+        }
+        if let Some((_, co)) = matrix.as_ref() {
+            for lg in &self.lagged[next_lagged..] {
+                if let Some(h) = self.lagged_matrix(lg, &v, co) {
+                    self.scatter_matrix(&lg.ids, &h, &mut batch);
+                }
             }
         }
         self.crease_stops(asm, st, out, matrix.as_ref().map(|(_, co)| *co), &mut batch)?;
@@ -1666,24 +1866,13 @@ impl ForceTerm for ContactTerm {
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.damping);
-            if let Some((_, co)) = matrix.as_ref() {
-                let k3 = (co.c * lg.c) * lg.normal * lg.normal.transpose();
-                let mut h = SMatrix::<f64, 12, 12>::zeros();
-                for a in 0..4 {
-                    for b in 0..4 {
-                        h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
-                            .copy_from(&(lg.w[a] * lg.w[b] * k3));
-                    }
-                }
-                self.scatter_matrix(&lg.ids, &h, &mut batch);
-            }
         }
         // Friction with the lagged normal forces and bases.
         for lg in self.lagged.iter().filter(|_| self.mu > 0.0) {
             let vr: Vector3<f64> = (0..4).map(|k| lg.w[k] * v[lg.ids[k]]).sum();
             let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
             let y = u.norm();
-            let (phi, dphi_y) = slip_factor(y, self.eps_v);
+            let (phi, _) = slip_factor(y, self.eps_v);
             let ml = self.mu * lg.lambda;
             let ut = lg.basis[0] * u.x + lg.basis[1] * u.y;
             let fr = ml * phi * ut;
@@ -1694,21 +1883,10 @@ impl ForceTerm for ContactTerm {
             }
             self.scatter_force(&lg.ids, &g, &mut out.force);
             self.scatter_force(&lg.ids, &g, &mut out.dissipative_force.friction);
-            if let Some((_, co)) = matrix.as_ref() {
-                // d f / d v_rel = mu lambda T [phi I + (phi'/y) u u^T] T^T.
-                let k3 = friction_matrix(co.c * ml, &lg.basis, u, (phi, dphi_y));
-                let mut h = SMatrix::<f64, 12, 12>::zeros();
-                for a in 0..4 {
-                    for b in 0..4 {
-                        h.fixed_view_mut::<3, 3>(3 * a, 3 * b)
-                            .copy_from(&(lg.w[a] * lg.w[b] * k3));
-                    }
-                }
-                self.scatter_matrix(&lg.ids, &h, &mut batch);
-            }
         }
         if let Some((vals, _)) = matrix.as_mut() {
-            batch.flush(asm, vals);
+            let mut known = self.positions.lock().unwrap_or_else(|e| e.into_inner());
+            batch.flush(asm, vals, &mut known);
         }
         Ok(())
     }

@@ -166,7 +166,9 @@ impl Newton {
         let matrix = self.refresh.then_some(self.coeffs);
         if self.line_search && it > 0 && self.slope0 < 0.0 {
             let t0 = Instant::now();
-            ctx.residual(next, ws, None)?;
+            // With the matrix where it is to be formed: most corrections
+            // stand, and their end is where it is formed.
+            ctx.residual(next, ws, matrix)?;
             let p = ctx.params;
             let mut tries = 0;
             // Away from the barrier the plain Newton step stands.
@@ -184,9 +186,9 @@ impl Newton {
             }
             if tries > 0 {
                 out.line_search_cuts += 1;
-            }
-            if self.refresh {
-                ctx.residual(next, ws, matrix)?;
+                if self.refresh {
+                    ctx.residual(next, ws, matrix)?;
+                }
             }
             out.assembly_time += t0.elapsed();
         } else if !(it == 0 && have_rhs && !self.refresh) {
