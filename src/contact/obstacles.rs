@@ -27,12 +27,13 @@
 //! taken at the closest points of its surface.
 
 use super::ccd;
+use super::potentials::{
+    barrier, db, ddb, friction_matrix, reversal_fraction, slip_factor, speed_stiffness,
+    tangent_basis,
+};
 use super::shapes::{Closest, Obstacle, Shape, ShapeError};
 use super::surface::{ContactSurface, VertexMap, eval_map, scatter_map};
-use super::term::{
-    ContactSettings, SettingsError, barrier, db, ddb, friction_matrix, reversal_fraction,
-    slip_factor, speed_stiffness, tangent_basis,
-};
+use super::term::{ContactSettings, SettingsError};
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError,
     ObstaclePower, State,

@@ -234,7 +234,7 @@ impl Shape {
                     let u = e.normalize();
                     return Closest {
                         distance: -radius,
-                        normal: super::term::tangent_basis(&u)[0],
+                        normal: super::potentials::tangent_basis(&u)[0],
                         hessian: Matrix3::zeros(),
                     };
                 }

@@ -35,13 +35,24 @@ use super::distance_derivatives::{
 use super::scalar::{Dual2, Real};
 use super::surface::ContactSurface;
 use crate::assembly::{
-    Assembler, BarrierTerm, BlockPosition, EvalError, Evaluation, ForceTerm, MatrixCoeffs,
-    MemoryError, State,
+    Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
 };
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
 use std::collections::HashMap;
+
+mod batch;
+mod psd;
+mod stops;
+
+use super::potentials::{
+    barrier, db, ddb, friction_matrix, reversal_fraction, slip_factor, speed_stiffness,
+    tangent_basis,
+};
+use batch::{BlockPositions, MatrixBatch};
+use psd::project_psd;
+use stops::{StopPoint, stop_points};
 
 /// Contact settings (scene keys under `ancf:contact`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -258,22 +269,6 @@ pub struct ContactTerm {
     creases_near_flat: bool,
 }
 
-/// The kinetic energy `m v_n^2 / 2` of a pair's approach is stopped at
-/// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2`: at about 4 % of the barrier
-/// width (see [`ContactTerm::pair_stiffness`]).
-pub(crate) const PAIR_SPEED_DIVISOR: f64 = 6.0;
-
-/// A point of a crease where its stop acts: the crease's `[a, b, t]` there
-/// (into the facet on the right of `t`, into the left one, along the
-/// crease) as linear maps of the slots.
-#[derive(Clone, Debug)]
-struct StopPoint {
-    edge: crate::ids::EdgeId,
-    /// Share of the crease's length (m) the point stands for.
-    length: f64,
-    maps: [super::surface::VertexMap; 3],
-}
-
 /// Share of the wedge's opening that neighbouring facets keep (see
 /// [`ContactTerm::neighbour_pairs`]): room for the facets to bend.
 const NEIGHBOUR_SHARE: f64 = 0.5;
@@ -281,16 +276,6 @@ const NEIGHBOUR_SHARE: f64 = 0.5;
 /// Neighbour pairs keeping less than this share of the thickness are left
 /// out (near the shared vertex or crease, where the crease stops act).
 const NEIGHBOUR_MIN: f64 = 0.02;
-
-/// Points per crease edge where the crease stops act, ends included: a
-/// flat-folded crease's facets bend between its ends, and crossed each
-/// other along it (at a sixteenth of a facet from the crease) with only
-/// the ends stopped.
-const STOP_POINTS: usize = 9;
-
-/// Slots of a pair's four points kept on the stack (each point maps to
-/// its facet's 12 slots or fewer).
-const MAX_PAIR_SLOTS: usize = 48;
 
 /// A pair's identity: edge-edge or not, and its four contact vertices.
 type PairKey = (bool, [usize; 4]);
@@ -1056,309 +1041,6 @@ impl ContactTerm {
     }
 }
 
-/// Pair matrices summed per set of slots before they reach the sparse
-/// matrix: the many pairs between two facets (stacked layers) share their
-/// slots, so each slot block is looked up in the pattern once per facet
-/// pair instead of once per pair.
-/// Groups are written in the order they were met (the pairs' canonical
-/// order), so the sums do not depend on hashing.
-#[derive(Default)]
-struct MatrixBatch {
-    /// Sorted slots -> index in `groups`.
-    index: std::collections::HashMap<Vec<usize>, usize>,
-    /// Sorted slots and the dense column-major matrix over their coordinates.
-    groups: Vec<(Vec<usize>, Vec<f64>)>,
-    /// The group used last (pairs in canonical order often share it).
-    last: Option<usize>,
-}
-
-impl MatrixBatch {
-    /// The (zeroed when new) dense matrix of the group of `slots`.
-    fn group(&mut self, slots: &[usize]) -> &mut [f64] {
-        let k = match self.last.filter(|&k| self.groups[k].0 == slots) {
-            Some(k) => k,
-            None => match self.index.get(slots) {
-                Some(&k) => k,
-                None => {
-                    let n3 = 3 * slots.len();
-                    self.index.insert(slots.to_vec(), self.groups.len());
-                    self.groups.push((slots.to_vec(), vec![0.0; n3 * n3]));
-                    self.groups.len() - 1
-                }
-            },
-        };
-        self.last = Some(k);
-        &mut self.groups[k].1
-    }
-
-    /// Add `W^T h W`: `h` (column-major) over the coordinates of the `N`
-    /// points `maps`, `W` their weights on the slots.
-    fn add_mapped<const N: usize>(&mut self, maps: &[&super::surface::VertexMap; N], h: &[f64]) {
-        let nh = 3 * N;
-        assert_eq!(h.len(), nh * nh, "a matrix over the points' coordinates");
-        // The points' slots (sorted, once each) and each point's weight on
-        // them, on the stack unless they are many.
-        let total: usize = maps.iter().map(|m| m.len()).sum();
-        let (mut slot_stack, mut w_stack) = ([0usize; MAX_PAIR_SLOTS], [[0.0; N]; MAX_PAIR_SLOTS]);
-        let (mut slot_heap, mut w_heap) = (Vec::new(), Vec::new());
-        let (slots, w): (&mut [usize], &mut [[f64; N]]) = if total <= MAX_PAIR_SLOTS {
-            (&mut slot_stack[..total], &mut w_stack[..total])
-        } else {
-            slot_heap.resize(total, 0);
-            w_heap.resize(total, [0.0; N]);
-            (&mut slot_heap, &mut w_heap)
-        };
-        for (k, &(s, _)) in maps.iter().flat_map(|m| m.iter()).enumerate() {
-            slots[k] = s;
-        }
-        slots.sort_unstable();
-        let mut ns = 0;
-        for a in 0..total {
-            if a == 0 || slots[a] != slots[ns - 1] {
-                slots[ns] = slots[a];
-                ns += 1;
-            }
-        }
-        let slots = &slots[..ns];
-        let w = &mut w[..ns];
-        for (k, m) in maps.iter().enumerate() {
-            for &(s, c) in m.iter() {
-                let a = slots.binary_search(&s).expect("slot listed");
-                w[a][k] += c;
-            }
-        }
-        let dense = self.group(slots);
-        let n3 = 3 * ns;
-        // Column (b, y) in two stages: the points' column
-        // `t = sum_l w[b][l] h[.., (l, y)]`, then `sum_k w[a][k] t[k]` into
-        // each slot a.
-        for (b, wb) in w.iter().enumerate() {
-            for y in 0..3 {
-                let mut t = [[0.0; 3]; N];
-                for (l, &c) in wb.iter().enumerate() {
-                    if c != 0.0 {
-                        let hc = &h[(3 * l + y) * nh..][..nh];
-                        for (tk, hk) in t.iter_mut().zip(hc.chunks_exact(3)) {
-                            for x in 0..3 {
-                                tk[x] += c * hk[x];
-                            }
-                        }
-                    }
-                }
-                let col = &mut dense[(3 * b + y) * n3..][..n3];
-                for (ca, wa) in col.chunks_exact_mut(3).zip(w.iter()) {
-                    for (&c, tk) in wa.iter().zip(&t) {
-                        if c != 0.0 {
-                            for x in 0..3 {
-                                ca[x] += c * tk[x];
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    /// Add every group to the matrix values `vals` (blocks the pattern
-    /// lacks are left out: the pattern holds every facet pair in reach),
-    /// at the blocks' positions kept in `known` (found where new).
-    fn flush(self, asm: &Assembler, vals: &mut [f64], known: &mut BlockPositions) {
-        if known.pattern != asm.pattern_id() || known.count > MAX_KEPT_POSITIONS {
-            *known = BlockPositions {
-                pattern: asm.pattern_id(),
-                ..Default::default()
-            };
-        }
-        for (slots, dense) in self.groups {
-            let ns = slots.len();
-            let n3 = 3 * ns;
-            let at = match known.groups.get(&slots) {
-                Some(at) => at,
-                None => {
-                    let at: Vec<BlockPosition> = (0..ns * ns)
-                        .map(|k| asm.block_position(slots[k % ns], slots[k / ns]))
-                        .collect();
-                    known.count += at.len();
-                    known.groups.entry(slots).or_insert(at)
-                }
-            };
-            for b in 0..ns {
-                for a in 0..ns {
-                    let col = |y: usize| 3 * b + y;
-                    asm.add_block_at(at[b * ns + a], |x, y| dense[col(y) * n3 + 3 * a + x], vals);
-                }
-            }
-        }
-    }
-}
-
-/// The matrix positions of slot groups' blocks (column-major over each
-/// group's slots), kept across evaluations while the pattern is the same:
-/// a stack's pairs meet the same groups at every evaluation.
-#[derive(Debug, Default)]
-struct BlockPositions {
-    /// The pattern they were found in ([`Assembler::pattern_id`]).
-    pattern: u64,
-    groups: HashMap<Vec<usize>, Vec<BlockPosition>>,
-    /// Positions kept in all.
-    count: usize,
-}
-
-/// Block positions kept at most (then found anew): 16 bytes each.
-const MAX_KEPT_POSITIONS: usize = 1 << 22;
-
-/// The crease stops' points: [`STOP_POINTS`] along every crease edge.
-fn stop_points(
-    mesh: &Mesh,
-    layout: &DofLayout,
-    elements: &[crate::element::ShellElement],
-) -> Vec<StopPoint> {
-    let mut out = Vec::new();
-    for (e, edge) in mesh.edge_ids().zip(mesh.edges()) {
-        if edge.kind != crate::mesh::EdgeKind::Crease || mesh.faces_of(e).len() != 2 {
-            continue;
-        }
-        let (v, w) = (edge.v[0], edge.v[1]);
-        let chord = mesh.coord(w) - mesh.coord(v);
-        let length = mesh.edge_length(e) / STOP_POINTS as f64;
-        for k in 0..STOP_POINTS {
-            let s = k as f64 / (STOP_POINTS - 1) as f64;
-            let mut right = None;
-            let mut left = None;
-            let mut tangent = None;
-            for &f in mesh.faces_of(e) {
-                let tri = mesh.triangle(f);
-                let at = |x| tri.iter().position(|&y| y == x).expect("on the facet");
-                let (iv, iw) = (at(v), at(w));
-                let ik = 3 - iv - iw;
-                let mut l = [0.0; 3];
-                l[iv] = 1.0 - s;
-                l[iw] = s;
-                // Into the facet: towards its third corner; along the crease.
-                let mut into = [0.0; 3];
-                into[ik] = 1.0;
-                for i in 0..3 {
-                    into[i] -= l[i];
-                }
-                let mut along = [0.0; 3];
-                along[iw] = 1.0;
-                along[iv] = -1.0;
-                let shape = elements[f.index()].shape();
-                let map = |dir: [f64; 3]| {
-                    let d = shape.d_along(l, dir);
-                    let mut terms: HashMap<usize, f64> = HashMap::new();
-                    for (node, combo) in layout.local[f.index()].iter().enumerate() {
-                        for (slot, c) in combo.terms() {
-                            *terms.entry(slot).or_insert(0.0) += d[node] * c;
-                        }
-                    }
-                    let mut m: super::surface::VertexMap =
-                        terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
-                    m.sort_unstable_by_key(|&(s, _)| s);
-                    m
-                };
-                let x = mesh.coord(tri[ik]) - mesh.coord(v);
-                if chord.x * x.y - chord.y * x.x < 0.0 {
-                    right = Some(map(into));
-                } else {
-                    left = Some(map(into));
-                }
-                tangent.get_or_insert_with(|| map(along));
-            }
-            if let (Some(a), Some(b), Some(t)) = (right, left, tangent) {
-                out.push(StopPoint {
-                    edge: e,
-                    length,
-                    maps: [a, b, t],
-                });
-            }
-        }
-    }
-    out
-}
-
-/// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
-/// theta` on the valley side (-1), `theta` on the mountain side (+1).
-/// A bound on how far the angle between the crease normals `a x t` and
-/// `b x t` (the gap to flat of [`flat_gap`]) can change along the move
-/// `(a, b, t) + alpha (da, db, dt)`, `alpha` in [0, 1]: each normal turns by
-/// at most `asin(|change| / |normal|) <= pi/2 |change| / |normal|`.
-fn stop_turn_bound([a, b, t]: [Vector3<f64>; 3], [da, db, dt]: [Vector3<f64>; 3]) -> f64 {
-    let (nt, ndt) = (t.norm(), dt.norm());
-    let turn = |x: &Vector3<f64>, dx: &Vector3<f64>| {
-        let normal = x.cross(&t).norm();
-        let change = dx.norm() * (nt + ndt) + x.norm() * ndt;
-        if change < normal {
-            std::f64::consts::FRAC_PI_2 * change / normal
-        } else {
-            std::f64::consts::PI
-        }
-    };
-    turn(&a, &da) + turn(&b, &db)
-}
-
-fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
-    let theta = crate::crease::theta(a, b, t);
-    if theta > std::f64::consts::PI {
-        (std::f64::consts::TAU - theta, -1.0)
-    } else {
-        (theta, 1.0)
-    }
-}
-
-/// The fraction of a correction `du` of a pair's tangential velocity `u`
-/// at which it comes closest to rest, where the correction would carry it
-/// through sticking to sliding the other way (`slide` its velocity at the
-/// step start, `eps` the stick velocity); None where it would not (see
-/// [`ContactTerm::friction_fraction`]).
-pub(crate) fn reversal_fraction(
-    u: Vector2<f64>,
-    du: Vector2<f64>,
-    slide: Vector2<f64>,
-    eps: f64,
-) -> Option<f64> {
-    let end = u + du;
-    // A pair that slid at the step start only where it slides that
-    // way and is carried past rest to slide back (an iterate
-    // sliding the other way, such as the held predictor's, is on
-    // its way back); one that stuck, wherever it is carried past.
-    let start = if slide.norm() > eps { slide } else { u };
-    if u.norm() <= eps || end.norm() <= eps || u.dot(&start) <= 0.0 || end.dot(&start) >= 0.0 {
-        return None;
-    }
-    let stop = -u.dot(&du) / du.norm_squared();
-    (stop > 0.0).then_some(stop)
-}
-
-/// Smoothed Coulomb friction's `f1(y) / y` and its derivative over `y`
-/// at tangential speed `y` (`f1` rises as `2y/eps - (y/eps)^2` up to the
-/// stick velocity `eps`, then is 1).
-pub(crate) fn slip_factor(y: f64, eps: f64) -> (f64, f64) {
-    if y < eps {
-        (
-            2.0 / eps - y / (eps * eps),
-            if y > 0.0 { -1.0 / (eps * eps * y) } else { 0.0 },
-        )
-    } else {
-        (1.0 / y, -1.0 / (y * y * y))
-    }
-}
-
-/// `scale T [phi I + (phi'/y) u u^T] T^T`: friction's derivative in the
-/// relative velocity times `scale` (`c mu lambda`), `T` the tangent
-/// `basis`, `u` the tangential velocity in it, `(phi, dphi_y)` from
-/// [`slip_factor`].
-pub(crate) fn friction_matrix(
-    scale: f64,
-    basis: &[Vector3<f64>; 2],
-    u: Vector2<f64>,
-    (phi, dphi_y): (f64, f64),
-) -> Matrix3<f64> {
-    let t = nalgebra::Matrix3x2::from_columns(basis);
-    let inner = nalgebra::Matrix2::identity() * phi + dphi_y * u * u.transpose();
-    scale * t * inner * t.transpose()
-}
-
 fn key(p: &Pair) -> PairKey {
     (matches!(p.kind, Kind::EdgeEdge { .. }), p.ids())
 }
@@ -1367,32 +1049,6 @@ fn key(p: &Pair) -> PairKey {
 fn find_key(pairs: &[Pair], p: &Pair) -> Option<usize> {
     let k = key(p);
     pairs.binary_search_by(|q| key(q).cmp(&k)).ok()
-}
-
-/// The barrier stiffness a pair of sample mass `mass` approaching at
-/// `approach` (m/s) takes: `kappa`, or enough to stop it at
-/// `b(s) = PAIR_SPEED_DIVISOR s_hat^2 / 2` (see
-/// [`ContactTerm::pair_stiffness`]).
-pub(crate) fn speed_stiffness(kappa: f64, mass: f64, approach: f64, s_hat: f64) -> f64 {
-    kappa.max(mass * approach * approach / (PAIR_SPEED_DIVISOR * s_hat.powi(2)))
-}
-
-/// Barrier `b(s)` and its first two derivatives in `s`.
-pub(crate) fn barrier<T: Real>(s: T, s_hat: f64) -> T {
-    let u = s - s_hat;
-    -(u * u) * (s / s_hat).ln()
-}
-
-/// `b'(s)` (negative inside the width).
-pub(crate) fn db(s: f64, s_hat: f64) -> f64 {
-    let u = s - s_hat;
-    -2.0 * u * (s / s_hat).ln() - u * u / s
-}
-
-/// `b''(s)`.
-pub(crate) fn ddb(s: f64, s_hat: f64) -> f64 {
-    let u = s - s_hat;
-    -2.0 * (s / s_hat).ln() - 4.0 * u / s + u * u / (s * s)
 }
 
 /// Points in the scalar type, each coordinate variable `3k + c`.
@@ -1416,72 +1072,6 @@ fn mollifier<T: Real>(kind: &Kind, x: &[V3<T>; 4]) -> T {
             distance::edge_edge_mollifier(&x[0], &x[1], &x[2], &x[3], *eps_x)
         }
     }
-}
-
-/// A pair Hessian with its negative eigenvalues set to zero. The pair
-/// energy depends only on the differences of the stencil points its
-/// formula involves (`points`: 2, 3 or 4), so its Hessian lives in their
-/// translation-free motions: the eigensolve runs there (3x3, 6x6 or 9x9 in
-/// place of a 12x12, the same result).
-fn project_psd(h: &SMatrix<f64, 12, 12>, points: &[usize]) -> SMatrix<f64, 12, 12> {
-    match points.len() {
-        2 => project_psd_in(h, &translation_free_frame::<3>(points)),
-        3 => project_psd_in(h, &translation_free_frame::<6>(points)),
-        _ => project_psd_in(h, &translation_free_frame::<9>(&[0, 1, 2, 3])),
-    }
-}
-
-/// `h` projected to positive semi-definite, given an orthonormal basis `q`
-/// of a subspace that holds its range.
-fn project_psd_in<const N: usize>(
-    h: &SMatrix<f64, 12, 12>,
-    q: &SMatrix<f64, 12, N>,
-) -> SMatrix<f64, 12, 12>
-where
-    nalgebra::Const<N>: nalgebra::DimSub<nalgebra::U1>,
-    nalgebra::DefaultAllocator:
-        nalgebra::allocator::Allocator<nalgebra::DimDiff<nalgebra::Const<N>, nalgebra::U1>>,
-{
-    let eig = (q.transpose() * h * q).symmetric_eigen();
-    if eig.eigenvalues.iter().all(|&l| l >= 0.0) {
-        return *h;
-    }
-    let v = q * eig.eigenvectors;
-    let mut vl = v;
-    for (mut col, l) in vl.column_iter_mut().zip(eig.eigenvalues.iter()) {
-        col *= l.max(0.0);
-    }
-    vl * v.transpose()
-}
-
-/// An orthonormal basis (12 x N, N = 3 (points - 1)) of the motions of the
-/// stencil's `points` that leave their centroid in place (the other points
-/// fixed): the Helmert contrasts `(1, -1) / sqrt 2`, `(1, 1, -2) / sqrt 6`,
-/// `(1, 1, 1, -3) / sqrt 12` over the points, each per coordinate.
-fn translation_free_frame<const N: usize>(points: &[usize]) -> SMatrix<f64, 12, N> {
-    debug_assert_eq!(N, 3 * (points.len() - 1));
-    let mut q = SMatrix::<f64, 12, N>::zeros();
-    for j in 1..points.len() {
-        let norm = ((j * (j + 1)) as f64).sqrt();
-        for (k, &pt) in points[..=j].iter().enumerate() {
-            let c = if k < j { 1.0 } else { -(j as f64) } / norm;
-            for d in 0..3 {
-                q[(3 * pt + d, 3 * (j - 1) + d)] = c;
-            }
-        }
-    }
-    q
-}
-
-/// An orthonormal basis of the plane normal to `n` (unit).
-pub(crate) fn tangent_basis(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
-    let a = if n.x.abs() < 0.9 {
-        Vector3::x()
-    } else {
-        Vector3::y()
-    };
-    let t0 = n.cross(&a).normalize();
-    [t0, n.cross(&t0)]
 }
 
 impl ContactTerm {
@@ -1528,130 +1118,6 @@ impl ContactTerm {
             k * b1 * sd,
             k * (b2 * sd * sd + b1 * sdd),
         )
-    }
-
-    /// Crease stops: a crease cannot fold past flat, where the facets across
-    /// it would pass through each other. Its facets share a vertex, so no
-    /// contact pair between them acts near the crease (a midsurface crease
-    /// folded flat closes to a wedge, only its open end a thickness wide),
-    /// and a crease pressed past flat (by a moment, or by layers above it)
-    /// crossed its facets there. At [`STOP_POINTS`] points along every
-    /// crease, the angle between the facets' surfaces (as the crease
-    /// springs read it at the ends) that comes within `flat_width` (the
-    /// thickness over the mean facet side: the wedge's angle) of flat, on
-    /// either side, meets the barrier `k b(g)` in its gap to flat `g`
-    /// (rad), `k` the crease spring stiffness of the point's share of the
-    /// crease (a spring driven to exactly flat then rests about half-way
-    /// into the stop). The iteration matrix takes the Gauss-Newton part
-    /// `k b'' grad grad^T` (positive semi-definite) unless exact Hessians
-    /// are asked for. The stops keep every accepted angle within (0, 2 pi),
-    /// so the raw angle is the unwrapped one.
-    fn crease_stops(
-        &self,
-        asm: &Assembler,
-        st: &State,
-        out: &mut Evaluation,
-        matrix: Option<MatrixCoeffs>,
-        batch: &mut MatrixBatch,
-    ) -> Result<(), EvalError> {
-        let w = self.flat_width;
-        for sp in &self.stops {
-            let [a, b, t] = sp
-                .maps
-                .each_ref()
-                .map(|m| super::surface::eval_map(m, st.q));
-            let (g, sign) = flat_gap(&a, &b, &t);
-            if g >= w {
-                continue;
-            }
-            if g <= 0.0 {
-                return Err(EvalError::PastFlat { edge: sp.edge });
-            }
-            let k = asm.physics.crease_k_per_length * sp.length;
-            let d = crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
-            out.term_energy += k * barrier(g, w);
-            out.barrier_pairs += 1;
-            let grad = d.grad9() * sign;
-            let f = grad * (k * db(g, w));
-            self.scatter_maps(&sp.maps, &f, &mut out.force);
-            if let Some(co) = matrix.filter(|co| co.k != 0.0) {
-                let mut h = grad * grad.transpose() * (k * ddb(g, w));
-                if let Some(hess) = d.hess9() {
-                    h += hess * (sign * k * db(g, w));
-                }
-                self.scatter_maps_matrix(&sp.maps, &(co.k * h), batch);
-            }
-        }
-        Ok(())
-    }
-
-    /// The largest fraction of the move `q -> q + dq` that keeps every
-    /// crease stop's point from passing flat: on the same side, its gap to
-    /// flat not below the collision checks' share of the gap it had
-    /// (halving the fraction until it holds).
-    fn crease_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
-        let mut fraction: f64 = 1.0;
-        for sp in &self.stops {
-            let vecs = |x: &[f64]| sp.maps.each_ref().map(|m| super::surface::eval_map(m, x));
-            let [a, b, t] = vecs(q);
-            let [da, db_, dt] = vecs(dq);
-            let raw0 = crate::crease::theta(&a, &b, &t);
-            let gap = if raw0 > std::f64::consts::PI {
-                std::f64::consts::TAU - raw0
-            } else {
-                raw0
-            };
-            let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
-            if stop_turn_bound([a, b, t], [da, db_, dt]) < (gap - keep).min(1.0) {
-                continue;
-            }
-            // Passing flat wraps the raw angle across 0 = 2 pi.
-            let clear = |alpha: f64| {
-                let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
-                (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
-                    && flat_gap(&a, &b, &t).0 >= keep
-            };
-            let mut halvings = 0;
-            while !clear(fraction) && halvings < 60 {
-                fraction *= 0.5;
-                halvings += 1;
-            }
-            if halvings == 60 {
-                return 0.0;
-            }
-        }
-        fraction
-    }
-
-    /// Whether a crease stop's point at `q` is within twice the stop's
-    /// width of flat.
-    fn near_flat(&self, q: &[f64]) -> bool {
-        self.stops.iter().any(|sp| {
-            let [a, b, t] = sp.maps.each_ref().map(|m| super::surface::eval_map(m, q));
-            flat_gap(&a, &b, &t).0 < 2.0 * self.flat_width
-        })
-    }
-
-    /// Add a 9-vector over the crease vectors `(a, b, t)` to the slots.
-    fn scatter_maps(
-        &self,
-        maps: &[super::surface::VertexMap; 3],
-        f: &SVector<f64, 9>,
-        force: &mut [f64],
-    ) {
-        for (j, m) in maps.iter().enumerate() {
-            super::surface::scatter_map(m, &f.fixed_rows::<3>(3 * j).into(), force);
-        }
-    }
-
-    /// Add a 9x9 matrix over the crease vectors `(a, b, t)` to `batch`.
-    fn scatter_maps_matrix(
-        &self,
-        maps: &[super::surface::VertexMap; 3],
-        h: &SMatrix<f64, 9, 9>,
-        batch: &mut MatrixBatch,
-    ) {
-        batch.add_mapped(&maps.each_ref(), h.as_slice());
     }
 
     /// The iteration matrix of a lagged pair's dashpot and friction (`co.c`
@@ -1889,79 +1355,5 @@ impl ForceTerm for ContactTerm {
             batch.flush(asm, vals, &mut known);
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rng::XorShift;
-
-    /// The bound on a crease stop's turn holds along the whole move: the
-    /// gap to flat never changes by more than it, at any fraction.
-    #[test]
-    fn stop_turn_bound_holds_along_the_move() {
-        let mut rng = XorShift(11);
-        let mut v = |s: f64| Vector3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
-        let mut tight = 0;
-        for i in 0..2000 {
-            let x = [v(1.0), v(1.0), v(1.0)];
-            let scale = [1e-3, 1e-2, 0.1, 0.5][i % 4];
-            let dx = [v(scale), v(scale), v(scale)];
-            let bound = stop_turn_bound(x, dx);
-            let g0 = flat_gap(&x[0], &x[1], &x[2]).0;
-            for k in 1..=50 {
-                let alpha = k as f64 / 50.0;
-                let [a, b, t] = [0, 1, 2].map(|i| x[i] + dx[i] * alpha);
-                let g = flat_gap(&a, &b, &t).0;
-                assert!(
-                    (g - g0).abs() <= bound + 1e-12,
-                    "gap {g0} -> {g} at {alpha}, bound {bound}"
-                );
-            }
-            if bound < 0.5 {
-                tight += 1;
-            }
-        }
-        assert!(
-            tight > 500,
-            "the bound is informative ({tight} of 2000 below 0.5)"
-        );
-    }
-
-    /// The projection in the translation-free frame of the points a pair
-    /// Hessian involves equals the full 12x12 eigen-projection, and the
-    /// frames are orthonormal and orthogonal to the translations.
-    #[test]
-    fn projection_in_the_translation_free_frame_equals_the_full_one() {
-        fn check<const N: usize>(points: &[usize], rng: &mut XorShift) {
-            let q = translation_free_frame::<N>(points);
-            assert!((q.transpose() * q - SMatrix::<f64, N, N>::identity()).norm() < 1e-14);
-            for d in 0..3 {
-                let t = SVector::<f64, 12>::from_fn(|i, _| if i % 3 == d { 1.0 } else { 0.0 });
-                assert!((q.transpose() * t).norm() < 1e-14);
-            }
-            for _ in 0..100 {
-                let m = SMatrix::<f64, N, N>::from_fn(|_, _| rng.range(-1.0, 1.0));
-                let h = q * (m + m.transpose()) * q.transpose();
-                let eig = h.symmetric_eigen();
-                let l = eig.eigenvalues.map(|l| l.max(0.0));
-                let full = eig.eigenvectors
-                    * SMatrix::<f64, 12, 12>::from_diagonal(&l)
-                    * eig.eigenvectors.transpose();
-                let got = project_psd(&h, points);
-                let e = (got - full).norm();
-                assert!(e < 1e-12 * h.norm(), "{points:?}: {e}");
-                assert!(got.symmetric_eigen().eigenvalues.min() > -1e-12 * h.norm());
-            }
-        }
-        let mut rng = XorShift(40);
-        for points in [[0, 2].as_slice(), &[1, 3], &[3, 0]] {
-            check::<3>(points, &mut rng);
-        }
-        for points in [[0, 1, 2].as_slice(), &[0, 3, 1], &[2, 0, 1]] {
-            check::<6>(points, &mut rng);
-        }
-        check::<9>(&[0, 1, 2, 3], &mut rng);
     }
 }
