@@ -187,8 +187,8 @@ impl CandidateCache {
 /// infinite where a pair enters the barrier, into Newton's residual).
 #[derive(Clone, Debug)]
 struct Lagged {
-    /// The pair's key (its four contact vertices in `.1`).
-    key: PairKey,
+    /// Edge-edge or not: with `ids`, the pair's key.
+    edge: bool,
     ids: [usize; 4],
     /// Normal dashpot coefficient (N s/m).
     c: f64,
@@ -202,6 +202,12 @@ struct Lagged {
     lambda: f64,
     /// Tangential relative velocity at the step start (in `basis`).
     slide: Vector2<f64>,
+}
+
+impl Lagged {
+    fn key(&self) -> PairKey {
+        (self.edge, self.ids)
+    }
 }
 
 /// What contact looks like at one state (for outputs and tests).
@@ -848,7 +854,7 @@ impl ContactTerm {
             let ids = p.ids();
             let vr: Vector3<f64> = (0..4).map(|k| w[k] * v[ids[k]]).sum();
             self.lagged.push(Lagged {
-                key: key(&p),
+                edge: matches!(p.kind, Kind::EdgeEdge { .. }),
                 ids,
                 c: 2.0 * self.zeta * (k * p.mass).sqrt(),
                 w,
@@ -1286,7 +1292,7 @@ impl ForceTerm for ContactTerm {
             if let Some((_, co)) = matrix.as_ref() {
                 let kp = key(&p);
                 let lagged = &self.lagged;
-                while next_lagged < lagged.len() && lagged[next_lagged].key < kp {
+                while next_lagged < lagged.len() && lagged[next_lagged].key() < kp {
                     let lg = &lagged[next_lagged];
                     if let Some(h) = self.lagged_matrix(lg, &v, co) {
                         self.scatter_matrix(&lg.ids, &h, &mut batch);
@@ -1298,7 +1304,7 @@ impl ForceTerm for ContactTerm {
                     (false, true) => Some(co.k * project_psd(&e.h, points)),
                     (false, false) => Some(co.k * e.h),
                 };
-                while next_lagged < lagged.len() && lagged[next_lagged].key == kp {
+                while next_lagged < lagged.len() && lagged[next_lagged].key() == kp {
                     if let Some(hl) = self.lagged_matrix(&lagged[next_lagged], &v, co) {
                         h = Some(h.map_or(hl, |h| h + hl));
                     }

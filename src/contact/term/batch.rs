@@ -19,7 +19,7 @@ const MAX_PAIR_SLOTS: usize = 48;
 #[derive(Default)]
 pub(super) struct MatrixBatch {
     /// Sorted slots -> index in `groups`.
-    index: std::collections::HashMap<Vec<usize>, usize>,
+    index: HashMap<Vec<usize>, usize>,
     /// Sorted slots and the dense column-major matrix over their coordinates.
     groups: Vec<(Vec<usize>, Vec<f64>)>,
     /// The group used last (pairs in canonical order often share it).
@@ -28,7 +28,7 @@ pub(super) struct MatrixBatch {
 
 impl MatrixBatch {
     /// The (zeroed when new) dense matrix of the group of `slots`.
-    pub(super) fn group(&mut self, slots: &[usize]) -> &mut [f64] {
+    fn group(&mut self, slots: &[usize]) -> &mut [f64] {
         let k = match self.last.filter(|&k| self.groups[k].0 == slots) {
             Some(k) => k,
             None => match self.index.get(slots) {
