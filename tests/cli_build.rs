@@ -257,6 +257,43 @@ fn every_scene_command_takes_contact_and_friction() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--contact` on a FOLD file whose `ancf:contact` is written but not
+/// enabled takes the file's settings (as docs/scenes.md says), not the
+/// defaults; `--friction` still overrides the file's.
+#[test]
+fn contact_option_takes_the_files_settings() {
+    let dir = scratch("contact-settings");
+    let text = std::fs::read_to_string(root().join("scenes/single_crease.fold")).unwrap();
+    let mut fold: serde_json::Value = serde_json::from_str(&text).unwrap();
+    fold["ancf:contact"] =
+        serde_json::json!({"thickness": 2e-5, "friction": 0.1, "subdivisions": 4});
+    let file = dir.join("off.fold");
+    std::fs::write(&file, fold.to_string()).unwrap();
+    let check = |extra: &[&str]| {
+        let r = bin().arg("check").args(extra).arg(&file).output().unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        String::from_utf8_lossy(&r.stdout).into_owned()
+    };
+    let text = check(&[]);
+    assert!(
+        text.contains("contact:   off (--contact turns it on)"),
+        "{text}"
+    );
+    let text = check(&["--contact"]);
+    assert!(
+        text.contains("contact:   on, thickness 2e-5 m")
+            && text.contains("friction 0.1,")
+            && text.contains("4 subdivisions"),
+        "{text}"
+    );
+    let text = check(&["--contact", "--friction", "0.45"]);
+    assert!(
+        text.contains("thickness 2e-5 m") && text.contains("friction 0.45"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn help_says_what_is_true() {
     let r = bin().args(["build", "--help"]).output().unwrap();

@@ -137,6 +137,7 @@ impl SceneOptions {
                 FEdges::Crease => FlatEdges::Crease,
                 FEdges::Smooth => FlatEdges::Smooth,
             }),
+            contact: self.contact,
         }
     }
 }

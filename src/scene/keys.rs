@@ -143,6 +143,8 @@ pub struct PhysicsKeys {
     pub outputs: Outputs,
     /// `ancf:contact` when enabled (thickness 0: the sheet's).
     pub contact: Option<ContactSettings>,
+    /// `ancf:contact` as given, enabled or not (what `--contact` turns on).
+    pub contact_given: Option<ContactSettings>,
     /// `ancf:contact.friction` as given (enabled or not).
     pub contact_friction: Option<f64>,
     /// `ancf:obstacles`.
@@ -764,17 +766,18 @@ fn key_contact(
     let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
     let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
     p.contact_friction = friction;
+    p.contact_given = Some(ContactSettings {
+        // 0 = the sheet thickness (filled in with the material).
+        thickness: thickness.unwrap_or(0.0),
+        width: width.unwrap_or(d.width),
+        stiffness,
+        friction: friction.unwrap_or(d.friction),
+        stick_velocity: stick.unwrap_or(d.stick_velocity),
+        damping_ratio: zeta.unwrap_or(d.damping_ratio),
+        subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
+    });
     if enabled {
-        p.contact = Some(ContactSettings {
-            // 0 = the sheet thickness (filled in with the material).
-            thickness: thickness.unwrap_or(0.0),
-            width: width.unwrap_or(d.width),
-            stiffness,
-            friction: friction.unwrap_or(d.friction),
-            stick_velocity: stick.unwrap_or(d.stick_velocity),
-            damping_ratio: zeta.unwrap_or(d.damping_ratio),
-            subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
-        });
+        p.contact = p.contact_given;
     }
     Ok(())
 }

@@ -68,7 +68,7 @@ pub use error::SceneError;
 pub use fold::{FoldFile, FrameSelector};
 
 /// Options of [`load_with`] and [`from_str_with`]: what the command-line
-/// options `--frame`, `--size`, `--unit` and `--f-edges` set. The geometry
+/// options `--frame`, `--size`, `--unit`, `--f-edges` and `--contact` set. The geometry
 /// options override the file's `ancf:import` key and `frame_unit`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
@@ -86,6 +86,9 @@ pub struct LoadOptions {
     /// What FOLD `F` edges are (default: creases, smooth edges in Origami
     /// Simulator exports).
     pub f_edges: Option<FlatEdges>,
+    /// Self-contact on, with the file's `ancf:contact` settings (enabled or
+    /// not) where it has them, else the defaults: the CLI's `--contact`.
+    pub contact: bool,
 }
 
 /// How FOLD `F` edges are read.

@@ -231,7 +231,13 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     scene.fold_edge_count = edges.v.len();
     // with_defaults drives every mesh crease: the FOLD creases (mesh edges
     // after the FOLD edges are diagonals and cut sides, never creases).
-    apply_physics(&mut scene, physics.clone(), &edges, &copies, &mut warnings)?;
+    apply_physics(
+        &mut scene,
+        physics.clone(),
+        (&edges, &copies),
+        options.contact,
+        &mut warnings,
+    )?;
 
     warnings.extend(thin_shell_warning(&scene));
 
