@@ -14,7 +14,7 @@
 //! (A flat stack released in one held communication step, and what
 //! reading every output costs, are parts 3 and 4 of `benches/contact.rs`.)
 //!
-//! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,bird]
+//! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird]
 //! [--fold PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]`
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
 //! targets, not flat and not in the default list; `--cpu-limit S` stops a
@@ -148,9 +148,16 @@ fn main() {
     let patterns: Vec<String> = value("--patterns")
         .map(|v| v.split(',').map(String::from).collect())
         .unwrap_or_else(|| {
-            ["miura", "yoshimura", "kresling", "waterbomb", "bird"]
-                .map(String::from)
-                .to_vec()
+            [
+                "miura",
+                "yoshimura",
+                "kresling",
+                "waterbomb",
+                "smallbird",
+                "bird",
+            ]
+            .map(String::from)
+            .to_vec()
         });
     let folds: Vec<String> = args
         .iter()
@@ -190,6 +197,11 @@ fn main() {
                 let mut s = load("scenes/waterbomb.fold");
                 waterbomb_base(&mut s);
                 ("waterbomb base", s, true)
+            }
+            "smallbird" => {
+                let mut s = load("tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold");
+                fold_flat(&mut s);
+                ("small bird base (flat-folder)", s, true)
             }
             "bird" => {
                 let mut s = load("tests/data/flat-folder/089_traditionaloripa_9_Birdbase.fold");
