@@ -254,6 +254,15 @@ pub fn scatter_map(m: &VertexMap, f: &Vector3<f64>, force: &mut [f64]) {
     }
 }
 
+/// Add a vector over `N` points' coordinates (`f[3 k..3 k + 3]` at point
+/// `k`) to the slots the points map to ([`scatter_map`] per point).
+pub fn scatter_points<const N: usize>(maps: [&VertexMap; N], f: &[f64], force: &mut [f64]) {
+    assert_eq!(f.len(), 3 * N, "a vector over the points' coordinates");
+    for (m, fk) in maps.into_iter().zip(f.chunks_exact(3)) {
+        scatter_map(m, &Vector3::new(fk[0], fk[1], fk[2]), force);
+    }
+}
+
 /// `sum c_k q[slot_k]` for one vertex map.
 pub fn eval_map(m: &VertexMap, q: &[f64]) -> Vector3<f64> {
     let mut x = Vector3::zeros();

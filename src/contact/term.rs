@@ -1019,13 +1019,7 @@ impl ContactTerm {
     }
 
     fn scatter_force(&self, ids: &[usize; 4], g: &SVector<f64, 12>, force: &mut [f64]) {
-        for (k, &i) in ids.iter().enumerate() {
-            super::surface::scatter_map(
-                &self.surf.maps[i],
-                &g.fixed_rows::<3>(3 * k).into(),
-                force,
-            );
-        }
+        super::surface::scatter_points(ids.map(|i| &self.surf.maps[i]), g.as_slice(), force);
     }
 
     /// The slots a pair's four points `ids` depend on, sorted, into `slots`

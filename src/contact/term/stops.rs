@@ -163,7 +163,11 @@ impl ContactTerm {
             out.barrier_pairs += 1;
             let grad = d.grad9() * sign;
             let f = grad * (k * db(g, w));
-            self.scatter_maps(&sp.maps, &f, &mut out.force);
+            crate::contact::surface::scatter_points(
+                sp.maps.each_ref(),
+                f.as_slice(),
+                &mut out.force,
+            );
             if let Some(co) = matrix.filter(|co| co.k != 0.0) {
                 let mut h = grad * grad.transpose() * (k * ddb(g, w));
                 if let Some(hess) = d.hess9() {
@@ -227,18 +231,6 @@ impl ContactTerm {
                 .map(|m| crate::contact::surface::eval_map(m, q));
             flat_gap(&a, &b, &t).0 < 2.0 * self.flat_width
         })
-    }
-
-    /// Add a 9-vector over the crease vectors `(a, b, t)` to the slots.
-    fn scatter_maps(
-        &self,
-        maps: &[crate::contact::surface::VertexMap; 3],
-        f: &SVector<f64, 9>,
-        force: &mut [f64],
-    ) {
-        for (j, m) in maps.iter().enumerate() {
-            crate::contact::surface::scatter_map(m, &f.fixed_rows::<3>(3 * j).into(), force);
-        }
     }
 
     /// Add a 9x9 matrix over the crease vectors `(a, b, t)` to `batch`.
