@@ -141,10 +141,11 @@ pub struct PhysicsKeys {
     pub solver: SolverSettings,
     /// `ancf:outputs`.
     pub outputs: Outputs,
-    /// `ancf:contact` when enabled (thickness 0: the sheet's).
+    /// `ancf:contact` as given, enabled or not (thickness 0: the sheet's):
+    /// what `--contact` turns on.
     pub contact: Option<ContactSettings>,
-    /// `ancf:contact` as given, enabled or not (what `--contact` turns on).
-    pub contact_given: Option<ContactSettings>,
+    /// `ancf:contact.enabled`.
+    pub contact_enabled: bool,
     /// `ancf:contact.friction` as given (enabled or not).
     pub contact_friction: Option<f64>,
     /// `ancf:obstacles`.
@@ -766,7 +767,8 @@ fn key_contact(
     let zeta = o.num_limited("damping_ratio", "contact.damping_ratio")?;
     let subdivisions = o.num_limited("subdivisions", "contact.subdivisions")?;
     p.contact_friction = friction;
-    p.contact_given = Some(ContactSettings {
+    p.contact_enabled = enabled;
+    p.contact = Some(ContactSettings {
         // 0 = the sheet thickness (filled in with the material).
         thickness: thickness.unwrap_or(0.0),
         width: width.unwrap_or(d.width),
@@ -776,9 +778,6 @@ fn key_contact(
         damping_ratio: zeta.unwrap_or(d.damping_ratio),
         subdivisions: subdivisions.map(|x| x as usize).unwrap_or(d.subdivisions),
     });
-    if enabled {
-        p.contact = p.contact_given;
-    }
     Ok(())
 }
 

@@ -234,7 +234,8 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
     apply_physics(
         &mut scene,
         physics.clone(),
-        (&edges, &copies),
+        &edges,
+        &copies,
         options.contact,
         &mut warnings,
     )?;

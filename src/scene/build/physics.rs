@@ -11,13 +11,13 @@ use crate::scene::{ActuatorMode, Attachment, Damping, Scene, Support};
 use std::collections::HashMap;
 
 /// Material, damping, actuators, supports, loads, solver and outputs,
-/// checked against the mesh (`copies`: the mesh vertices split off each
-/// FOLD vertex). `contact`: self-contact on whatever the file's
-/// `enabled` says (with its settings, else the defaults).
+/// checked against the mesh. `contact`: self-contact on whatever the
+/// file's `enabled` says (with its settings, else the defaults).
 pub(super) fn apply_physics(
     scene: &mut Scene,
     p: keys::PhysicsKeys,
-    (edges, copies): (&FoldEdges, &[usize]),
+    edges: &FoldEdges,
+    copies: &[usize],
     contact: bool,
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
@@ -33,11 +33,8 @@ pub(super) fn apply_physics(
     scene.auto_damping = p.damping.is_none();
     scene.actuator_time_constant = p.actuator_time_constant;
     scene.gravity = p.gravity;
-    let settings = match contact {
-        true => Some(p.contact_given.unwrap_or_default()),
-        false => p.contact,
-    };
-    scene.contact = settings.map(|mut c| {
+    let on = contact || p.contact_enabled;
+    scene.contact = on.then(|| p.contact.unwrap_or_default()).map(|mut c| {
         if c.thickness == 0.0 {
             c.thickness = p.material.thickness;
         }
