@@ -263,6 +263,26 @@ pub fn scatter_points<const N: usize>(maps: [&VertexMap; N], f: &[f64], force: &
     }
 }
 
+/// The slots `maps` map to, sorted and once each, written to the front of
+/// `out` (at least the maps' total length); returns how many.
+pub fn slot_union(maps: &[&VertexMap], out: &mut [usize]) -> usize {
+    let mut total = 0;
+    for &(s, _) in maps.iter().flat_map(|m| m.iter()) {
+        out[total] = s;
+        total += 1;
+    }
+    let slots = &mut out[..total];
+    slots.sort_unstable();
+    let mut n = 0;
+    for a in 0..total {
+        if n == 0 || slots[a] != slots[n - 1] {
+            slots[n] = slots[a];
+            n += 1;
+        }
+    }
+    n
+}
+
 /// `sum c_k q[slot_k]` for one vertex map.
 pub fn eval_map(m: &VertexMap, q: &[f64]) -> Vector3<f64> {
     let mut x = Vector3::zeros();
@@ -283,4 +303,18 @@ pub fn lattice_triangles(n: usize) -> impl Iterator<Item = [(usize, usize); 3]> 
             std::iter::once(up).chain((i + j + 1 < n).then_some(down))
         })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slot_union_lists_each_slot_once_in_order() {
+        let a: VertexMap = vec![(7, 0.5), (2, 0.25), (4, 0.25)];
+        let b: VertexMap = vec![(4, 1.0), (9, -0.5), (2, 0.5)];
+        let mut out = [0usize; 6];
+        let n = slot_union(&[&a, &b], &mut out);
+        assert_eq!(&out[..n], &[2, 4, 7, 9]);
+    }
 }

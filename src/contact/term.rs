@@ -1025,12 +1025,10 @@ impl ContactTerm {
     /// The slots a pair's four points `ids` depend on, sorted, into `slots`
     /// (cleared first): the blocks its matrix touches.
     fn pair_slots(&self, ids: &[usize; 4], slots: &mut Vec<usize>) {
-        slots.clear();
-        for &i in ids {
-            slots.extend(self.surf.maps[i].iter().map(|&(s, _)| s));
-        }
-        slots.sort_unstable();
-        slots.dedup();
+        let maps = ids.map(|i| &self.surf.maps[i]);
+        slots.resize(maps.iter().map(|m| m.len()).sum(), 0);
+        let n = super::surface::slot_union(&maps, slots);
+        slots.truncate(n);
     }
 
     /// Add a pair's 12 x 12 matrix `h` (its four points' coordinates) to

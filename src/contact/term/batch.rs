@@ -66,17 +66,7 @@ impl MatrixBatch {
             w_heap.resize(total, [0.0; N]);
             (&mut slot_heap, &mut w_heap)
         };
-        for (k, &(s, _)) in maps.iter().flat_map(|m| m.iter()).enumerate() {
-            slots[k] = s;
-        }
-        slots.sort_unstable();
-        let mut ns = 0;
-        for a in 0..total {
-            if a == 0 || slots[a] != slots[ns - 1] {
-                slots[ns] = slots[a];
-                ns += 1;
-            }
-        }
+        let ns = crate::contact::surface::slot_union(maps, slots);
         let slots = &slots[..ns];
         let w = &mut w[..ns];
         for (k, m) in maps.iter().enumerate() {
