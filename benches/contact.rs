@@ -13,7 +13,7 @@
 //! (`--reads 2` adds the Miura folded flat to part 3.)
 
 use origami_fmu::benchmarks::{arg, best_us, fold_by_ramp, miura_scene};
-use origami_fmu::contact::{ContactSettings, ContactTerm};
+use origami_fmu::contact::ContactTerm;
 use origami_fmu::cpu_time::Stopwatch;
 use origami_fmu::ids::EdgeId;
 use origami_fmu::mesh::Mesh;
@@ -24,10 +24,7 @@ use std::f64::consts::PI;
 type Target = dyn Fn(&Mesh, usize, f64) -> f64;
 
 fn with_contact(mut scene: origami_fmu::Scene) -> origami_fmu::Scene {
-    scene.contact = Some(ContactSettings {
-        thickness: scene.material.thickness,
-        ..Default::default()
-    });
+    scene.contact = Some(scene.default_contact());
     scene
 }
 

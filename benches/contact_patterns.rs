@@ -27,7 +27,6 @@ mod common;
 use common::cpu_seconds;
 use nalgebra::Vector3;
 use origami_fmu::benchmarks::{flat_fold_error, flat_folded_positions};
-use origami_fmu::contact::ContactSettings;
 use origami_fmu::ids::{EdgeId, VertexId};
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
@@ -74,10 +73,7 @@ fn waterbomb_base(scene: &mut Scene) {
 fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> Row {
     let mut scene = scene;
     if contact {
-        scene.contact = Some(ContactSettings {
-            thickness: scene.material.thickness,
-            ..Default::default()
-        });
+        scene.contact = Some(scene.default_contact());
     }
     let map = flat.then(|| flat_folded_positions(&scene.mesh));
     let mut model = Model::new(scene).unwrap();

@@ -48,10 +48,7 @@ fn main() {
     let settings = |scene: &mut Scene| {
         if contact {
             // As `"ancf:contact": {"enabled": true}` gives it: the sheet's thickness.
-            scene.contact = Some(origami_fmu::contact::ContactSettings {
-                thickness: scene.material.thickness,
-                ..Default::default()
-            });
+            scene.contact = Some(scene.default_contact());
         }
         if let Some(t) = tolerance {
             scene.solver.tolerance = t;

@@ -261,9 +261,8 @@ fn contact(tweak: &dyn Fn(&mut Scene)) -> Row {
         }
     }
     scene.contact = Some(origami_fmu::contact::ContactSettings {
-        thickness: scene.material.thickness,
         friction: 0.3,
-        ..Default::default()
+        ..scene.default_contact()
     });
     tweak(&mut scene);
     let mut m = Model::new(scene).unwrap();

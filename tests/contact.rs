@@ -47,9 +47,8 @@ fn rot_y(angle: f64) -> [[f64; 3]; 3] {
 
 fn contact_on(scene: &mut Scene, friction: f64) -> ContactSettings {
     let c = ContactSettings {
-        thickness: scene.material.thickness,
         friction,
-        ..Default::default()
+        ..scene.default_contact()
     };
     scene.contact = Some(c);
     c

@@ -166,9 +166,8 @@ fn diagonal_contact() -> Scene {
         fix: Fix::Clamped,
     });
     s.contact = Some(ContactSettings {
-        thickness: s.material.thickness,
         friction: 0.0,
-        ..Default::default()
+        ..s.default_contact()
     });
     s
 }

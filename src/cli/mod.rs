@@ -106,10 +106,7 @@ impl SceneOptions {
     /// Apply `--contact` and `--friction` to a loaded scene.
     pub fn apply(&self, scene: &mut scene::Scene) -> Result<(), CliError> {
         if self.contact && scene.contact.is_none() {
-            scene.contact = Some(crate::contact::ContactSettings {
-                thickness: scene.material.thickness,
-                ..Default::default()
-            });
+            scene.contact = Some(scene.default_contact());
         }
         if let Some(mu) = self.friction {
             if !(mu.is_finite() && mu >= 0.0) {

@@ -284,10 +284,7 @@ fn needs_implicit(sc: &Scene, key: &str) -> Result<(), Error> {
 /// The contact settings obstacles use: self-contact's, or its defaults
 /// with the sheet's thickness where self-contact is off.
 pub(super) fn obstacle_settings(sc: &Scene) -> crate::contact::ContactSettings {
-    sc.contact.unwrap_or(crate::contact::ContactSettings {
-        thickness: sc.material.thickness,
-        ..Default::default()
-    })
+    sc.contact.unwrap_or_else(|| sc.default_contact())
 }
 
 /// The rigid obstacles' force term on the assembler (the implicit

@@ -610,6 +610,16 @@ impl InputRamp {
 }
 
 impl Scene {
+    /// Self-contact's default settings for this sheet: its thickness, the
+    /// rest as [`ContactSettings::default`] (what `--contact` and
+    /// `"ancf:contact": {"enabled": true}` give).
+    pub fn default_contact(&self) -> ContactSettings {
+        ContactSettings {
+            thickness: self.material.thickness,
+            ..Default::default()
+        }
+    }
+
     /// A scene around `mesh` with every default of a plain FOLD file: paper
     /// material, no supports, no gravity, automatic damping, one rest-angle
     /// actuator `fold` over every crease.
