@@ -42,7 +42,9 @@ pub struct StepReport {
     pub factorizations: usize,
     /// Smallest internal step used, s.
     pub min_step: f64,
-    /// CPU time (the stepping thread's clock) assembling forces and matrices, s.
+    /// CPU time (the stepping thread's clock) assembling forces and
+    /// matrices, s; zero unless phase timing is on
+    /// ([`crate::solver::set_phase_timing`]), as the two below.
     pub assembly_time: f64,
     /// CPU time in sparse numeric factorizations, s.
     pub factor_time: f64,
