@@ -8,13 +8,18 @@
 use super::{Error, Model, Phase, VariableSpec, physics};
 use crate::assembly::Physics;
 use crate::scene::limits::LimitError;
-use crate::scene::{ActuatorMode, CreaseStiffness, RampShape as RampShapeKind, Scene};
+use crate::scene::{ActuatorMode, CreaseStiffness, InputTiming, RampShape as RampShapeKind, Scene};
 
 /// Whether `sc` has an actuator that the built-in ramp drives.
 fn has_rest_angle_actuator(sc: &Scene) -> bool {
     sc.actuators
         .iter()
         .any(|a| a.mode == ActuatorMode::RestAngle)
+}
+
+/// Whether `sc` has any input.
+fn has_inputs(sc: &Scene) -> bool {
+    !super::variables::input_table(sc).is_empty()
 }
 
 /// Declares [`Parameter`], [`ALL`] and `Parameter::info` from one row per
@@ -74,13 +79,24 @@ parameters! {
         "",
         "most internal steps one communication step may take before it fails"
     ),
+    ErrorFilter => (
+        "solver.error_filter",
+        "",
+        "1: the local error estimate filtered through the iteration matrix (ringing far above the step's frequency counts by its displacement and is damped by the scheme: cheaper under held inputs, loses that ringing's energy); 0 (default): the plain estimate"
+    ),
+    /// Only in scenes with inputs.
+    InputFirstOrderHold => (
+        "input.first_order_hold",
+        "",
+        "0 (default): an input set before a step is held over it (FMI 2.0); 1: first-order hold, each step ramps from the previous value to the one set, so a sample acts one step late (no input derivatives then)"
+    ),
     /// Only in scenes with contact.
     ContactFriction => ("contact.friction", "", "Coulomb friction coefficient of self-contact"),
     /// Only in scenes with actuators.
     ActuatorTimeConstant => (
         "actuator.time_constant",
         "s",
-        "time constant of the actuators' critically damped response to their inputs, 0 for none"
+        "time constant of the actuators' servo, a critically damped response to their inputs; 0 (the default): ideal, the input acts at once"
     ),
     /// Only in scenes with a rest-angle actuator.
     RampTime => (
@@ -117,6 +133,8 @@ impl Parameter {
             | MaxStep
             | Tolerance
             | MaxInternalSteps
+            | ErrorFilter
+            | InputFirstOrderHold
             | ContactFriction
             | ActuatorTimeConstant
             | RampTime
@@ -153,6 +171,11 @@ impl Parameter {
             MaxStep => Some(s.max_step),
             Tolerance => Some(s.tolerance),
             MaxInternalSteps => Some(s.max_internal_steps as f64),
+            ErrorFilter => Some(if s.error_filter { 1.0 } else { 0.0 }),
+            InputFirstOrderHold => has_inputs(sc).then_some(match s.input_timing {
+                InputTiming::Hold => 0.0,
+                InputTiming::FirstOrderHold => 1.0,
+            }),
             ContactFriction => sc.contact.map(|c| c.friction),
             ActuatorTimeConstant => {
                 (!sc.actuators.is_empty()).then(|| super::actuator_time_constant(sc))
@@ -193,6 +216,14 @@ impl Parameter {
             MaxStep => sc.solver.max_step = x,
             Tolerance => sc.solver.tolerance = x,
             MaxInternalSteps => sc.solver.max_internal_steps = x as usize,
+            ErrorFilter => sc.solver.error_filter = x != 0.0,
+            InputFirstOrderHold => {
+                sc.solver.input_timing = if x == 0.0 {
+                    InputTiming::Hold
+                } else {
+                    InputTiming::FirstOrderHold
+                }
+            }
             ContactFriction => {
                 if let Some(c) = sc.contact.as_mut() {
                     c.friction = x;
@@ -215,8 +246,6 @@ impl Parameter {
         let (name, unit, description) = self.info();
         let auto = if sc.auto_damping && self.is_damping() {
             " (automatic damping until a damping parameter is set)"
-        } else if self == ActuatorTimeConstant && sc.actuator_time_constant.is_none() {
-            "; automatic (from the sheet's folding frequency) until set"
         } else {
             ""
         };
@@ -283,22 +312,15 @@ impl Model {
         if kind.is_damping() {
             self.state.damping_set = true;
         }
-        if kind == ActuatorTimeConstant {
-            self.state.actuator_set = true;
-        }
         self.state.parameters[i] = value;
         Ok(())
     }
 
     /// Put the parameter values into the scene. Automatic damping stays on
     /// until a damping parameter is set; while on, the damping parameters
-    /// show the values it chose for the current material (likewise the
-    /// automatic actuator time constant).
+    /// show the values it chose for the current material.
     pub(super) fn apply_parameters(&mut self) {
-        let auto = (
-            self.auto_damping && !self.state.damping_set,
-            self.auto_actuator && !self.state.actuator_set,
-        );
+        let auto = self.auto_damping && !self.state.damping_set;
         apply(
             &self.parameter_kinds,
             auto,
@@ -307,9 +329,9 @@ impl Model {
         );
     }
 
-    /// Check parameter values as a saved state holds them (`damping_set`,
-    /// `actuator_set`: whether a damping parameter or the actuator time
-    /// constant was set): each by the rules of [`crate::scene::limits`], as
+    /// Check parameter values as a saved state holds them (`damping_set`:
+    /// whether a damping parameter was set): each by the rules of
+    /// [`crate::scene::limits`], as
     /// [`Model::set_parameter`] does, then the scene they make as the scene
     /// reader does. Returns that scene and the values as
     /// [`Model::apply_parameters`] leaves them.
@@ -317,7 +339,6 @@ impl Model {
         &self,
         values: &[f64],
         damping_set: bool,
-        actuator_set: bool,
     ) -> Result<(Scene, Vec<f64>), ParametersError> {
         if values.len() != self.parameters.len() {
             return Err(ParametersError::Count {
@@ -333,10 +354,7 @@ impl Model {
         }
         let mut scene = self.scene.clone();
         let mut values = values.to_vec();
-        let auto = (
-            self.auto_damping && !damping_set,
-            self.auto_actuator && !actuator_set,
-        );
+        let auto = self.auto_damping && !damping_set;
         apply(&self.parameter_kinds, auto, &mut scene, &mut values);
         crate::scene::limits::check_scene(&scene).map_err(ParametersError::Scene)?;
         Ok((scene, values))
@@ -385,23 +403,20 @@ impl std::error::Error for ParametersError {
     }
 }
 
-/// Put the values of `kinds` into `sc`. With automatic damping and
-/// actuator time constant (`auto`: whether each is on) the values show
-/// the automatic choices for the material now in the scene.
-fn apply(kinds: &[Parameter], auto: (bool, bool), sc: &mut Scene, values: &mut [f64]) {
-    let (auto_damping, auto_actuator) = auto;
+/// Put the values of `kinds` into `sc`. With automatic damping on
+/// (`auto_damping`) the damping values show the automatic choices for the
+/// material now in the scene.
+fn apply(kinds: &[Parameter], auto_damping: bool, sc: &mut Scene, values: &mut [f64]) {
     sc.auto_damping = auto_damping;
     for (p, &x) in kinds.iter().zip(values.iter()) {
         p.apply(sc, x);
     }
-    if auto_actuator {
-        sc.actuator_time_constant = None;
-    }
     let ph = physics(sc);
     for (p, x) in kinds.iter().zip(values.iter_mut()) {
-        let shows_auto =
-            (auto_damping && p.is_damping()) || (auto_actuator && *p == ActuatorTimeConstant);
-        if shows_auto && let Some(v) = p.value(sc, &ph) {
+        if auto_damping
+            && p.is_damping()
+            && let Some(v) = p.value(sc, &ph)
+        {
             *x = v;
         }
     }

@@ -139,6 +139,8 @@ pub const LIMITS: &[Limit] = &[
         "",
     ),
     lim("solver.stop_time", Range::Positive, "s"),
+    lim("solver.error_filter", Range::Whole(0, 1), ""),
+    lim("input.first_order_hold", Range::Whole(0, 1), ""),
     lim("contact.friction", Range::NonNegative, ""),
     lim("actuator.time_constant", Range::NonNegative, "s"),
     lim("ramp.time", Range::Closed(0.0, 1e9), "s"),
