@@ -150,14 +150,25 @@ impl BuildTree {
         })
     }
 
-    /// The cargo target folder: the parent of `target/<profile>/`.
-    fn target_dir(&self) -> &Path {
-        self.exe_dir.parent().unwrap_or(&self.exe_dir)
+    /// The cargo target folder: the parent of `target/<profile>/` where the
+    /// executable is; for an installed one (`cargo install --path .` puts
+    /// it in ~/.cargo/bin), the source tree's `target/`.
+    fn target_dir(&self) -> PathBuf {
+        let in_target = self
+            .exe_dir
+            .file_name()
+            .is_some_and(|n| n == "release" || n == "debug");
+        match (&self.exe_dir.parent(), &self.manifest) {
+            (Some(parent), _) if in_target => parent.to_path_buf(),
+            (_, Some(manifest)) => manifest.with_file_name("target"),
+            _ => self.exe_dir.clone(),
+        }
     }
 
     /// The files where cargo leaves this crate's library for `platform`:
     /// next to the executable (or in its `deps/`, where `cargo test` leaves
-    /// it) for the host's platform; for win64 cross-built on another host,
+    /// it; or in `target/release/` for an installed executable) for the
+    /// host's platform; for win64 cross-built on another host,
     /// `target/x86_64-win7-windows-gnu/release/` (or the standard
     /// `x86_64-pc-windows-gnu`, Windows 10 and newer). darwin64 and linux64
     /// are only found on their own hosts: nothing here tests a cross-built
@@ -166,6 +177,7 @@ impl BuildTree {
         let file = platform.cargo_file();
         if Some(platform) == Platform::host() {
             return vec![
+                self.target_dir().join("release").join(&file),
                 self.exe_dir.join("deps").join(&file),
                 self.exe_dir.join(&file),
             ];
@@ -373,6 +385,29 @@ mod tests {
     fn this_executable_is_of_the_host_platform() {
         let exe = std::fs::read(std::env::current_exe().unwrap()).unwrap();
         assert_eq!(Platform::of_binary(&exe), Platform::host());
+    }
+
+    /// An installed executable (~/.cargo/bin) finds the libraries in its
+    /// source tree's target/.
+    #[test]
+    fn an_installed_executable_looks_in_its_source_tree() {
+        let tree = BuildTree {
+            exe_dir: PathBuf::from("/home/u/.cargo/bin"),
+            manifest: Some(PathBuf::from("/src/origami-fmu/Cargo.toml")),
+        };
+        assert_eq!(tree.target_dir(), Path::new("/src/origami-fmu/target"));
+        if let Some(host) = Platform::host() {
+            let first = tree.candidates(host)[0].clone();
+            assert_eq!(
+                first,
+                Path::new("/src/origami-fmu/target/release").join(host.cargo_file())
+            );
+        }
+        let built = BuildTree {
+            exe_dir: PathBuf::from("/w/target/release"),
+            manifest: None,
+        };
+        assert_eq!(built.target_dir(), Path::new("/w/target"));
     }
 
     /// darwin64 is never found cross-built, and a host that cannot build a
