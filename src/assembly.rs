@@ -307,8 +307,7 @@ impl Assembler {
                 ShellElement::with_sides(
                     [mesh.coord(a), mesh.coord(b), mesh.coord(c)],
                     layout.side_vectors(mesh, f),
-                    element.rule,
-                    element.interpolation,
+                    element,
                 )
                 .map_err(|source| BuildError::Element { face: f, source })
             })
