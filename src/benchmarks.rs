@@ -16,6 +16,11 @@ use crate::solver::statics::{self, Load, StaticReport, StaticSettings, StaticsEr
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 
+mod modes;
+mod panel;
+pub use modes::{CANTILEVER_PLATE_MODES, CantileverModes};
+pub use panel::{PANEL_TIP, PanelTip};
+
 /// Why a benchmark case could not be solved.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BenchmarkError {
@@ -36,6 +41,8 @@ pub enum BenchmarkError {
     Assembly(BuildError),
     /// The static solve failed.
     Statics(StaticsError),
+    /// The eigenvalue problem of a vibration case could not be solved (why).
+    Eigen(&'static str),
 }
 
 impl std::fmt::Display for BenchmarkError {
@@ -53,6 +60,7 @@ impl std::fmt::Display for BenchmarkError {
             }
             BenchmarkError::Assembly(m) => write!(f, "{m}"),
             BenchmarkError::Statics(e) => write!(f, "{e}"),
+            BenchmarkError::Eigen(why) => write!(f, "vibration modes: {why}"),
         }
     }
 }
