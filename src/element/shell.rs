@@ -30,7 +30,7 @@
 
 use super::{
     Bending, ElemVec, ElementOptions,
-    bending::{self, N_FIELDS, Projection},
+    bending::{N_CUBIC, Projection, SplitState},
     quadrature::Rule,
     shape::{Interpolation, Shape},
 };
@@ -503,8 +503,7 @@ impl ShellElement {
         for (q, kin) in self.qp[..self.nq].iter().zip(&kins) {
             out.membrane += q.wa * hm * dot3(kin.eps, pl.apply(1.0, kin.eps));
         }
-        let sp = self.split_state(proj, &pl, &kins);
-        out.bending = 2.0 * hb * sp.energy;
+        out.bending = hb * self.split_state(proj, &pl, &kins).energy;
         out
     }
 
@@ -518,7 +517,7 @@ impl ShellElement {
         out
     }
 
-    /// The split bending energy at the curvatures `kins` ([`bending`]).
+    /// The split bending energy at the curvatures `kins` ([`super::bending`]).
     #[inline(always)]
     fn split_state(
         &self,
@@ -526,30 +525,8 @@ impl ShellElement {
         pl: &Plane,
         kins: &[Kinematics; MAX_QP],
     ) -> SplitState {
-        let wa: [f64; MAX_QP] =
-            std::array::from_fn(|q| if q < self.nq { self.qp[q].wa } else { 0.0 });
-        let l_inv = proj.l_inv(pl.c, pl.nu);
-        let wphi = proj.weighted(pl.c, pl.nu, &wa[..self.nq]);
-        let b = SVector::<f64, N_FIELDS>::from_fn(|m, _| {
-            (0..self.nq).map(|q| dot3(wphi[m][q], kins[q].kappa)).sum()
-        });
-        let gamma = l_inv * b;
-        let wg = SVector::<f64, N_FIELDS>::from_fn(|t, _| bending::WEIGHTS[t] * gamma[t]);
-        let y = l_inv.transpose() * wg;
-        let mut moments = [[0.0; 3]; MAX_QP];
-        for (q, mq) in moments[..self.nq].iter_mut().enumerate() {
-            for m in 0..N_FIELDS {
-                for c in 0..3 {
-                    mq[c] += y[m] * wphi[m][q][c];
-                }
-            }
-        }
-        SplitState {
-            energy: 0.5 * gamma.dot(&wg),
-            moments,
-            wphi,
-            l_inv,
-        }
+        let kappa: [[f64; 3]; MAX_QP] = std::array::from_fn(|q| kins[q].kappa);
+        proj.state(&kappa[..self.nq], pl.c, pl.nu)
     }
 
     /// Energy, internal force f = dU/de (27, index 3*k + c for nodal vector k, component c) and,
@@ -647,15 +624,30 @@ impl ShellElement {
             .split
             .as_ref()
             .map(|proj| self.split_state(proj, &pl, &kins));
-        // The split energy's measures' gradients sum_q (wa C phi_m) . d kappa_q / d e_k.
-        let mut grads = [[Vector3::zeros(); 9]; N_FIELDS];
+        // The split energy's gradients: of sum_q wa kappa_q (mean_grads[k][V])
+        // and of b_m (cubic_grads[m][k]).
+        let mut mean_grads = [[Vector3::zeros(); 3]; 9];
+        let mut cubic_grads = [[Vector3::zeros(); 9]; N_CUBIC];
         for (iq, q) in self.qp[..self.nq].iter().enumerate() {
             let kin = &kins[iq];
             // Weighted stress resultants and moments (Voigt).
             let nm = pl.apply(q.wa * hm, kin.eps);
             let mb = match &split {
                 None => pl.apply(q.wa * hb, kin.kappa),
-                Some(sp) => sp.moments[iq].map(|m| m * hb),
+                Some(sp) => {
+                    let mut m = pl.apply(q.wa * hb, sp.mean);
+                    let proj = self
+                        .split
+                        .as_ref()
+                        .expect("a split state has its projection");
+                    for (c, y) in sp.y.iter().enumerate() {
+                        let w = proj.wc_phi(c, iq, pl.c, pl.nu);
+                        for v in 0..3 {
+                            m[v] += hb * y * w[v];
+                        }
+                    }
+                    m
+                }
             };
             out.membrane += 0.5 * dot3(kin.eps, nm);
             out.bending += 0.5 * dot3(kin.kappa, mb);
@@ -690,26 +682,43 @@ impl ShellElement {
                 };
                 let material = match &split {
                     None => Material3::Pointwise,
-                    Some(sp) => Material3::Split {
-                        wphi: std::array::from_fn(|m| sp.wphi[m][iq]),
-                        grads: &mut grads,
+                    Some(_) => Material3::Split {
+                        wc_phi: std::array::from_fn(|m| {
+                            let proj = self.split.as_ref().expect("split");
+                            proj.wc_phi(m, iq, pl.c, pl.nu)
+                        }),
+                        mean_grads: &mut mean_grads,
+                        cubic_grads: &mut cubic_grads,
                     },
                 };
                 add_tangent_upper(bl, q, kin, &pl, h, &stress, material);
             }
         }
-        if let (Some(bl), Some(sp)) = (blocks, &split) {
-            // (h^3/12) sum_t w_t d gamma_t d gamma_t^T, d gamma = L^-1 d b:
-            // every block a sum of seven outer products.
+        if let (Some(bl), Some(sp), Some(proj)) = (blocks, &split, &self.split) {
+            // (h^3/12) (d(A kappa_mean)^T C d(A kappa_mean) / A + a db^T G^-1 db):
+            // every block a sum of outer products, three and four.
             let hb = h * h * h / 12.0;
-            for t in 0..N_FIELDS {
-                let g: [Vector3<f64>; 9] = std::array::from_fn(|k| {
-                    (0..N_FIELDS).fold(Vector3::zeros(), |a, m| a + grads[m][k] * sp.l_inv[(t, m)])
-                });
-                let s = hb * bending::WEIGHTS[t];
-                for k in 0..9 {
-                    for l in k..9 {
-                        add_outer(&mut bl[k][l], s, &g[k], &g[l]);
+            let s = hb / proj.area();
+            let c_mean = mean_grads.map(|g| {
+                [
+                    (g[0] + g[1] * pl.nu) * (s * pl.c),
+                    (g[0] * pl.nu + g[1]) * (s * pl.c),
+                    g[2] * (s * pl.c * 0.5 * (1.0 - pl.nu)),
+                ]
+            });
+            let gamma: [[Vector3<f64>; 9]; N_CUBIC] = std::array::from_fn(|t| {
+                std::array::from_fn(|k| {
+                    (0..N_CUBIC).fold(Vector3::zeros(), |a, m| a + cubic_grads[m][k] * sp.l[t][m])
+                })
+            });
+            for k in 0..9 {
+                for l in k..9 {
+                    let b = &mut bl[k][l];
+                    for v in 0..3 {
+                        add_outer(b, 1.0, &mean_grads[k][v], &c_mean[l][v]);
+                    }
+                    for g in &gamma {
+                        add_outer(b, hb, &g[k], &g[l]);
                     }
                 }
             }
@@ -776,24 +785,16 @@ struct Stress<'a> {
     c: Vector3<f64>,
 }
 
-/// The split bending energy at one state: its value over `h^3/12`, the
-/// weighted moments over `h^3/12` at each point, the weights
-/// `wa_q C phi_m(q)` and `L^-1`.
-struct SplitState {
-    energy: f64,
-    moments: [[f64; 3]; MAX_QP],
-    wphi: [[[f64; 3]; MAX_QP]; N_FIELDS],
-    l_inv: SMatrix<f64, N_FIELDS, N_FIELDS>,
-}
-
 /// How a point adds the bending energy's material tangent: its own
 /// `(beta_k . D beta_l) n_hat n_hat^T`, or (split energy) by adding its
 /// share of the measures' gradients (the blocks come after the points).
 enum Material3<'a> {
     Pointwise,
     Split {
-        wphi: [[f64; 3]; N_FIELDS],
-        grads: &'a mut [[Vector3<f64>; 9]; N_FIELDS],
+        /// `wa C phi_m` at the point.
+        wc_phi: [[f64; 3]; N_CUBIC],
+        mean_grads: &'a mut [[Vector3<f64>; 3]; 9],
+        cubic_grads: &'a mut [[Vector3<f64>; 9]; N_CUBIC],
     },
 }
 
@@ -826,13 +827,16 @@ fn add_tangent_upper(
     let mut y1 = [ZERO3; 9];
     let mut y2 = [ZERO3; 9];
     let mut yv = [ZERO3; 9];
+    let pointwise = matches!(material, Material3::Pointwise);
     let mut beta = [[0.0; 3]; 9];
     let mut dbeta = [[0.0; 3]; 9];
     for l in 0..9 {
         let (n1, n2, ntl) = (q.n1[l], q.n2[l], st.nt[l]);
         let nv = [q.n11[l], q.n22[l], 2.0 * q.n12[l]];
         beta[l] = [0, 1, 2].map(|v| nv[v] + n1 * pv[v] + n2 * qv[v]);
-        dbeta[l] = pl.apply(sb, beta[l]);
+        if pointwise {
+            dbeta[l] = pl.apply(sb, beta[l]);
+        }
         let mut m = ZERO3;
         axpy(&mut m, n1, &x.x11);
         axpy(&mut m, n2, &x.x12);
@@ -848,17 +852,23 @@ fn add_tangent_upper(
         axpy(&mut m, n2, &x.gv2);
         yv[l] = m;
     }
-    let pointwise = match material {
-        Material3::Pointwise => true,
-        Material3::Split { wphi, grads } => {
-            for (wp, g) in wphi.iter().zip(grads.iter_mut()) {
-                for l in 0..9 {
-                    g[l] += kin.n_hat * dot3(*wp, beta[l]);
-                }
+    if let Material3::Split {
+        wc_phi,
+        mean_grads,
+        cubic_grads,
+    } = material
+    {
+        for l in 0..9 {
+            for v in 0..3 {
+                mean_grads[l][v] += kin.n_hat * (q.wa * beta[l][v]);
             }
-            false
         }
-    };
+        for (wp, g) in wc_phi.iter().zip(cubic_grads.iter_mut()) {
+            for l in 0..9 {
+                g[l] += kin.n_hat * dot3(*wp, beta[l]);
+            }
+        }
+    }
     let nn = outer(&kin.n_hat, &kin.n_hat);
     for k in 0..9 {
         let (n1, n2, ntk) = (q.n1[k], q.n2[k], st.nt[k]);

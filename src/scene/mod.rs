@@ -384,6 +384,10 @@ pub struct SolverSettings {
     /// digits on refined meshes (`src/element/quadrature.rs`).
     #[serde(default)]
     pub quadrature: crate::element::Rule,
+    /// The shell's bending energy (Rust API only, not a scene key: the
+    /// benches compare the split energy with the default).
+    #[serde(skip)]
+    pub bending: crate::element::Bending,
     /// The stepper's numerical constants (Rust API only, not a scene key).
     #[serde(skip)]
     pub integration: crate::solver::IntegrationParameters,
@@ -423,6 +427,7 @@ impl Default for SolverSettings {
             max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
             input_timing: InputTiming::Hold,
             quadrature: crate::element::Rule::Dunavant7,
+            bending: crate::element::Bending::Pointwise,
             integration: Default::default(),
         }
     }
