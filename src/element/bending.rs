@@ -18,8 +18,9 @@
 //! energy is exact under large rotations; a constant curvature has no
 //! variation, so the patch test holds; the force is the pointwise energy's
 //! with the moments `(h^3/12) (wa_q C kappa_mean + sum_m y_m wa_q C phi_mq)`,
-//! `y = a G^-1 b`. `G = E/(1-nu^2) (GA + nu GB)` is factored at each
-//! evaluation (4 x 4), so the material may change between evaluations.
+//! `y = a G^-1 b`. `G = E/(1-nu^2) (GA + nu GB)`: its factors for the
+//! sheet's Poisson's ratio are kept ([`Projection::prepare`]); at another
+//! ratio they are computed at the evaluation (4 x 4).
 //!
 //! Why (docs/model.md, "Bending on coarse meshes"): the displacement
 //! element's higher-order stiffness (the energy of the curvature's variation)
@@ -61,17 +62,31 @@ pub struct Projection {
     wa: [f64; MAX_QP],
     /// `sum_q wa_q`.
     area: f64,
+    /// The factors kept for one Poisson's ratio ([`Projection::prepare`]).
+    kept: Option<Factors>,
 }
 
-/// The split energy at one state, for the force and the tangent.
+/// What the split energy needs for one Poisson ratio `nu`: the weights
+/// `wc_mq = wa_q (CA + nu CB) phi_m(q)` and `l = sqrt(a) L^-1` with
+/// `GA + nu GB = L L^T` (so `a (GA + nu GB)^-1 = l^T l`).
+#[derive(Clone, Copy, Debug)]
+pub struct Factors {
+    nu: f64,
+    /// `wc[m][q]`.
+    pub wc: [[V3; MAX_QP]; N_CUBIC],
+    /// `l[t][m]`.
+    pub l: [[f64; N_CUBIC]; N_CUBIC],
+}
+
+/// The split energy at one state, for the force and the tangent; with
+/// `c = E/(1-nu^2)`, `b_m = c sum_q wc_mq . kappa_q` and `a G^-1 = l^T l / c`.
 #[derive(Clone, Copy, Debug)]
 pub struct SplitState {
     /// `kappa_mean`.
     pub mean: V3,
-    /// `a G^-1 b`.
+    /// `a G^-1 b / c`: the moments at point `q` are
+    /// `(h^3/12) (wa_q C kappa_mean + c sum_m y_m wc_mq)`.
     pub y: [f64; N_CUBIC],
-    /// `sqrt(a) L^-1` with `G = L L^T`: `a G^-1 = l^T l`.
-    pub l: [[f64; N_CUBIC]; N_CUBIC],
     /// `A kappa_mean^T C kappa_mean + a b^T G^-1 b` (the energy over `h^3/24`).
     pub energy: f64,
 }
@@ -117,51 +132,29 @@ impl Projection {
             wa_cb,
             wa: std::array::from_fn(|q| wa.get(q).copied().unwrap_or(0.0)),
             area,
+            kept: None,
         }
     }
 
-    /// `wa_q C phi_m(q)` for the material `c = E/(1-nu^2)`, `nu`.
-    #[inline(always)]
-    pub fn wc_phi(&self, m: usize, q: usize, c: f64, nu: f64) -> V3 {
-        let (a, b) = (self.wa_ca[m][q], self.wa_cb[m][q]);
-        [
-            c * (a[0] + nu * b[0]),
-            c * (a[1] + nu * b[1]),
-            c * (a[2] + nu * b[2]),
-        ]
-    }
-
-    /// The state at the curvatures `kappa[..nq]` (Voigt, one per point) for
-    /// the material `c = E/(1-nu^2)`, `nu`.
-    #[inline(always)]
-    pub fn state(&self, kappa: &[V3], c: f64, nu: f64) -> SplitState {
-        let mut mean = [0.0; 3];
-        let mut b = [0.0; N_CUBIC];
-        for (q, k) in kappa.iter().enumerate() {
-            for v in 0..3 {
-                mean[v] += self.wa[q] * k[v];
-            }
-            for m in 0..N_CUBIC {
-                b[m] += c * (dot3(self.wa_ca[m][q], *k) + nu * dot3(self.wa_cb[m][q], *k));
-            }
-        }
-        let mean = mean.map(|m| m / self.area);
-        // G = L L^T (Cholesky), then l = sqrt(a) L^-1.
-        let mut g = [[0.0; N_CUBIC]; N_CUBIC];
+    /// The factors for Poisson's ratio `nu`.
+    pub fn factors(&self, nu: f64) -> Factors {
+        let mut wc = [[[0.0; 3]; MAX_QP]; N_CUBIC];
         for m in 0..N_CUBIC {
-            for n in 0..N_CUBIC {
-                g[m][n] = c * (self.ga[m][n] + nu * self.gb[m][n]);
+            for q in 0..MAX_QP {
+                let (a, b) = (self.wa_ca[m][q], self.wa_cb[m][q]);
+                wc[m][q] = [a[0] + nu * b[0], a[1] + nu * b[1], a[2] + nu * b[2]];
             }
         }
+        // GA + nu GB = L L^T (Cholesky), then l = sqrt(a) L^-1.
         let mut low = [[0.0; N_CUBIC]; N_CUBIC];
         for i in 0..N_CUBIC {
             for j in 0..=i {
-                let s = g[i][j] - (0..j).map(|k| low[i][k] * low[j][k]).sum::<f64>();
+                let g = self.ga[i][j] + nu * self.gb[i][j];
+                let s = g - (0..j).map(|k| low[i][k] * low[j][k]).sum::<f64>();
                 low[i][j] = if i == j { s.sqrt() } else { s / low[j][j] };
             }
         }
         let mut l = [[0.0; N_CUBIC]; N_CUBIC];
-        let ra = HIGHER_ORDER_WEIGHT.sqrt();
         for col in 0..N_CUBIC {
             // Forward substitution of L x = e_col.
             for i in col..N_CUBIC {
@@ -170,11 +163,51 @@ impl Projection {
                 l[i][col] = s / low[i][i];
             }
         }
-        let l = l.map(|row| row.map(|v| ra * v));
-        // gamma = l b, y = l^T gamma = a G^-1 b.
+        let ra = HIGHER_ORDER_WEIGHT.sqrt();
+        Factors {
+            nu,
+            wc,
+            l: l.map(|row| row.map(|v| ra * v)),
+        }
+    }
+
+    /// Keeps the factors for `nu`, so that evaluations at that Poisson's
+    /// ratio need not recompute them.
+    pub fn prepare(&mut self, nu: f64) {
+        self.kept = Some(self.factors(nu));
+    }
+
+    /// The factors for `nu`: the kept ones if they are for it, else
+    /// computed into `scratch`.
+    #[inline(always)]
+    pub fn factors_for<'a>(&'a self, nu: f64, scratch: &'a mut Option<Factors>) -> &'a Factors {
+        match &self.kept {
+            Some(f) if f.nu == nu => f,
+            _ => scratch.insert(self.factors(nu)),
+        }
+    }
+
+    /// The state at the curvatures `kappa[..nq]` (Voigt, one per point),
+    /// with the factors `f` of the material's Poisson's ratio and
+    /// `c = E/(1-nu^2)`.
+    #[inline(always)]
+    pub fn state(&self, f: &Factors, kappa: &[V3], c: f64) -> SplitState {
+        let mut mean = [0.0; 3];
+        let mut b = [0.0; N_CUBIC];
+        for (q, k) in kappa.iter().enumerate() {
+            for v in 0..3 {
+                mean[v] += self.wa[q] * k[v];
+            }
+            for m in 0..N_CUBIC {
+                b[m] += dot3(f.wc[m][q], *k);
+            }
+        }
+        let mean = mean.map(|m| m / self.area);
+        // With b over c: gamma = l b (the energy's c gamma^2), y = l^T gamma.
         let gamma: [f64; N_CUBIC] =
-            std::array::from_fn(|t| (0..N_CUBIC).map(|m| l[t][m] * b[m]).sum());
-        let y = std::array::from_fn(|m| (0..N_CUBIC).map(|t| l[t][m] * gamma[t]).sum());
+            std::array::from_fn(|t| (0..N_CUBIC).map(|m| f.l[t][m] * b[m]).sum());
+        let y = std::array::from_fn(|m| (0..N_CUBIC).map(|t| f.l[t][m] * gamma[t]).sum());
+        let nu = f.nu;
         let cm = [
             c * (mean[0] + nu * mean[1]),
             c * (nu * mean[0] + mean[1]),
@@ -183,8 +216,7 @@ impl Projection {
         SplitState {
             mean,
             y,
-            l,
-            energy: self.area * dot3(mean, cm) + gamma.iter().map(|g| g * g).sum::<f64>(),
+            energy: self.area * dot3(mean, cm) + c * gamma.iter().map(|g| g * g).sum::<f64>(),
         }
     }
 

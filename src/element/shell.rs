@@ -30,7 +30,7 @@
 
 use super::{
     Bending, ElemVec, ElementOptions,
-    bending::{N_CUBIC, Projection, SplitState},
+    bending::{Factors, N_CUBIC, Projection, SplitState},
     quadrature::Rule,
     shape::{Interpolation, Shape},
 };
@@ -503,7 +503,9 @@ impl ShellElement {
         for (q, kin) in self.qp[..self.nq].iter().zip(&kins) {
             out.membrane += q.wa * hm * dot3(kin.eps, pl.apply(1.0, kin.eps));
         }
-        out.bending = hb * self.split_state(proj, &pl, &kins).energy;
+        let mut scratch = None;
+        let f = proj.factors_for(pl.nu, &mut scratch);
+        out.bending = hb * self.split_state(proj, f, &pl, &kins).energy;
         out
     }
 
@@ -522,11 +524,22 @@ impl ShellElement {
     fn split_state(
         &self,
         proj: &Projection,
+        f: &Factors,
         pl: &Plane,
         kins: &[Kinematics; MAX_QP],
     ) -> SplitState {
         let kappa: [[f64; 3]; MAX_QP] = std::array::from_fn(|q| kins[q].kappa);
-        proj.state(&kappa[..self.nq], pl.c, pl.nu)
+        proj.state(f, &kappa[..self.nq], pl.c)
+    }
+
+    /// Keeps what the element's energy needs for `mat` that depends on the
+    /// material only (the split bending energy's factors for its Poisson's
+    /// ratio), so that evaluations with it need not recompute it. Results
+    /// are the same with or without.
+    pub fn prepare(&mut self, mat: &Material) {
+        if let Some(p) = &mut self.split {
+            p.prepare(mat.poisson_ratio);
+        }
     }
 
     /// Energy, internal force f = dU/de (27, index 3*k + c for nodal vector k, component c) and,
@@ -620,10 +633,16 @@ impl ShellElement {
         force.fill(0.0);
         let mut out = ShellEnergy::default();
         let kins = self.kinematics_at(e);
+        let mut scratch = None;
+        let factors = self
+            .split
+            .as_ref()
+            .map(|proj| proj.factors_for(pl.nu, &mut scratch));
         let split = self
             .split
             .as_ref()
-            .map(|proj| self.split_state(proj, &pl, &kins));
+            .zip(factors)
+            .map(|(proj, f)| self.split_state(proj, f, &pl, &kins));
         // The split energy's gradients: of sum_q wa kappa_q (mean_grads[k][V])
         // and of b_m (cubic_grads[m][k]).
         let mut mean_grads = [[Vector3::zeros(); 3]; 9];
@@ -636,14 +655,10 @@ impl ShellElement {
                 None => pl.apply(q.wa * hb, kin.kappa),
                 Some(sp) => {
                     let mut m = pl.apply(q.wa * hb, sp.mean);
-                    let proj = self
-                        .split
-                        .as_ref()
-                        .expect("a split state has its projection");
-                    for (c, y) in sp.y.iter().enumerate() {
-                        let w = proj.wc_phi(c, iq, pl.c, pl.nu);
+                    let f = factors.expect("a split state has its factors");
+                    for (y, w) in sp.y.iter().zip(&f.wc) {
                         for v in 0..3 {
-                            m[v] += hb * y * w[v];
+                            m[v] += hb * pl.c * y * w[iq][v];
                         }
                     }
                     m
@@ -684,8 +699,7 @@ impl ShellElement {
                     None => Material3::Pointwise,
                     Some(_) => Material3::Split {
                         wc_phi: std::array::from_fn(|m| {
-                            let proj = self.split.as_ref().expect("split");
-                            proj.wc_phi(m, iq, pl.c, pl.nu)
+                            factors.expect("a split state has its factors").wc[m][iq]
                         }),
                         mean_grads: &mut mean_grads,
                         cubic_grads: &mut cubic_grads,
@@ -694,9 +708,10 @@ impl ShellElement {
                 add_tangent_upper(bl, q, kin, &pl, h, &stress, material);
             }
         }
-        if let (Some(bl), Some(sp), Some(proj)) = (blocks, &split, &self.split) {
+        if let (Some(bl), Some(f), Some(proj)) = (blocks, factors, &self.split) {
             // (h^3/12) (d(A kappa_mean)^T C d(A kappa_mean) / A + a db^T G^-1 db):
-            // every block a sum of outer products, three and four.
+            // every block a sum of outer products, three and four; with db
+            // over c, a db^T G^-1 db = c |l db|^2.
             let hb = h * h * h / 12.0;
             let s = hb / proj.area();
             let c_mean = mean_grads.map(|g| {
@@ -708,7 +723,7 @@ impl ShellElement {
             });
             let gamma: [[Vector3<f64>; 9]; N_CUBIC] = std::array::from_fn(|t| {
                 std::array::from_fn(|k| {
-                    (0..N_CUBIC).fold(Vector3::zeros(), |a, m| a + cubic_grads[m][k] * sp.l[t][m])
+                    (0..N_CUBIC).fold(Vector3::zeros(), |a, m| a + cubic_grads[m][k] * f.l[t][m])
                 })
             });
             for k in 0..9 {
@@ -718,7 +733,7 @@ impl ShellElement {
                         add_outer(b, 1.0, &mean_grads[k][v], &c_mean[l][v]);
                     }
                     for g in &gamma {
-                        add_outer(b, hb, &g[k], &g[l]);
+                        add_outer(b, hb * pl.c, &g[k], &g[l]);
                     }
                 }
             }
@@ -791,7 +806,7 @@ struct Stress<'a> {
 enum Material3<'a> {
     Pointwise,
     Split {
-        /// `wa C phi_m` at the point.
+        /// `wa (CA + nu CB) phi_m` at the point.
         wc_phi: [[f64; 3]; N_CUBIC],
         mean_grads: &'a mut [[Vector3<f64>; 3]; 9],
         cubic_grads: &'a mut [[Vector3<f64>; 9]; N_CUBIC],
@@ -1330,6 +1345,36 @@ mod tests {
                 el.eval_lagged(&mat, &e, &mut f2, Some(&mut km), Some(&mid));
                 assert!((km - (k0 + k2) * 0.5).norm() < 1e-12 * k0.norm());
             }
+        }
+    }
+
+    /// Keeping the split energy's factors for the material changes no bit of
+    /// the results; kept for another Poisson's ratio, they are not used.
+    #[test]
+    fn prepared_elements_give_the_same_results() {
+        let mut rng = Rng(0xbeef);
+        let x = triangles()[2];
+        let e = random_deformation(&x, &mut rng);
+        let (mat, other) = (
+            material(0.1),
+            Material {
+                poisson_ratio: 0.1,
+                ..material(0.1)
+            },
+        );
+        for el in both(x, Rule::default()) {
+            let run = |el: &ShellElement| {
+                let mut f = SVector::zeros();
+                let mut k = SMatrix::<f64, 27, 27>::zeros();
+                let en = el.eval(&mat, &e, &mut f, Some(&mut k));
+                (en, f, k, el.energy(&mat, &e))
+            };
+            let plain = run(&el);
+            let mut kept = el;
+            kept.prepare(&mat);
+            assert_eq!(run(&kept), plain, "{:?}", el.bending());
+            kept.prepare(&other);
+            assert_eq!(run(&kept), plain, "{:?}", el.bending());
         }
     }
 
