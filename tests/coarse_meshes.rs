@@ -7,7 +7,8 @@
 //! - the split bending energy ([`Bending::Split`]) on the clamped plate
 //!   under uniform load is within 3 % at 4 x 4 cells and 0.5 % at 8 x 8,
 //!   on same-diagonal and union-jack meshes (measured -0.89 / -2.55 % and
-//!   +0.38 / +0.16 %; the pointwise energy -17.6 / -24.8 % and -4.9 / -5.2 %);
+//!   +0.38 / +0.16 %; the pointwise energy -17.6 / -24.8 % and
+//!   -4.94 / -5.25 %);
 //! - a square panel clamped on one edge under a tip line load is within 5 %
 //!   of its converged tip deflection as 2 triangles and within 2 % as 8
 //!   (measured +3.8 %, -0.4 / +0.8 %; pointwise -9.3 %, -3.9 / -2.9 %);
