@@ -32,6 +32,7 @@ use origami_fmu::scene::Scene;
 use origami_fmu::scene::patterns::Miura;
 
 fn main() {
+    origami_fmu::solver::set_phase_timing(true);
     let args: Vec<String> = std::env::args().skip(1).collect();
     let value = origami_fmu::benchmarks::arg_text;
     let panels: Vec<usize> = value("--panels")

@@ -47,13 +47,7 @@ use std::f64::consts::PI;
 
 /// CPU time of this thread so far, s.
 fn cpu_seconds() -> f64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: a valid out pointer for clock_gettime.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+    origami_fmu::cpu_time::now(origami_fmu::cpu_time::Clock::Thread).as_secs_f64()
 }
 
 /// What one scene's run did.

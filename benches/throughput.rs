@@ -79,6 +79,7 @@ fn options() -> Options {
 }
 
 fn main() {
+    origami_fmu::solver::set_phase_timing(true);
     let o = options();
     println!(
         "Miura-ori folding, {} s simulated, tolerance {:.0e}, max step {:.0e} s, {:?} Newton, {:?} quadrature, {:?} bending",

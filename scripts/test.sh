@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The test command: checks formatting, builds everything (release: the
 # numerics are slow unoptimized), runs clippy (warnings are errors) and the
-# cargo tests, runs a C host of the FMU under valgrind, sets up the Python
+# cargo tests, runs a C host of the FMU under valgrind, cross-builds the
+# win64 DLL and tests it under wine (scripts/windows_test.sh), sets up the Python
 # venv with fmpy, installs fmi-sim (a second FMI client; once per machine,
 # about 9 min) and runs the fmpy suite. Works on a fresh Debian machine with
-# rustup, cc, python3 and apt-get (as root, for libclang-dev and valgrind).
+# rustup, cc, python3 and apt-get (as root, for libclang-dev, valgrind,
+# wine, MinGW-w64 and Debian's Rust with its source).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
@@ -20,6 +22,8 @@ echo "== cargo test --release"
 cargo test --release --locked
 echo "== C host under valgrind"
 bash scripts/c_host_test.sh
+echo "== win64 DLL under wine"
+bash scripts/windows_test.sh
 echo "== python venv"
 PY=$(bash scripts/setup_venv.sh)
 echo "== fmi-sim (second FMI client)"

@@ -13,7 +13,7 @@
 //! [`solver`]s), with [`fmi`] on top: the FMI 2.0 co-simulation functions
 //! exported from the cdylib. `unsafe` code is denied everywhere but in two
 //! files of [`fmi`] (the pointer helpers and the exports) and the one
-//! clock call of [`cpu_time`].
+//! clock call of [`cpu_time`] (one for unix, one for Windows).
 //!
 //! The names a user of the Rust API needs most are re-exported here:
 //! [`Scene`] (read one with [`scene::load`] or [`scene::from_str`], or build

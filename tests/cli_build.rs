@@ -19,6 +19,7 @@ fn build_writes_the_fmu() {
         .arg(&scene)
         .arg("-o")
         .arg(&out)
+        .args(["--platforms", "linux64"])
         .output()
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
@@ -396,4 +397,160 @@ fn check_lists_obstacles_and_a_moving_ones_pose_inputs() {
         "{text}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The binary names of the FMU at `path`, sorted.
+fn fmu_binaries(path: &Path) -> Vec<String> {
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
+    let mut names: Vec<String> = (0..zip.len())
+        .map(|i| zip.by_index(i).unwrap().name().unwrap().into_owned())
+        .filter(|n| n.starts_with("binaries/"))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The cdylib cargo built with the executable (target/release/ or, under
+/// `cargo test`, its deps/).
+fn host_library() -> std::path::PathBuf {
+    let dir = Path::new(env!("CARGO_BIN_EXE_origami-fmu"))
+        .parent()
+        .unwrap();
+    [
+        dir.join("liborigami_fmu.so"),
+        dir.join("deps/liborigami_fmu.so"),
+    ]
+    .into_iter()
+    .find(|p| p.is_file())
+    .expect("the cdylib is built with the executable")
+}
+
+/// Without --platforms, build packs this host's library plus the win64 DLL
+/// when one was cross-built (where cargo leaves it).
+#[test]
+fn build_packs_the_host_and_what_was_cross_built() {
+    let dir = scratch("default_platforms");
+    let fmu = dir.join("sq.fmu");
+    let r = bin()
+        .arg("build")
+        .arg(root().join("tests/fmpy/scenes/square.json"))
+        .arg("-o")
+        .arg(&fmu)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let target = Path::new(env!("CARGO_BIN_EXE_origami-fmu"))
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap();
+    let cross_built = ["x86_64-win7-windows-gnu", "x86_64-pc-windows-gnu"]
+        .iter()
+        .any(|t| target.join(t).join("release/origami_fmu.dll").is_file());
+    let mut expected = vec!["binaries/linux64/origami_fmu.so"];
+    if cross_built {
+        expected.push("binaries/win64/origami_fmu.dll");
+    }
+    assert_eq!(fmu_binaries(&fmu), expected);
+}
+
+/// --library files go in the folder their format names; a platform that
+/// cannot be had, an unknown platform or a file that is no library is
+/// refused with what is wrong, and no FMU is written.
+#[test]
+fn build_places_libraries_by_platform() {
+    let dir = scratch("platforms");
+    let scene = root().join("tests/fmpy/scenes/square.json");
+    let fmu = dir.join("p.fmu");
+    let so = host_library();
+    // A PE32+ image (as far as its headers go) stands for a win64 DLL.
+    let mut pe = vec![0u8; 0x200];
+    pe[..2].copy_from_slice(b"MZ");
+    pe[0x3c] = 0x80;
+    pe[0x80..0x84].copy_from_slice(b"PE\0\0");
+    pe[0x80 + 24..0x80 + 26].copy_from_slice(&[0x0b, 0x02]);
+    let dll = dir.join("some.dll");
+    std::fs::write(&dll, &pe).unwrap();
+    let build = |extra: &[&std::ffi::OsStr]| {
+        let _ = std::fs::remove_file(&fmu);
+        bin()
+            .arg("build")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&fmu)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let os = |s: &'static str| std::ffi::OsStr::new(s);
+    let r = build(&[
+        os("--library"),
+        dll.as_os_str(),
+        os("--library"),
+        so.as_os_str(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_eq!(
+        fmu_binaries(&fmu),
+        [
+            "binaries/linux64/origami_fmu.so",
+            "binaries/win64/origami_fmu.dll"
+        ]
+    );
+    let out = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        out.contains(&format!(
+            "binaries/win64/origami_fmu.dll (512 bytes, from {})",
+            dll.display()
+        )),
+        "{out}"
+    );
+    let r = build(&[
+        os("--library"),
+        dll.as_os_str(),
+        os("--platforms"),
+        os("win64"),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_eq!(fmu_binaries(&fmu), ["binaries/win64/origami_fmu.dll"]);
+
+    let refused = |extra: &[&std::ffi::OsStr], wanted: &[&str]| {
+        let r = build(extra);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{extra:?}");
+        for w in wanted {
+            assert!(err.contains(w), "{extra:?}: {err}");
+        }
+        assert!(!fmu.exists(), "{extra:?}");
+    };
+    refused(
+        &[os("--platforms"), os("darwin64")],
+        &["--platforms darwin64", "on a Mac", "README", "--library"],
+    );
+    refused(
+        &[os("--platforms"), os("linux64,win32")],
+        &["win32", "linux64, win64, darwin64"],
+    );
+    refused(
+        &[os("--library"), scene.as_os_str()],
+        &["square.json is not a 64-bit shared library"],
+    );
+    refused(
+        &[
+            os("--library"),
+            so.as_os_str(),
+            os("--platforms"),
+            os("win64"),
+        ],
+        &["is a linux64 library but --platforms does not list linux64"],
+    );
+    refused(
+        &[
+            os("--library"),
+            dll.as_os_str(),
+            os("--library"),
+            dll.as_os_str(),
+        ],
+        &["two --library files are win64 libraries"],
+    );
 }

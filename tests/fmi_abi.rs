@@ -39,7 +39,7 @@ fn resources(tag: &str, bytes: &[u8]) -> (PathBuf, String) {
 }
 
 fn uri(dir: &Path) -> String {
-    format!("file://{}", dir.display())
+    origami_fmu::fmi::resources::file_uri(dir)
 }
 
 struct Fmu {

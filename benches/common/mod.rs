@@ -88,7 +88,7 @@ pub fn square_model(
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fmpy/scenes/square.json");
     let mut scene = origami_fmu::fmi::resources::load_scene_file(&path).expect("square scene");
-    scene.solver.input_timing = origami_fmu::scene::InputTiming::Ramp;
+    scene.solver.input_timing = origami_fmu::scene::InputTiming::FirstOrderHold;
     let mut m = origami_fmu::model::Model::new(edit(scene)).expect("model");
     m.initialize().expect("initialize");
     let fold = m.input_id("fold").expect("fold input");

@@ -1,11 +1,12 @@
 //! `origami-fmu build SCENE -o X.fmu`: pack a scene as an FMI 2.0
 //! co-simulation FMU.
 //!
-//! The FMU holds `modelDescription.xml` (generated from the scene),
-//! `binaries/linux64/origami_fmu.so` (a copy of this crate's cdylib, found
-//! next to the running executable unless `--library` names it) and the
-//! scene in `resources/`.
+//! The FMU holds `modelDescription.xml` (generated from the scene), one
+//! binary per platform, `binaries/<platform>/origami_fmu.<so|dll|dylib>`
+//! (copies of this crate's cdylib; see [`super::platforms`] for where they
+//! are found and how they are built), and the scene in `resources/`.
 
+use super::platforms::{BuildTree, Platform};
 use super::{CliError, SceneOptions, out};
 use crate::fmi::{self, MODEL_IDENTIFIER, SCENE_FILE};
 use std::fmt::Write as _;
@@ -21,10 +22,17 @@ pub struct BuildArgs {
     /// Where to write the FMU.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// The shared library to pack (default: liborigami_fmu.so next to this
-    /// executable, as cargo builds it).
-    #[arg(long)]
-    pub library: Option<PathBuf>,
+    /// Platforms to pack, comma-separated: linux64, win64, darwin64. A named platform's binary
+    /// is built through cargo when missing; a cross-built one (win64 on Linux) is brought up
+    /// to date when its toolchain is installed [default: this host's platform plus every
+    /// cross-built binary found, e.g. target/x86_64-win7-windows-gnu/release/origami_fmu.dll].
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    pub platforms: Vec<Platform>,
+    /// A shared library to pack (repeatable), in the platform folder its format names: ELF
+    /// linux64, PE32+ win64, Mach-O darwin64 [default: this crate's, as cargo builds it next
+    /// to this executable].
+    #[arg(long, value_name = "FILE")]
+    pub library: Vec<PathBuf>,
     /// Start value of the parameter ramp.time: the FMU folds by itself, every rest-angle
     /// actuator going from 0 to 1 over SECONDS, in tools that drive no input [default: 0,
     /// off: the master drives the inputs].
@@ -35,24 +43,129 @@ pub struct BuildArgs {
     pub read: SceneOptions,
 }
 
-/// The platform folder of the binary inside the FMU.
-const PLATFORM: &str = "linux64";
+/// One platform's binary, read.
+struct Binary {
+    platform: Platform,
+    source: PathBuf,
+    bytes: Vec<u8>,
+}
 
-/// The cdylib next to the running executable: `target/<profile>/` after
-/// `cargo build`, or `target/<profile>/deps/` where `cargo test` leaves it;
-/// the newer of the two when both exist.
-fn default_library() -> Result<PathBuf, CliError> {
-    let exe = std::env::current_exe().map_err(CliError::Executable)?;
-    let dir = exe.parent().ok_or(CliError::NoExecutableFolder)?;
-    let name = format!("lib{MODEL_IDENTIFIER}.so");
-    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    // max_by_key keeps the last of equals: prefer target/<profile>/ on a tie.
-    [dir.join("deps").join(&name), dir.join(&name)]
-        .into_iter()
-        .filter_map(|p| modified(&p).map(|t| (t, p)))
-        .max_by_key(|(t, _)| *t)
-        .map(|(_, p)| p)
-        .ok_or_else(|| CliError::LibraryMissing(dir.join(&name)))
+/// Read `path` as the binary of `platform`, refusing a file of another format.
+fn read_binary(platform: Platform, path: PathBuf) -> Result<Binary, CliError> {
+    let bytes = std::fs::read(&path).map_err(super::error::io("read the FMU library", &path))?;
+    match Platform::of_binary(&bytes) {
+        Some(p) if p == platform => Ok(Binary {
+            platform,
+            source: path,
+            bytes,
+        }),
+        found => Err(CliError::WrongBinary {
+            path,
+            platform,
+            found,
+        }),
+    }
+}
+
+/// The binaries to pack, one per platform, in [`Platform::ALL`]'s order;
+/// notes for the report.
+fn binaries(args: &BuildArgs, notes: &mut Vec<String>) -> Result<Vec<Binary>, CliError> {
+    let mut out: Vec<Binary> = Vec::new();
+    for path in &args.library {
+        let bytes = std::fs::read(path).map_err(super::error::io("read the FMU library", path))?;
+        let platform =
+            Platform::of_binary(&bytes).ok_or_else(|| CliError::NotABinary(path.clone()))?;
+        if !args.platforms.is_empty() && !args.platforms.contains(&platform) {
+            return Err(CliError::LibraryNotListed {
+                path: path.clone(),
+                platform,
+            });
+        }
+        if out.iter().any(|b| b.platform == platform) {
+            return Err(CliError::TwoLibraries(platform));
+        }
+        out.push(Binary {
+            platform,
+            source: path.clone(),
+            bytes,
+        });
+    }
+    if args.platforms.is_empty() && !args.library.is_empty() {
+        return Ok(sorted(out));
+    }
+    let tree = BuildTree::of_executable()?;
+    if args.platforms.is_empty() {
+        let host = Platform::host().ok_or(CliError::NoHostPlatform)?;
+        let path = tree
+            .find(host)
+            .ok_or_else(|| CliError::LibraryMissing(tree.exe_dir.join(host.cargo_file())))?;
+        let host_time = modified(&path);
+        out.push(read_binary(host, path)?);
+        for p in Platform::ALL.into_iter().filter(|&p| p != host) {
+            if let Some(path) = tree.find(p) {
+                if modified(&path) < host_time {
+                    notes.push(format!(
+                        "{p}: {} is older than the {host} library; `--platforms {host},{p}` \
+                         rebuilds it",
+                        path.display()
+                    ));
+                }
+                out.push(read_binary(p, path)?);
+            }
+        }
+        return Ok(sorted(out));
+    }
+    for &p in &args.platforms {
+        if !out.iter().any(|b| b.platform == p) {
+            let path = named_binary(&tree, p)?;
+            out.push(read_binary(p, path)?);
+        }
+    }
+    Ok(sorted(out))
+}
+
+fn sorted(mut binaries: Vec<Binary>) -> Vec<Binary> {
+    binaries.sort_by_key(|b| b.platform);
+    binaries
+}
+
+fn modified(path: &Path) -> Option<std::time::SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// The binary of a platform named in `--platforms`: the host's as found
+/// (built when missing); a cross-built one built through cargo (up to date
+/// in seconds when nothing changed) when its toolchain is installed, else
+/// as found; else the error that says what to install.
+fn named_binary(tree: &BuildTree, platform: Platform) -> Result<PathBuf, CliError> {
+    let found = tree.find(platform);
+    if Some(platform) == Platform::host()
+        && let Some(path) = found
+    {
+        return Ok(path);
+    }
+    let mut cargo = match tree.build_command(platform) {
+        Ok(c) => c,
+        Err(why) => return found.ok_or(CliError::PlatformUnavailable { platform, why }),
+    };
+    super::err(&format!("{platform}: building the binary: {cargo:?}\n"));
+    let status = cargo.status().map_err(|e| CliError::PlatformBuild {
+        platform,
+        why: e.to_string(),
+    })?;
+    if !status.success() {
+        return Err(CliError::PlatformBuild {
+            platform,
+            why: format!("cargo {status}; its messages are above"),
+        });
+    }
+    tree.find(platform).ok_or_else(|| CliError::PlatformBuild {
+        platform,
+        why: format!(
+            "cargo succeeded but left none of {:?}",
+            tree.candidates(platform)
+        ),
+    })
 }
 
 /// Run `origami-fmu build`.
@@ -67,12 +180,9 @@ pub fn run(args: &BuildArgs) -> Result<(), CliError> {
         scene.ramp.time = t;
     }
     let contents = fmi::fmu_contents(&scene)?;
-    let library = match &args.library {
-        Some(l) => l.clone(),
-        None => default_library()?,
-    };
-    let so = std::fs::read(&library).map_err(super::error::io("read the FMU library", &library))?;
-    let binary = format!("binaries/{PLATFORM}/{MODEL_IDENTIFIER}.so");
+    let mut notes = Vec::new();
+    let binaries = binaries(args, &mut notes)?;
+    let paths: Vec<String> = binaries.iter().map(|b| b.platform.fmu_path()).collect();
     let resource = format!("resources/{SCENE_FILE}");
     // A FOLD source travels along as resources/scene.fold, for the user and
     // other FOLD tools; the FMU itself loads the validated scene JSON.
@@ -81,15 +191,15 @@ pub fn run(args: &BuildArgs) -> Result<(), CliError> {
     } else {
         Some(std::fs::read(&args.scene).map_err(super::error::io("read", &args.scene))?)
     };
-    let mut files: Vec<(&str, &[u8], u32)> = vec![
-        (
-            "modelDescription.xml",
-            contents.model_description.as_bytes(),
-            0o644,
-        ),
-        (&binary, &so, 0o755),
-        (&resource, &contents.scene_file, 0o644),
-    ];
+    let mut files: Vec<(&str, &[u8], u32)> = vec![(
+        "modelDescription.xml",
+        contents.model_description.as_bytes(),
+        0o644,
+    )];
+    for (b, path) in binaries.iter().zip(&paths) {
+        files.push((path, &b.bytes, 0o755));
+    }
+    files.push((&resource, &contents.scene_file, 0o644));
     if let Some(f) = &fold_source {
         files.push(("resources/scene.fold", f, 0o644));
     }
@@ -112,12 +222,17 @@ pub fn run(args: &BuildArgs) -> Result<(), CliError> {
         "  modelDescription.xml ({} bytes)",
         contents.model_description.len()
     );
-    let _ = writeln!(
-        o,
-        "  {binary} ({} bytes, from {})",
-        so.len(),
-        library.display()
-    );
+    for (b, path) in binaries.iter().zip(&paths) {
+        let _ = writeln!(
+            o,
+            "  {path} ({} bytes, from {})",
+            b.bytes.len(),
+            b.source.display()
+        );
+    }
+    for n in &notes {
+        let _ = writeln!(o, "  note: {n}");
+    }
     let _ = writeln!(o, "  {resource} ({} bytes)", contents.scene_file.len());
     o.push_str(&drive_note(&contents.scene));
     out(&o);

@@ -94,6 +94,42 @@ pub enum CliError {
     NoExecutableFolder,
     /// The FMU library is not next to the executable.
     LibraryMissing(PathBuf),
+    /// This host has no FMI 2.0 platform, so there is no default library.
+    NoHostPlatform,
+    /// A `--library` file is no 64-bit shared library of an FMI platform.
+    NotABinary(PathBuf),
+    /// A library's file format is not its platform's.
+    WrongBinary {
+        /// The file.
+        path: PathBuf,
+        /// The platform it was to be packed for.
+        platform: crate::cli::platforms::Platform,
+        /// The platform its format names, if any.
+        found: Option<crate::cli::platforms::Platform>,
+    },
+    /// A `--library` is for a platform that `--platforms` does not list.
+    LibraryNotListed {
+        /// The file.
+        path: PathBuf,
+        /// Its platform.
+        platform: crate::cli::platforms::Platform,
+    },
+    /// Two `--library` files for one platform.
+    TwoLibraries(crate::cli::platforms::Platform),
+    /// A platform named in `--platforms` has no binary and this machine cannot build one.
+    PlatformUnavailable {
+        /// The platform.
+        platform: crate::cli::platforms::Platform,
+        /// Why, and what to install or do.
+        why: String,
+    },
+    /// The cargo build of a platform's binary failed.
+    PlatformBuild {
+        /// The platform.
+        platform: crate::cli::platforms::Platform,
+        /// How it failed.
+        why: String,
+    },
 }
 
 /// What is wrong with an `--input` CSV (lines are 1-based, the header
@@ -230,6 +266,41 @@ impl std::fmt::Display for CliError {
                  with the executable), or name it with --library",
                 path.display()
             ),
+            CliError::NoHostPlatform => write!(
+                f,
+                "this machine is none of FMI 2.0's platforms linux64, win64, darwin64, so there is \
+                 no default library: name the libraries with --library"
+            ),
+            CliError::NotABinary(path) => write!(
+                f,
+                "--library {} is not a 64-bit shared library of linux64 (ELF), win64 (PE32+) or \
+                 darwin64 (Mach-O)",
+                path.display()
+            ),
+            CliError::WrongBinary {
+                path,
+                platform,
+                found,
+            } => write!(
+                f,
+                "{} is not a {platform} library (its format is {}), so it cannot be packed as \
+                 {}",
+                path.display(),
+                found.map_or("none of linux64, win64, darwin64".into(), |p| p.to_string()),
+                platform.fmu_path()
+            ),
+            CliError::LibraryNotListed { path, platform } => write!(
+                f,
+                "--library {} is a {platform} library but --platforms does not list {platform}",
+                path.display()
+            ),
+            CliError::TwoLibraries(p) => write!(f, "two --library files are {p} libraries"),
+            CliError::PlatformUnavailable { platform, why } => {
+                write!(f, "--platforms {platform}: {why}")
+            }
+            CliError::PlatformBuild { platform, why } => {
+                write!(f, "the build of the {platform} library failed: {why}")
+            }
         }
     }
 }

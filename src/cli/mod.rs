@@ -7,6 +7,7 @@ pub mod build;
 pub mod check;
 mod error;
 pub mod pattern;
+pub mod platforms;
 pub mod simulate;
 
 pub use error::{CliError, InputCsvError};

@@ -312,6 +312,8 @@ impl Progress {
 
 /// Run `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
+    // The closing report gives the stepper's phase times.
+    crate::solver::set_phase_timing(true);
     let loaded = super::load_scene(&args.scene, &args.read)?;
     for n in &loaded.notes {
         super::err(&format!("{n}\n"));

@@ -882,7 +882,7 @@ mod tests {
             stepFinished: None,
             componentEnvironment: std::ptr::null_mut(),
         };
-        let uri = format!("file://{}", dir.display());
+        let uri = super::super::resources::file_uri(&dir);
         let inst = Instance::instantiate(
             Logger::new(cb, "t", false),
             1,

@@ -57,6 +57,8 @@ pub enum ResourceError {
     RelativeUri(String),
     /// The resource location has a malformed %-escape.
     BadEscape(String),
+    /// The resource location's path is not UTF-8 (on Windows, paths are text).
+    NotUtf8(String),
 }
 
 impl std::fmt::Display for ResourceError {
@@ -91,6 +93,10 @@ impl std::fmt::Display for ResourceError {
             ResourceError::BadEscape(uri) => {
                 write!(f, "resource location {uri:?} has a malformed %-escape")
             }
+            ResourceError::NotUtf8(uri) => write!(
+                f,
+                "resource location {uri:?} decodes to a path that is not UTF-8"
+            ),
         }
     }
 }
@@ -379,8 +385,9 @@ pub fn is_structured_name(name: &str) -> bool {
 
 /// The folder named by a resource-location URI as hosts pass it:
 /// `file:///abs/path`, `file://localhost/abs/path` or `file:/abs/path`,
-/// percent-encoded, with or without a trailing slash. Other hosts and
-/// schemes are rejected with the reason.
+/// percent-encoded, with or without a trailing slash; on Windows
+/// `file:///C:/abs/path` names the drive path `C:/abs/path`. Other hosts
+/// and schemes are rejected with the reason.
 pub fn resource_dir_from_uri(uri: &str) -> Result<PathBuf, ResourceError> {
     let lower = uri.get(..5).map(str::to_ascii_lowercase);
     if lower.as_deref() != Some("file:") {
@@ -404,8 +411,63 @@ pub fn resource_dir_from_uri(uri: &str) -> Result<PathBuf, ResourceError> {
         return Err(ResourceError::RelativeUri(uri.into()));
     }
     let bytes = percent_decode(path).ok_or_else(|| ResourceError::BadEscape(uri.into()))?;
+    path_from_bytes(bytes, uri)
+}
+
+/// A decoded URI path as the system's path: any bytes on unix.
+#[cfg(unix)]
+fn path_from_bytes(bytes: Vec<u8>, _uri: &str) -> Result<PathBuf, ResourceError> {
     use std::os::unix::ffi::OsStringExt;
     Ok(PathBuf::from(std::ffi::OsString::from_vec(bytes)))
+}
+
+/// A decoded URI path as the system's path: UTF-8 text on Windows, the
+/// drive path without the URI's leading slash.
+#[cfg(not(unix))]
+fn path_from_bytes(bytes: Vec<u8>, uri: &str) -> Result<PathBuf, ResourceError> {
+    let text = String::from_utf8(bytes).map_err(|_| ResourceError::NotUtf8(uri.into()))?;
+    Ok(PathBuf::from(windows_path(&text)))
+}
+
+/// The Windows path of a decoded `file:` URI path: `/C:/dir` is the drive
+/// path `C:/dir` (RFC 8089, appendix E.2); any other path is kept.
+#[cfg_attr(unix, allow(dead_code))]
+fn windows_path(path: &str) -> &str {
+    let b = path.as_bytes();
+    let drive = b.len() >= 3 && b[0] == b'/' && b[1].is_ascii_alphabetic() && b[2] == b':';
+    if drive && (b.len() == 3 || b[3] == b'/') {
+        &path[1..]
+    } else {
+        path
+    }
+}
+
+/// The `file:` URI of the absolute path `path`, percent-encoded, as
+/// [`resource_dir_from_uri`] reads it back: `file:///tmp/x` on unix,
+/// `file:///C:/x` on Windows. For tests and hosts written in Rust.
+pub fn file_uri(path: &Path) -> String {
+    #[cfg(unix)]
+    let (text, lead) = {
+        use std::os::unix::ffi::OsStrExt;
+        (path.as_os_str().as_bytes().to_vec(), "")
+    };
+    #[cfg(not(unix))]
+    let (text, lead) = {
+        let s = path.to_string_lossy().replace('\\', "/");
+        // `\\?\C:\x` (a canonicalized path) is the drive path `C:\x`.
+        let s = s.strip_prefix("//?/").map(str::to_string).unwrap_or(s);
+        let lead = if s.starts_with('/') { "" } else { "/" };
+        (s.into_bytes(), lead)
+    };
+    let mut uri = format!("file://{lead}");
+    for b in text {
+        if b.is_ascii_alphanumeric() || b"-._~/:".contains(&b) {
+            uri.push(char::from(b));
+        } else {
+            uri.push_str(&format!("%{b:02X}"));
+        }
+    }
+    uri
 }
 
 fn percent_decode(s: &str) -> Option<Vec<u8>> {
@@ -455,6 +517,27 @@ mod tests {
         assert!(p("file:relative/x").is_err());
         assert!(p("file:///tmp/%zz").is_err());
         assert!(p("file:///tmp/%4").is_err());
+    }
+
+    /// `file:///C:/x` is the drive path `C:/x` on Windows, and a rooted
+    /// path on unix; `file_uri` reads back to the same path either way.
+    #[test]
+    fn windows_drive_uris() {
+        assert_eq!(windows_path("/C:/a b/resources"), "C:/a b/resources");
+        assert_eq!(windows_path("/z:"), "z:");
+        assert_eq!(windows_path("/tmp/x"), "/tmp/x");
+        assert_eq!(windows_path("/C:x"), "/C:x");
+        assert_eq!(windows_path("/1:/x"), "/1:/x");
+        let p = resource_dir_from_uri("file:///C:/a%20b/resources").unwrap();
+        #[cfg(windows)]
+        assert_eq!(p, PathBuf::from(r"C:\a b\resources"));
+        #[cfg(unix)]
+        assert_eq!(p, PathBuf::from("/C:/a b/resources"));
+        let dir = std::env::temp_dir().join("origami fmu 100%").join("ré");
+        let uri = file_uri(&dir);
+        assert!(uri.starts_with("file:///"), "{uri}");
+        assert!(uri.contains("origami%20fmu%20100%25/r%C3%A9"), "{uri}");
+        assert_eq!(resource_dir_from_uri(&uri).unwrap(), dir);
     }
 
     /// Scene resources fail with typed errors that keep their cause.

@@ -184,8 +184,9 @@ fn model_structure(w: &mut String, model: &Model, vars: &[&VariableSpec], np: us
         // Outputs are the state at the communication point: an input set
         // now acts over the next step only, except that the crease energy
         // is read under the rest angles in force, which the rest-angle
-        // actuators set at once where they are ideal (actuator.time_constant
-        // 0, which a master may set): declared whatever the time constant.
+        // actuators set at once where they are ideal (the default;
+        // actuator.time_constant > 0 is a servo): declared whatever the
+        // time constant.
         let rest_angle: Vec<String> = model
             .scene()
             .actuators

@@ -5,7 +5,7 @@
 //! a step, `f_ext - M qdd - f_int` (generalized-alpha holds the equation
 //! at t_{n+1}, prescribed DOFs included, with their inertia).
 
-use super::drive::InputMap;
+use super::inputs::InputMap;
 use crate::assembly::Assembler;
 use crate::dofs::SlotKind;
 use crate::frame::{self, HeldSlots, Pose};

@@ -14,21 +14,22 @@
 //!
 //! This file holds [`Model`], its errors and phases and the life cycle
 //! (new, initialize); the rest is one job per file:
-//! - `variables`: [`VariableSpec`], the input and output tables, inputs
-//!   and outputs;
+//! - `variables`: [`VariableSpec`], the input and output tables, outputs;
 //! - `parameters`: the parameters, one typed list with name, unit,
 //!   description, start value and how each is applied;
 //! - `physics`: the physics a scene asks for ([`physics()`]) and the
 //!   automatic damping;
 //! - `system`: what is built from the scene and parameters (assembly,
 //!   solver, stepper settings);
-//! - `drive`: how input values become loads and prescribed DOFs;
+//! - `inputs`: the input path in one file: what a master sets, the signal
+//!   over an advance, the actuators, and how the values become rest
+//!   angles, loads and prescribed DOFs;
 //! - `attach`: the attachments' frames and the reaction outputs;
 //! - `step`: the step controller ([`Model::advance`], [`StepReport`]);
 //! - `state`: [`ModelState`], save and restore, consistent accelerations.
 
 mod attach;
-mod drive;
+mod inputs;
 mod parameters;
 mod physics;
 mod state;
@@ -36,9 +37,9 @@ mod step;
 mod system;
 mod variables;
 
-pub use physics::actuator_time_constant;
 #[doc(hidden)]
-pub use physics::{AUTO_ACTUATOR_BANDWIDTH, AUTO_DAMPING_RATIO, physics};
+pub use physics::{AUTO_DAMPING_RATIO, physics};
+pub use physics::{actuator_time_constant, folding_frequency};
 pub use state::ModelState;
 #[doc(hidden)]
 pub use state::Work;
@@ -176,8 +177,6 @@ pub struct Model {
     built_with: Option<Vec<f64>>,
     /// Whether the scene asked for automatic damping.
     auto_damping: bool,
-    /// Whether the scene left the actuators' time constant automatic.
-    auto_actuator: bool,
     /// Outputs evaluated from the state on their first read (emptied
     /// whenever the state changes).
     read_cache: ReadCache,
@@ -217,7 +216,6 @@ impl Model {
             input_slopes: vec![0.0; inputs.len()],
             input_second_derivatives: vec![0.0; inputs.len()],
             damping_set: false,
-            actuator_set: false,
             actuators: scene.actuators.iter().map(|a| [a.start, 0.0]).collect(),
             memory: StepperMemory {
                 h_next: scene.solver.max_step,
@@ -236,7 +234,6 @@ impl Model {
         let auto_damping = scene.auto_damping;
         let mut m = Model {
             auto_damping,
-            auto_actuator: scene.actuator_time_constant.is_none(),
             scene,
             parameter_kinds,
             parameters,

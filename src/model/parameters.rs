@@ -1,14 +1,14 @@
 //! The model's parameters. One row per parameter (the `parameters!` table
-//! below) gives its name, unit and description; [`Parameter::value`] says
-//! which scenes have it and its start value, [`Parameter::apply`] how a
-//! value goes into the scene. Every match over [`Parameter`] is
-//! exhaustive, so no parameter is matched by its name and none can be
-//! silently ignored.
+//! below) gives its name; its unit, range, description and automatic flag
+//! are its row of [`crate::scene::limits::LIMITS`], the one table of named
+//! values; [`Parameter::value`] says which scenes have it and its start
+//! value, [`Parameter::apply`] how a value goes into the scene (a match
+//! over every parameter, so none can be silently ignored).
 
 use super::{Error, Model, Phase, VariableSpec, physics};
 use crate::assembly::Physics;
-use crate::scene::limits::LimitError;
-use crate::scene::{ActuatorMode, CreaseStiffness, RampShape as RampShapeKind, Scene};
+use crate::scene::limits::{Limit, LimitError};
+use crate::scene::{ActuatorMode, CreaseStiffness, InputTiming, RampShape as RampShapeKind, Scene};
 
 /// Whether `sc` has an actuator that the built-in ramp drives.
 fn has_rest_angle_actuator(sc: &Scene) -> bool {
@@ -17,10 +17,16 @@ fn has_rest_angle_actuator(sc: &Scene) -> bool {
         .any(|a| a.mode == ActuatorMode::RestAngle)
 }
 
-/// Declares [`Parameter`], [`ALL`] and `Parameter::info` from one row per
-/// parameter, in the FMU's order: `Variant => (name, unit, description)`.
+/// Whether `sc` has any input.
+fn has_inputs(sc: &Scene) -> bool {
+    !super::variables::input_table(sc).is_empty()
+}
+
+/// Declares [`Parameter`] and [`ALL`] from one row per parameter, in the
+/// FMU's order: `Variant => name`. Each name's unit, range, description and
+/// automatic flag are its row of [`crate::scene::limits::LIMITS`].
 macro_rules! parameters {
-    ($($(#[doc = $doc:literal])* $p:ident => ($name:literal, $unit:literal, $what:literal),)*) => {
+    ($($(#[doc = $doc:literal])* $p:ident => $name:literal,)*) => {
         /// One parameter of the model.
         #[derive(Clone, Copy, Debug, PartialEq, Eq)]
         pub(super) enum Parameter {
@@ -31,11 +37,10 @@ macro_rules! parameters {
         const ALL: &[Parameter] = &[$(Parameter::$p,)*];
 
         impl Parameter {
-            /// Name (the FMU variable name, and the name of its limit in
-            /// [`crate::scene::limits`]), unit and description.
-            fn info(self) -> (&'static str, &'static str, &'static str) {
+            /// The FMU variable name.
+            pub(super) fn name(self) -> &'static str {
                 match self {
-                    $(Parameter::$p => ($name, $unit, $what),)*
+                    $(Parameter::$p => $name,)*
                 }
             }
         }
@@ -43,126 +48,66 @@ macro_rules! parameters {
 }
 
 parameters! {
-    YoungsModulus => ("material.youngs_modulus", "Pa", "Young's modulus"),
-    PoissonRatio => ("material.poisson_ratio", "", "Poisson's ratio"),
-    Thickness => ("material.thickness", "m", "sheet thickness"),
-    Density => ("material.density", "kg/m3", "mass density"),
+    YoungsModulus => "material.youngs_modulus",
+    PoissonRatio => "material.poisson_ratio",
+    Thickness => "material.thickness",
+    Density => "material.density",
     /// Only in scenes whose crease stiffness is a length scale.
-    CreaseLengthScale => (
-        "crease.length_scale",
-        "m",
-        "crease stiffness = (crease length / length_scale) * bending stiffness"
-    ),
+    CreaseLengthScale => "crease.length_scale",
     /// Only in scenes whose crease stiffness is given per unit length.
-    CreaseStiffnessPerLength => (
-        "crease.stiffness_per_length",
-        "N/rad",
-        "rotational crease stiffness per unit crease length"
-    ),
-    DampingAlpha => ("damping.alpha", "1/s", "Rayleigh mass-proportional damping"),
-    DampingBeta => ("damping.beta", "s", "Rayleigh stiffness-proportional damping"),
-    DampingCrease => ("damping.crease", "N.s/rad", "crease damping per unit length"),
+    CreaseStiffnessPerLength => "crease.stiffness_per_length",
+    DampingAlpha => "damping.alpha",
+    DampingBeta => "damping.beta",
+    DampingCrease => "damping.crease",
     /// Gravity components are only in scenes with gravity.
-    GravityX => ("gravity.x", "m/s2", "gravity, x component"),
-    GravityY => ("gravity.y", "m/s2", "gravity, y component"),
-    GravityZ => ("gravity.z", "m/s2", "gravity, z component"),
-    RhoInf => ("solver.rho_inf", "", "generalized-alpha spectral radius"),
-    MaxStep => ("solver.max_step", "s", "largest internal step"),
-    Tolerance => ("solver.tolerance", "", "relative solver tolerance"),
-    MaxInternalSteps => (
-        "solver.max_internal_steps",
-        "",
-        "most internal steps one communication step may take before it fails"
-    ),
+    GravityX => "gravity.x",
+    GravityY => "gravity.y",
+    GravityZ => "gravity.z",
+    RhoInf => "solver.rho_inf",
+    MaxStep => "solver.max_step",
+    Tolerance => "solver.tolerance",
+    MaxInternalSteps => "solver.max_internal_steps",
+    ErrorFilter => "solver.error_filter",
+    /// Only in scenes with inputs.
+    InputFirstOrderHold => "input.first_order_hold",
     /// Only in scenes with contact.
-    ContactFriction => ("contact.friction", "", "Coulomb friction coefficient of self-contact"),
+    ContactFriction => "contact.friction",
     /// Only in scenes with actuators.
-    ActuatorTimeConstant => (
-        "actuator.time_constant",
-        "s",
-        "time constant of the actuators' critically damped response to their inputs, 0 for none"
-    ),
+    ActuatorTimeConstant => "actuator.time_constant",
     /// Only in scenes with a rest-angle actuator.
-    RampTime => (
-        "ramp.time",
-        "s",
-        "built-in signal: when > 0, every rest-angle actuator (fold) goes from 0 to 1 over this time and holds 1, and values set on those inputs are not used; 0 = off, the master drives them"
-    ),
+    RampTime => "ramp.time",
     /// Only in scenes with a rest-angle actuator.
-    RampShape => ("ramp.shape", "", "shape of the built-in signal: 0 linear, 1 smooth (zero slope at both ends)"),
+    RampShape => "ramp.shape",
 }
 
 use Parameter::*;
 
 impl Parameter {
-    /// The FMU variable name.
-    pub(super) fn name(self) -> &'static str {
-        self.info().0
+    /// Its row of the one table of named values.
+    fn limit(self) -> &'static Limit {
+        crate::scene::limits::limit(self.name()).expect("every parameter has a limit (tested)")
     }
 
-    /// Whether setting it switches automatic damping off.
+    /// Whether the model chooses it until set: setting one switches the
+    /// automatic damping off.
     pub(super) fn is_damping(self) -> bool {
-        match self {
-            DampingAlpha | DampingBeta | DampingCrease => true,
-            YoungsModulus
-            | PoissonRatio
-            | Thickness
-            | Density
-            | CreaseLengthScale
-            | CreaseStiffnessPerLength
-            | GravityX
-            | GravityY
-            | GravityZ
-            | RhoInf
-            | MaxStep
-            | Tolerance
-            | MaxInternalSteps
-            | ContactFriction
-            | ActuatorTimeConstant
-            | RampTime
-            | RampShape => false,
-        }
+        self.limit().automatic
     }
 
     /// Its value in `sc`, where `ph` is `physics(sc)` (the damping in
     /// effect: the automatic choice, unless the scene sets damping); None
     /// when the scene has no such parameter.
     fn value(self, sc: &Scene, ph: &Physics) -> Option<f64> {
-        let m = &sc.material;
-        let s = &sc.solver;
         match self {
-            YoungsModulus => Some(m.youngs_modulus),
-            PoissonRatio => Some(m.poisson_ratio),
-            Thickness => Some(m.thickness),
-            Density => Some(m.density),
-            CreaseLengthScale => match sc.crease {
-                CreaseStiffness::LengthScale(l) => Some(l),
-                CreaseStiffness::PerLength(_) => None,
-            },
-            CreaseStiffnessPerLength => match sc.crease {
-                CreaseStiffness::PerLength(k) => Some(k),
-                CreaseStiffness::LengthScale(_) => None,
-            },
             DampingAlpha => Some(ph.alpha),
             DampingBeta => Some(ph.beta),
             DampingCrease => Some(ph.crease_c_per_length),
-            GravityX => sc.gravity.map(|g| g[0]),
-            GravityY => sc.gravity.map(|g| g[1]),
-            GravityZ => sc.gravity.map(|g| g[2]),
-            RhoInf => Some(s.rho_inf),
-            MaxStep => Some(s.max_step),
-            Tolerance => Some(s.tolerance),
-            MaxInternalSteps => Some(s.max_internal_steps as f64),
-            ContactFriction => sc.contact.map(|c| c.friction),
             ActuatorTimeConstant => {
                 (!sc.actuators.is_empty()).then(|| super::actuator_time_constant(sc))
             }
             RampTime | RampShape if !has_rest_angle_actuator(sc) => None,
-            RampTime => Some(sc.ramp.time),
-            RampShape => Some(match sc.ramp.shape {
-                RampShapeKind::Linear => 0.0,
-                RampShapeKind::Smooth => 1.0,
-            }),
+            InputFirstOrderHold if !has_inputs(sc) => None,
+            _ => (self.limit().value)(sc),
         }
     }
 
@@ -193,6 +138,14 @@ impl Parameter {
             MaxStep => sc.solver.max_step = x,
             Tolerance => sc.solver.tolerance = x,
             MaxInternalSteps => sc.solver.max_internal_steps = x as usize,
+            ErrorFilter => sc.solver.error_filter = x != 0.0,
+            InputFirstOrderHold => {
+                sc.solver.input_timing = if x == 0.0 {
+                    InputTiming::Hold
+                } else {
+                    InputTiming::FirstOrderHold
+                }
+            }
             ContactFriction => {
                 if let Some(c) = sc.contact.as_mut() {
                     c.friction = x;
@@ -212,11 +165,14 @@ impl Parameter {
 
     /// The variable of the FMU.
     fn spec(self, start: f64, sc: &Scene) -> VariableSpec {
-        let (name, unit, description) = self.info();
+        let Limit {
+            name,
+            unit,
+            description,
+            ..
+        } = *self.limit();
         let auto = if sc.auto_damping && self.is_damping() {
             " (automatic damping until a damping parameter is set)"
-        } else if self == ActuatorTimeConstant && sc.actuator_time_constant.is_none() {
-            "; automatic (from the sheet's folding frequency) until set"
         } else {
             ""
         };
@@ -283,22 +239,15 @@ impl Model {
         if kind.is_damping() {
             self.state.damping_set = true;
         }
-        if kind == ActuatorTimeConstant {
-            self.state.actuator_set = true;
-        }
         self.state.parameters[i] = value;
         Ok(())
     }
 
     /// Put the parameter values into the scene. Automatic damping stays on
     /// until a damping parameter is set; while on, the damping parameters
-    /// show the values it chose for the current material (likewise the
-    /// automatic actuator time constant).
+    /// show the values it chose for the current material.
     pub(super) fn apply_parameters(&mut self) {
-        let auto = (
-            self.auto_damping && !self.state.damping_set,
-            self.auto_actuator && !self.state.actuator_set,
-        );
+        let auto = self.auto_damping && !self.state.damping_set;
         apply(
             &self.parameter_kinds,
             auto,
@@ -307,9 +256,9 @@ impl Model {
         );
     }
 
-    /// Check parameter values as a saved state holds them (`damping_set`,
-    /// `actuator_set`: whether a damping parameter or the actuator time
-    /// constant was set): each by the rules of [`crate::scene::limits`], as
+    /// Check parameter values as a saved state holds them (`damping_set`:
+    /// whether a damping parameter was set): each by the rules of
+    /// [`crate::scene::limits`], as
     /// [`Model::set_parameter`] does, then the scene they make as the scene
     /// reader does. Returns that scene and the values as
     /// [`Model::apply_parameters`] leaves them.
@@ -317,7 +266,6 @@ impl Model {
         &self,
         values: &[f64],
         damping_set: bool,
-        actuator_set: bool,
     ) -> Result<(Scene, Vec<f64>), ParametersError> {
         if values.len() != self.parameters.len() {
             return Err(ParametersError::Count {
@@ -333,10 +281,7 @@ impl Model {
         }
         let mut scene = self.scene.clone();
         let mut values = values.to_vec();
-        let auto = (
-            self.auto_damping && !damping_set,
-            self.auto_actuator && !actuator_set,
-        );
+        let auto = self.auto_damping && !damping_set;
         apply(&self.parameter_kinds, auto, &mut scene, &mut values);
         crate::scene::limits::check_scene(&scene).map_err(ParametersError::Scene)?;
         Ok((scene, values))
@@ -385,23 +330,20 @@ impl std::error::Error for ParametersError {
     }
 }
 
-/// Put the values of `kinds` into `sc`. With automatic damping and
-/// actuator time constant (`auto`: whether each is on) the values show
-/// the automatic choices for the material now in the scene.
-fn apply(kinds: &[Parameter], auto: (bool, bool), sc: &mut Scene, values: &mut [f64]) {
-    let (auto_damping, auto_actuator) = auto;
+/// Put the values of `kinds` into `sc`. With automatic damping on
+/// (`auto_damping`) the damping values show the automatic choices for the
+/// material now in the scene.
+fn apply(kinds: &[Parameter], auto_damping: bool, sc: &mut Scene, values: &mut [f64]) {
     sc.auto_damping = auto_damping;
     for (p, &x) in kinds.iter().zip(values.iter()) {
         p.apply(sc, x);
     }
-    if auto_actuator {
-        sc.actuator_time_constant = None;
-    }
     let ph = physics(sc);
     for (p, x) in kinds.iter().zip(values.iter_mut()) {
-        let shows_auto =
-            (auto_damping && p.is_damping()) || (auto_actuator && *p == ActuatorTimeConstant);
-        if shows_auto && let Some(v) = p.value(sc, &ph) {
+        if auto_damping
+            && p.is_damping()
+            && let Some(v) = p.value(sc, &ph)
+        {
             *x = v;
         }
     }

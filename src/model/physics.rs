@@ -31,11 +31,18 @@ pub fn physics(sc: &Scene) -> Physics {
 
 /// Default damping: mass-proportional damping of the deformation rate
 /// (rigid motion undamped, see [`crate::rigid`]) with damping ratio
-/// [`AUTO_DAMPING_RATIO`] on the folding mode (`folding_omega`). Every
+/// [`AUTO_DAMPING_RATIO`] on the folding mode ([`folding_frequency`]). Every
 /// deformation mode then decays at the same rate alpha / 2, so a fold
 /// settles within a few of its periods.
 fn auto_alpha(sc: &Scene, k_per_length: f64) -> f64 {
     2.0 * AUTO_DAMPING_RATIO * folding_omega(sc, k_per_length)
+}
+
+/// The folding mode's angular frequency (rad/s) of the scene's sheet: what
+/// the default damping is tuned to, and a yardstick for a servo's time
+/// constant (a servo n times faster than the sheet folds: 1 / (n omega)).
+pub fn folding_frequency(sc: &Scene) -> f64 {
+    folding_omega(sc, physics(sc).crease_k_per_length)
 }
 
 /// The folding mode's angular frequency (rad/s): a panel of the mean facet
@@ -50,23 +57,9 @@ fn folding_omega(sc: &Scene, k_per_length: f64) -> f64 {
     (3.0 * k_per_length / (m.density * m.thickness * w.powi(3))).sqrt()
 }
 
-/// The automatic actuator's natural frequency over the folding mode's.
-pub const AUTO_ACTUATOR_BANDWIDTH: f64 = 4.0;
-
-/// The actuators' time constant (s): the scene's, or automatic: the
-/// natural frequency [`AUTO_ACTUATOR_BANDWIDTH`] times the folding mode's
-/// (`folding_omega`), fast against the sheet's folding and slow against
-/// its facets' bending, so a held or stepped input folds the sheet without
-/// ringing the facets. 0 where the folding frequency is not positive (no
-/// crease stiffness).
+/// The actuators' time constant (s): the scene's servo, or 0, the ideal
+/// actuator (the input is the rest angle or moment at once). There is no
+/// automatic value: a servo is part of the plant the user chooses.
 pub fn actuator_time_constant(sc: &Scene) -> f64 {
-    if let Some(t) = sc.actuator_time_constant {
-        return t;
-    }
-    let omega = folding_omega(sc, physics(sc).crease_k_per_length);
-    if omega > 0.0 && omega.is_finite() {
-        1.0 / (AUTO_ACTUATOR_BANDWIDTH * omega)
-    } else {
-        0.0
-    }
+    sc.actuator_time_constant.unwrap_or(0.0)
 }

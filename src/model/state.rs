@@ -43,10 +43,6 @@ pub struct ModelState {
     #[serde(default)]
     #[doc(hidden)]
     pub damping_set: bool,
-    /// Whether `actuator.time_constant` was set (the automatic one is then off).
-    #[serde(default)]
-    #[doc(hidden)]
-    pub actuator_set: bool,
     /// Each actuator's value and rate: what its input has moved it to
     /// ([`crate::model::actuator_time_constant`]).
     #[serde(default)]
@@ -228,7 +224,7 @@ impl Model {
         let moving = self.scene.obstacles.iter().filter(|o| o.moving).count();
         check_memory(&s.memory, running, (n, nc, moving))?;
         let checked = self
-            .check_parameters(&s.parameters, s.damping_set, s.actuator_set)
+            .check_parameters(&s.parameters, s.damping_set)
             .map_err(|e| e.to_string())?;
         if let Some(o) = &s.outputs {
             if o.len() != self.outputs.len() {

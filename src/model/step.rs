@@ -3,7 +3,7 @@
 //! size the step control proposes ([`crate::solver::step_control`]), and
 //! what it reports.
 
-use super::drive::{DriveValues, actuator_response, ramp_response};
+use super::inputs::{DriveValues, StepSignal};
 use super::system::System;
 use super::{Error, Model, ModelState, Phase};
 use crate::solver::step_control::{StepController, Verdict, equal_substeps};
@@ -42,7 +42,9 @@ pub struct StepReport {
     pub factorizations: usize,
     /// Smallest internal step used, s.
     pub min_step: f64,
-    /// CPU time (the stepping thread's clock) assembling forces and matrices, s.
+    /// CPU time (the stepping thread's clock) assembling forces and
+    /// matrices, s; zero unless phase timing is on
+    /// ([`crate::solver::set_phase_timing`]), as the two below.
     pub assembly_time: f64,
     /// CPU time in sparse numeric factorizations, s.
     pub factor_time: f64,
@@ -162,24 +164,9 @@ impl Model {
                     })?,
             ),
         };
-        for (k, a) in state.actuators.iter_mut().enumerate() {
-            *a = adv.actuator(k, big_h);
-        }
-        // An input with a second derivative goes on along its parabola
-        // until it is set again.
-        for (s1, s2) in state
-            .input_slopes
-            .iter_mut()
-            .zip(&state.input_second_derivatives)
-        {
-            *s1 += s2 * big_h;
-        }
-        let mut u = std::mem::take(&mut adv.u);
-        adv.commands_at(big_h, &mut u);
+        adv.signal.finish(state);
         let report = adv.report;
         self.state.time = t0 + big_h;
-        self.state.inputs_now.clone_from(&u);
-        self.state.inputs_next = u;
         self.read_cache = Default::default();
         self.state.outputs = ev.map(|ev| self.compute_outputs(&ev, &d_end));
         let d = &self.state.dynamics;
@@ -245,25 +232,15 @@ fn moved_obstacles_clear(
     })
 }
 
-/// One advance in progress: its inputs, the drive of the step at hand, and
-/// the work so far.
+/// One advance in progress: its inputs' signals, the drive of the step at
+/// hand, and the work so far.
 struct Advance {
-    big_h: f64,
     t0: f64,
-    /// Inputs at the start, at the end before slopes, and their first and
-    /// second derivatives.
-    u0: Vec<f64>,
-    u1: Vec<f64>,
-    slopes: Vec<f64>,
-    second: Vec<f64>,
-    /// The actuators' time constant, and their values and rates at the start.
-    tau: f64,
-    act0: Vec<[f64; 2]>,
+    big_h: f64,
+    /// The inputs over the advance ([`crate::model::inputs`]).
+    signal: StepSignal,
     /// Inputs acting at the step at hand's end.
     u: Vec<f64>,
-    /// The built-in ramp and the inputs it drives (in place of the
-    /// master's values).
-    ramp: (crate::scene::InputRamp, Vec<usize>),
     /// The drive at the start of the step at hand (its work over the step) ...
     d_start: DriveValues,
     /// ... and at its end.
@@ -283,17 +260,11 @@ impl Advance {
         ramp: (crate::scene::InputRamp, Vec<usize>),
     ) -> Advance {
         let mut adv = Advance {
-            big_h,
             t0: state.time,
-            u1: state.inputs_next.clone(),
-            slopes: state.input_slopes.clone(),
-            second: state.input_second_derivatives.clone(),
-            tau: sys.actuator_tau,
-            act0: state.actuators.clone(),
+            big_h,
+            signal: StepSignal::new(state, sys.actuation, big_h, ramp),
             u: state.inputs_now.clone(),
             d_start: DriveValues::default(),
-            u0: state.inputs_now.clone(),
-            ramp,
             d: DriveValues::default(),
             next: Dynamics::default(),
             report: StepReport {
@@ -303,7 +274,7 @@ impl Advance {
             linear_times: sys.stepper.linear_times(&sys.solver),
         };
         let mut u = std::mem::take(&mut adv.u);
-        adv.inputs_at(0.0, &mut u);
+        adv.signal.inputs_at(0.0, &mut u);
         sys.inputs.drive_into(&u, &mut adv.d_start);
         adv.move_obstacles(sys, &u, 0.0, true);
         adv.u = u;
@@ -316,9 +287,11 @@ impl Advance {
         if sys.inputs.obstacles.is_empty() {
             return;
         }
-        let d1: Vec<f64> = (0..u.len()).map(|k| self.command_rate(k, e)).collect();
+        let d1: Vec<f64> = (0..u.len())
+            .map(|k| self.signal.command_rate(k, e))
+            .collect();
         let d2: Vec<f64> = (0..u.len())
-            .map(|k| self.second.get(k).copied().unwrap_or(0.0))
+            .map(|k| self.signal.command_acceleration(k))
             .collect();
         let d = if start {
             &mut self.d_start
@@ -326,58 +299,6 @@ impl Advance {
             &mut self.d
         };
         sys.inputs.move_obstacles(u, (&d1, &d2), d);
-    }
-
-    /// The inputs as the master set them at elapsed time `e` of this
-    /// advance (held, ramped, with their slopes).
-    fn commands_at(&self, e: f64, u: &mut [f64]) {
-        for (k, x) in u.iter_mut().enumerate() {
-            *x = self.command(k, e);
-        }
-        for &k in &self.ramp.1 {
-            u[k] = self.ramp.0.value(self.t0 + e);
-        }
-    }
-
-    /// Input `k` as the master set it at elapsed time `e`.
-    fn command(&self, k: usize, e: f64) -> f64 {
-        let s2 = self.second.get(k).copied().unwrap_or(0.0);
-        self.u0[k]
-            + (self.u1[k] - self.u0[k]) * (e / self.big_h)
-            + (self.slopes[k] + 0.5 * s2 * e) * e
-    }
-
-    /// The inputs acting on the sheet at elapsed time `e`: the commands,
-    /// each actuator's replaced by its response.
-    fn inputs_at(&self, e: f64, u: &mut [f64]) {
-        self.commands_at(e, u);
-        if self.tau > 0.0 {
-            for (k, x) in u.iter_mut().enumerate().take(self.act0.len()) {
-                *x = self.actuator(k, e)[0];
-            }
-        }
-    }
-
-    /// Actuator `k`'s value and rate at elapsed time `e` (its response to
-    /// the master's input or to the built-in ramp).
-    fn actuator(&self, k: usize, e: f64) -> [f64; 2] {
-        if self.ramp.1.contains(&k) {
-            return ramp_response(self.tau, self.act0[k], &self.ramp.0, self.t0, e);
-        }
-        let slope = (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k];
-        let s2 = self.second.get(k).copied().unwrap_or(0.0);
-        if self.tau > 0.0 {
-            actuator_response(self.tau, self.act0[k], self.u0[k], [slope, s2], e)
-        } else {
-            [self.command(k, e), self.command_rate(k, e)]
-        }
-    }
-
-    /// Input `k`'s rate of change as the master set it, at elapsed time
-    /// `e` (the derivative of [`Advance::command`]).
-    fn command_rate(&self, k: usize, e: f64) -> f64 {
-        let s2 = self.second.get(k).copied().unwrap_or(0.0);
-        (self.u1[k] - self.u0[k]) / self.big_h + self.slopes[k] + s2 * e
     }
 
     fn too_many(&self, cap: usize) -> Error {
@@ -504,7 +425,7 @@ impl Advance {
         s_end: f64,
     ) -> Result<Outcome, Failure> {
         let mut u = std::mem::take(&mut self.u);
-        self.inputs_at(s_end, &mut u);
+        self.signal.inputs_at(s_end, &mut u);
         sys.inputs.drive_into(&u, &mut self.d);
         self.move_obstacles(sys, &u, s_end, false);
         self.u = u;

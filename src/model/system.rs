@@ -2,7 +2,7 @@
 //! solver, stepper settings and the input map ([`Model::build`]).
 
 use super::attach::{self, About, FrameInput, Reaction, Reactions};
-use super::drive::{DriveValues, InputMap};
+use super::inputs::{Actuation, DriveValues, InputMap};
 use super::{Error, Model, fold_edges, physics};
 use crate::assembly::{Assembler, EvalError, Evaluation, State};
 use crate::contact::ContactTerm;
@@ -31,8 +31,8 @@ pub(super) struct System {
     pub(super) inputs: InputMap,
     /// For each `crease[e]` output: the crease ends averaged.
     pub(super) angle_ends: Vec<Vec<usize>>,
-    /// The actuators' time constant (s; 0: they follow their inputs at once).
-    pub(super) actuator_tau: f64,
+    /// How the actuators follow their inputs.
+    pub(super) actuation: Actuation,
     /// The scene's solver settings it was built with (step bounds, the
     /// internal step limit, the numerical constants).
     pub(super) settings: SolverSettings,
@@ -242,7 +242,7 @@ impl System {
             },
             reactions,
             angle_ends,
-            actuator_tau: super::actuator_time_constant(sc),
+            actuation: Actuation::of(sc),
             asm,
         })
     }
@@ -442,6 +442,7 @@ fn stepper(
                 stick_bound,
                 max_newton: s.max_newton,
                 newton: s.newton,
+                error_filter: s.error_filter,
             };
             let scales = ga::Scales {
                 newton: asm.scales(length),

@@ -2,11 +2,11 @@
 //! outputs ([`VariableSpec`] tables in value-reference order), setting
 //! inputs and reading outputs. Parameters are in [`super::parameters`].
 
-use super::drive::DriveValues;
+use super::inputs::DriveValues;
 use super::{Error, Model, Phase};
 use crate::assembly::Evaluation;
 use crate::ids::{FoldEdgeId, VertexId};
-use crate::scene::{ActuatorMode, InputTiming, Scene};
+use crate::scene::{ActuatorMode, Scene};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -344,131 +344,6 @@ impl Model {
     /// Outputs: vertex positions, crease angles, energies (as the scene selects).
     pub fn outputs(&self) -> &[VariableSpec] {
         &self.outputs
-    }
-
-    /// Value of input `i` as last set (in force now; with ramped inputs,
-    /// the value the next advance ends at).
-    pub fn input(&self, id: InputId) -> Result<f64, Error> {
-        let i = id.0;
-        self.input_spec(i)?;
-        Ok(match self.scene.solver.input_timing {
-            InputTiming::Hold => self.state.inputs_now[i],
-            InputTiming::Ramp => self.state.inputs_next[i],
-        })
-    }
-
-    fn input_spec(&self, i: usize) -> Result<&VariableSpec, Error> {
-        self.inputs.get(i).ok_or(Error::NoSuchVariable {
-            kind: "input",
-            index: i,
-        })
-    }
-
-    /// Set input `i`. Held inputs (the default): the value is in force from
-    /// now and held over the next advance; its slope is reset to zero.
-    /// Ramped inputs: the value the next advance ends at. Non-finite values,
-    /// and values beyond [`crate::scene::limits::MAX_MAGNITUDE`], are
-    /// rejected.
-    pub fn set_input(&mut self, id: InputId, value: f64) -> Result<(), Error> {
-        let i = id.0;
-        let spec = self.input_spec(i)?;
-        if let Err(source) = crate::scene::limits::check_number(value) {
-            return Err(Error::OutOfLimits {
-                name: spec.name.clone(),
-                value,
-                source,
-            });
-        }
-        if self.is_ramped(i) {
-            // The built-in ramp drives it (parameter ramp.time): not used.
-            return Ok(());
-        }
-        self.state.inputs_next[i] = value;
-        if self.state.phase == Phase::Setup || self.scene.solver.input_timing == InputTiming::Hold {
-            // An actuator follows its input at once where its time constant
-            // is 0 (and before initialization, where it starts at rest).
-            let at_once = match (&self.sys, self.state.phase) {
-                (Some(sys), Phase::Running) => sys.actuator_tau == 0.0,
-                _ => true,
-            };
-            if i < self.state.actuators.len() && at_once {
-                if let (Some(sys), Phase::Running) = (&self.sys, self.state.phase) {
-                    // A held input that jumps does its work at once.
-                    let u = self.drive_inputs();
-                    self.state.work.input +=
-                        sys.inputs
-                            .jump_work(&sys.asm, i, value, &u, &self.state.crease_theta);
-                }
-                self.state.actuators[i] = [value, 0.0];
-                // The crease energy is read under the rest angles now in force.
-                self.read_cache = Default::default();
-            }
-            self.state.inputs_now[i] = value;
-        }
-        self.state.input_slopes[i] = 0.0;
-        if let Some(s2) = self.state.input_second_derivatives.get_mut(i) {
-            *s2 = 0.0;
-        }
-        Ok(())
-    }
-
-    /// Set the `order`-th time derivative of input `id` (order 1 or 2: the
-    /// input then follows its Taylor polynomial from its value over the
-    /// advance, as `fmi2SetRealInputDerivatives` asks). It applies until the
-    /// input or the derivative is set again (an input with a second
-    /// derivative goes on along its parabola: its first derivative grows
-    /// by the second times each advance). Not with ramped inputs.
-    pub fn set_input_derivative(
-        &mut self,
-        id: InputId,
-        order: i32,
-        value: f64,
-    ) -> Result<(), Error> {
-        let i = id.0;
-        let spec = self.input_spec(i)?;
-        let bad = |reason: &str| Error::BadValue {
-            name: format!("derivative of order {order} of {}", spec.name),
-            value,
-            reason: reason.into(),
-        };
-        if !(1..=2).contains(&order) {
-            return Err(bad("first and second derivatives are taken (order 1 or 2)"));
-        }
-        if self.scene.solver.input_timing == InputTiming::Ramp {
-            return Err(bad(
-                "the scene ramps its inputs (solver input_timing \"ramp\"); derivatives need held inputs",
-            ));
-        }
-        if let Err(source) = crate::scene::limits::check_number(value) {
-            return Err(Error::OutOfLimits {
-                name: format!("derivative of order {order} of {}", spec.name),
-                value,
-                source,
-            });
-        }
-        if !self.is_ramped(i) {
-            if order == 1 {
-                self.state.input_slopes[i] = value;
-            } else {
-                self.state
-                    .input_second_derivatives
-                    .resize(self.inputs.len(), 0.0);
-                self.state.input_second_derivatives[i] = value;
-            }
-        }
-        Ok(())
-    }
-
-    /// Whether input `i` follows the built-in ramp (`ramp.time` > 0 and a
-    /// rest-angle actuator) instead of the values set on it.
-    pub(super) fn is_ramped(&self, i: usize) -> bool {
-        self.state.phase == Phase::Running
-            && self.scene.ramp.is_on()
-            && self
-                .scene
-                .actuators
-                .get(i)
-                .is_some_and(|a| a.mode == crate::scene::ActuatorMode::RestAngle)
     }
 
     /// Current values of all outputs, in the order of [`Model::outputs`].

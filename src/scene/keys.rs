@@ -7,14 +7,14 @@
 //! | `ancf:crease` | `{length_scale}` or `{stiffness_per_length}`, optional `damping_per_length` |
 //! | `ancf:damping` | `{alpha, beta}` or `"auto"` |
 //! | `ancf:actuators` | `[{name, edges, mode, start}]` |
-//! | `ancf:actuation` | `{time_constant}` (s, or `"auto"`) |
+//! | `ancf:actuation` | `{time_constant}` (s: the actuators' servo; 0 or absent: ideal) |
 //! | `ancf:supports` | `[{vertices, fix}]` |
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
 //! | `ancf:attachments` | `[{name, vertices}]` |
 //! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
 //! | `ancf:obstacles` | `[{name, shape, ...its parameters, friction, moving}]` |
-//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, quadrature}` |
+//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, error_filter, quadrature}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies", "reactions"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
 //! | `ancf:import` | `{size, unit, f_edges}`: how the FOLD geometry is read |
@@ -125,7 +125,7 @@ pub struct PhysicsKeys {
     pub damping: Option<(f64, f64)>,
     /// `ancf:actuators`; `None`: the default actuator `fold`.
     pub actuators: Option<Vec<ActuatorSpec>>,
-    /// `ancf:actuation.time_constant`; `None`: automatic.
+    /// `ancf:actuation.time_constant`; `None`: ideal actuators.
     pub actuator_time_constant: Option<f64>,
     /// `ancf:supports`.
     pub supports: Vec<SupportSpec>,
@@ -239,6 +239,16 @@ impl<'a> Obj<'a> {
         self.get(f)
             .map(|v| expect_string(v, &self.path(f)))
             .transpose()
+    }
+    fn boolean(&self, f: &str) -> Result<Option<bool>, SceneError> {
+        match self.get(f) {
+            None => Ok(None),
+            Some(Value::Bool(b)) => Ok(Some(*b)),
+            Some(other) => Err(SceneError::invalid(
+                self.path(f),
+                format!("expected true or false, found {}", type_name(other)),
+            )),
+        }
     }
     fn required(&self, f: &str) -> Result<&'a Value, SceneError> {
         self.get(f)
@@ -627,10 +637,18 @@ fn key_actuators(
 fn key_actuation(
     v: &Value,
     p: &mut PhysicsKeys,
-    _warnings: &mut Vec<String>,
+    warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let o = Obj::new("ancf:actuation", v, &["time_constant"])?;
-    if o.get("time_constant").and_then(Value::as_str) != Some("auto") {
+    if o.get("time_constant").and_then(Value::as_str) == Some("auto") {
+        // Before 2026-12-06 "auto" chose a mesh-dependent servo; there is
+        // no automatic value any more.
+        warnings.push(
+            "ancf:actuation.time_constant: \"auto\" is no longer supported (there is no automatic \
+             servo); the actuators are ideal. Give a time constant in seconds for a servo"
+                .into(),
+        );
+    } else {
         p.actuator_time_constant = o.num_limited("time_constant", "actuator.time_constant")?;
     }
     Ok(())
@@ -747,16 +765,7 @@ fn key_contact(
             "subdivisions",
         ],
     )?;
-    let enabled = match o.get("enabled") {
-        None => false,
-        Some(Value::Bool(b)) => *b,
-        Some(other) => {
-            return Err(SceneError::invalid(
-                o.path("enabled"),
-                format!("expected true or false, found {}", type_name(other)),
-            ));
-        }
-    };
+    let enabled = o.boolean("enabled")?.unwrap_or(false);
     let d = ContactSettings::default();
     // The rules of scene::limits, which the FMU's scene check runs too.
     let friction = o.num_limited("friction", "contact.friction")?;
@@ -990,6 +999,7 @@ fn key_solver(
             "stop_time",
             "max_internal_steps",
             "input_timing",
+            "error_filter",
             "quadrature",
         ],
     )?;
@@ -1032,8 +1042,16 @@ fn key_solver(
         s.input_timing = enum_value(
             &o.path("input_timing"),
             name,
-            &[("hold", InputTiming::Hold), ("ramp", InputTiming::Ramp)],
+            &[
+                ("hold", InputTiming::Hold),
+                ("first_order_hold", InputTiming::FirstOrderHold),
+                // The name before 2026-12-06.
+                ("ramp", InputTiming::FirstOrderHold),
+            ],
         )?;
+    }
+    if let Some(b) = o.boolean("error_filter")? {
+        s.error_filter = b;
     }
     if let Some(name) = o.string("newton")? {
         s.newton = enum_value(

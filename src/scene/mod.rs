@@ -376,9 +376,15 @@ pub struct SolverSettings {
     /// it fails cleanly, whatever the integrator: bounds the work of a call.
     #[serde(default = "default_max_internal_steps")]
     pub max_internal_steps: usize,
-    /// How an input set before a step acts over it.
+    /// How an input set before a step acts over it (parameter
+    /// `input.first_order_hold`).
     #[serde(default)]
     pub input_timing: InputTiming,
+    /// Filter the local error estimate through the iteration matrix
+    /// (parameter `solver.error_filter`): see
+    /// [`crate::solver::generalized_alpha`]. Off by default.
+    #[serde(default)]
+    pub error_filter: bool,
     /// Quadrature of the shell energy: the 7-point rule (default) or the
     /// 12-point rule, 1.7x the element's cost with errors equal to two
     /// digits on refined meshes (`src/element/quadrature.rs`).
@@ -403,14 +409,16 @@ fn default_max_internal_steps() -> usize {
 /// How an input value set before a step acts over that step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum InputTiming {
-    /// FMI 2.0 co-simulation: the value set before a step from t is the
-    /// input at t, held over the step (plus the slope the master gives
-    /// with `fmi2SetRealInputDerivatives`).
+    /// FMI 2.0 co-simulation (zero-order hold): the value set before a
+    /// step from t is the input at t, held over the step (plus the slope
+    /// the master gives with `fmi2SetRealInputDerivatives`).
     #[default]
     Hold,
-    /// The value set before a step from t is reached at its end, ramped
-    /// linearly from the value in force at t (a master that sets u(t + h)).
-    Ramp,
+    /// First-order hold: the value set before a step from t is reached at
+    /// its end, ramped linearly from the value in force at t; a sample acts
+    /// one step late, without the jumps of a held staircase.
+    #[serde(alias = "Ramp")]
+    FirstOrderHold,
 }
 
 impl Default for SolverSettings {
@@ -426,6 +434,7 @@ impl Default for SolverSettings {
             stop_time: 1.0,
             max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
             input_timing: InputTiming::Hold,
+            error_filter: false,
             quadrature: crate::element::Rule::Dunavant7,
             bending: crate::element::Bending::Pointwise,
             integration: Default::default(),
@@ -509,9 +518,9 @@ pub struct Scene {
     pub actuators: Vec<Actuator>,
     /// Time constant of the actuators' response to their inputs (s): each
     /// actuator follows its input as a critically damped second-order
-    /// system of natural frequency 1 / time_constant (0: at once). `None`:
-    /// automatic, from the sheet's folding frequency
-    /// ([`crate::model::actuator_time_constant`]).
+    /// system of natural frequency 1 / time_constant, a servo the user
+    /// chooses. `None` or 0: ideal actuators, the input acts at once (the
+    /// default).
     #[serde(default)]
     pub actuator_time_constant: Option<f64>,
     /// Supports.

@@ -19,8 +19,8 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use nalgebra::DMatrix;
-// Phase times are CPU time: the calling thread's clock, not the wall.
-use crate::cpu_time::CpuInstant as Instant;
+// Phase times are CPU time, read where phase timing is on (phase_timer).
+use crate::solver::phase_timer::PhaseTimer;
 
 /// Why the sparse solver could not analyse, factor or solve.
 #[derive(Clone, Debug, PartialEq)]
@@ -485,7 +485,7 @@ impl SparseSolver {
     /// Factor the matrix with these values (in pattern order). Any
     /// low-rank part of the previous matrix is dropped.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        let start = Instant::now();
+        let start = PhaseTimer::start();
         self.low_rank = None;
         let r = self.factor_inner(values);
         self.stats.factor_time += start.elapsed();
@@ -498,7 +498,7 @@ impl SparseSolver {
     /// `rank x rank` solve. Errors if nothing is factored, `U` has the
     /// wrong size, or the sum is singular.
     pub fn set_low_rank(&mut self, lr: LowRank) -> Result<(), LinearError> {
-        let start = Instant::now();
+        let start = PhaseTimer::start();
         let r = self.set_low_rank_inner(lr);
         self.stats.factor_time += start.elapsed();
         r
@@ -656,7 +656,7 @@ impl SparseSolver {
     /// Solve with the latest factorization, overwriting `rhs` with the
     /// solution. Errors if nothing is factored or the result is not finite.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), LinearError> {
-        let start = Instant::now();
+        let start = PhaseTimer::start();
         let r = self
             .solve_inner(rhs)
             .and_then(|()| self.apply_low_rank(rhs));

@@ -1,10 +1,14 @@
-/* A plain C host of the FMU, run under valgrind by scripts/c_host_test.sh.
+/* A plain C host of the FMU, run natively and under valgrind by
+ * scripts/c_host_test.sh, and compiled with MinGW-w64 and run under wine
+ * by scripts/windows_test.sh.
  *
- * Usage: host FMU_DIR (an unpacked .fmu: modelDescription.xml,
- * binaries/linux64/origami_fmu.so, resources/).
+ * Usage: host FMU_DIR [OUTPUTS.csv] (FMU_DIR an unpacked .fmu:
+ * modelDescription.xml, binaries/<platform>/, resources/).
  *
- * It loads the binary with dlopen, reads the GUID and the value references
- * of the inputs and outputs from modelDescription.xml, and drives one
+ * It loads binaries/linux64/origami_fmu.so with dlopen, or on Windows
+ * binaries/win64/origami_fmu.dll with LoadLibrary, reads the GUID and the
+ * value references of the inputs and outputs from modelDescription.xml,
+ * and drives one
  * co-simulation: setup, initialization, an input, steps (outputs finite),
  * FMU states (get/set/free and a serialize round trip, both reproducing a
  * step bit for bit; a flipped bit or a truncation refused), reset, a
@@ -12,18 +16,51 @@
  * its instance). Between
  * those it calls with NULL, misaligned and foreign arguments and checks
  * that each gets fmi2Error (or NULL from fmi2Instantiate), not a crash.
- * Exit status 0 when every check holds.
+ * With OUTPUTS.csv it then runs a fresh instance for 100 steps of 1 ms with
+ * the first input ramped from 0 to 1 (slopes given) and writes the time and every output after each
+ * step (%.17g, under a header of the names), to compare platforms. Exit status 0 when every check holds.
  *
  * The FMI 2.0 prototypes are declared here by hand (the standard's headers
  * are not vendored); only the functions used are looked up. */
+#ifdef _WIN32
+/* MinGW's C99 printf (%zu, %.17g as on Linux) rather than msvcrt's. */
+#define __USE_MINGW_ANSI_STDIO 1
+#include <windows.h>
+#else
 #define _GNU_SOURCE
 #include <dlfcn.h>
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* The shared library calls, dlfcn's or the Windows API's. */
+#ifdef _WIN32
+typedef HMODULE library;
+#define BINARY "\\binaries\\win64\\origami_fmu.dll"
+static library open_library(const char *path) { return LoadLibraryA(path); }
+static void *library_symbol(library lib, const char *name) {
+    return (void *)GetProcAddress(lib, name);
+}
+static int close_library(library lib) { return FreeLibrary(lib) ? 0 : -1; }
+static const char *library_error(void) {
+    static char text[64];
+    snprintf(text, sizeof text, "Windows error %lu", (unsigned long)GetLastError());
+    return text;
+}
+static char *absolute_path(const char *path) { return _fullpath(NULL, path, 0); }
+#else
+typedef void *library;
+#define BINARY "/binaries/linux64/origami_fmu.so"
+static library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void *library_symbol(library lib, const char *name) { return dlsym(lib, name); }
+static int close_library(library lib) { return dlclose(lib); }
+static const char *library_error(void) { return dlerror(); }
+static char *absolute_path(const char *path) { return realpath(path, NULL); }
+#endif
 
 typedef void *fmi2Component;
 typedef void *fmi2ComponentEnvironment;
@@ -119,10 +156,10 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     if (status >= fmi2OK && status <= fmi2Pending) logged[status]++;
 }
 
-static void *sym(void *lib, const char *name) {
-    void *p = dlsym(lib, name);
+static void *sym(library lib, const char *name) {
+    void *p = library_symbol(lib, name);
     if (!p) {
-        fprintf(stderr, "host.c: %s not exported: %s\n", name, dlerror());
+        fprintf(stderr, "host.c: %s not exported: %s\n", name, library_error());
         exit(2);
     }
     return p;
@@ -163,8 +200,10 @@ static int attribute(const char *p, const char *end, const char *name, char *out
 #define MAX_VARS 4096
 static fmi2ValueReference inputs[MAX_VARS], outputs[MAX_VARS];
 static size_t n_inputs, n_outputs;
+static char output_names[MAX_VARS][128];
 
-/* The GUID, and the value references of inputs and outputs. */
+/* The GUID, the value references of inputs and outputs, and the names of
+ * the outputs. */
 static void read_model_description(const char *xml, char *guid, size_t cap) {
     if (!attribute(xml, xml + strlen(xml), "guid=\"", guid, cap)) {
         fprintf(stderr, "host.c: no guid in modelDescription.xml\n");
@@ -174,15 +213,19 @@ static void read_model_description(const char *xml, char *guid, size_t cap) {
         /* Attribute values never hold '<' (escaped), so the element ends
          * before its closing tag. */
         const char *end = strstr(p, "</ScalarVariable>");
-        char vr[32], causality[32];
+        char vr[32], causality[32], name[128];
         if (!end || !attribute(p, end, " valueReference=\"", vr, sizeof vr) ||
-            !attribute(p, end, " causality=\"", causality, sizeof causality)) {
+            !attribute(p, end, " causality=\"", causality, sizeof causality) ||
+            !attribute(p, end, " name=\"", name, sizeof name)) {
             fprintf(stderr, "host.c: unreadable ScalarVariable\n");
             exit(2);
         }
         fmi2ValueReference r = (fmi2ValueReference)strtoul(vr, NULL, 10);
         if (!strcmp(causality, "input") && n_inputs < MAX_VARS) inputs[n_inputs++] = r;
-        if (!strcmp(causality, "output") && n_outputs < MAX_VARS) outputs[n_outputs++] = r;
+        if (!strcmp(causality, "output") && n_outputs < MAX_VARS) {
+            memcpy(output_names[n_outputs], name, sizeof name);
+            outputs[n_outputs++] = r;
+        }
     }
     if (n_inputs == 0 || n_outputs == 0) {
         fprintf(stderr, "host.c: the scene needs an input and outputs\n");
@@ -221,13 +264,50 @@ static void bad_handle(fmi2Component c) {
     F.FreeInstance(c); /* ignored */
 }
 
+/* A fresh instance: 100 steps of 1 ms, the first input ramped from 0 to 1
+ * with its slope given (fmi2SetRealInputDerivatives), the time and every
+ * output after each step written to csv_path. A smooth drive, so that the
+ * trajectory is well conditioned: a held jump to 1 whips the sheet, and that
+ * motion moves by several percent when the tolerance changes by 1e-7, so two
+ * platforms' last bits would not compare the platforms. */
+static void trajectory(const char *guid, const char *uri, const char *csv_path) {
+    FILE *f = fopen(csv_path, "w");
+    if (!f) {
+        perror(csv_path);
+        exit(2);
+    }
+    fmi2Component c =
+        F.Instantiate("trajectory", fmi2CoSimulation, guid, uri, &callbacks, fmi2False, fmi2False);
+    CHECK(c != NULL);
+    if (!c) exit(1);
+    initialize(c);
+    double t = 0.0, rate = 10.0;
+    const fmi2Integer order = 1;
+    static double v[MAX_VARS];
+    fprintf(f, "time");
+    for (size_t i = 0; i < n_outputs; i++) fprintf(f, ",\"%s\"", output_names[i]);
+    fprintf(f, "\n");
+    for (int k = 0; k < 100; k++) {
+        double fold = rate * t;
+        CHECK(F.SetReal(c, inputs, 1, &fold) == fmi2OK);
+        CHECK(F.SetRealInputDerivatives(c, inputs, 1, &order, &rate) == fmi2OK);
+        t = step_and_read(c, t, 1e-3, 1, v);
+        fprintf(f, "%.17g", t);
+        for (size_t i = 0; i < n_outputs; i++) fprintf(f, ",%.17g", v[i]);
+        fprintf(f, "\n");
+    }
+    CHECK(F.Terminate(c) == fmi2OK);
+    F.FreeInstance(c);
+    CHECK(fclose(f) == 0);
+}
+
 int main(int argc, char **argv) {
-    if (argc != 2) {
-        fprintf(stderr, "usage: %s FMU_DIR\n", argv[0]);
+    if (argc != 2 && argc != 3) {
+        fprintf(stderr, "usage: %s FMU_DIR [OUTPUTS.csv]\n", argv[0]);
         return 2;
     }
     char path[4096], uri[4096 + 16], guid[128];
-    char *dir = realpath(argv[1], NULL);
+    char *dir = absolute_path(argv[1]);
     if (!dir) {
         perror(argv[1]);
         return 2;
@@ -236,13 +316,20 @@ int main(int argc, char **argv) {
     char *xml = read_file(path);
     read_model_description(xml, guid, sizeof guid);
     free(xml);
+#ifdef _WIN32
+    /* file:///C:/dir/resources: the drive path with forward slashes. */
+    snprintf(uri, sizeof uri, "file:///%s/resources", dir);
+    for (char *p = uri; *p; p++)
+        if (*p == '\\') *p = '/';
+#else
     snprintf(uri, sizeof uri, "file://%s/resources", dir);
-    snprintf(path, sizeof path, "%s/binaries/linux64/origami_fmu.so", dir);
+#endif
+    snprintf(path, sizeof path, "%s" BINARY, dir);
     free(dir);
 
-    void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    library lib = open_library(path);
     if (!lib) {
-        fprintf(stderr, "host.c: dlopen: %s\n", dlerror());
+        fprintf(stderr, "host.c: cannot load %s: %s\n", path, library_error());
         return 2;
     }
 #define LOAD(name) *(void **)(&F.name) = sym(lib, "fmi2" #name)
@@ -427,9 +514,10 @@ int main(int argc, char **argv) {
     F.FreeInstance(c1);
     F.FreeInstance(c2);
     F.FreeInstance(NULL);
+    if (argc == 3) trajectory(guid, uri, argv[2]);
 
-    if (dlclose(lib) != 0) {
-        fprintf(stderr, "host.c: dlclose: %s\n", dlerror());
+    if (close_library(lib) != 0) {
+        fprintf(stderr, "host.c: closing the library: %s\n", library_error());
         failures++;
     }
     printf("c_host: %d checks, %d failed (%zu inputs, %zu outputs)\n", checks, failures, n_inputs,

@@ -4,7 +4,7 @@
 #![allow(dead_code)] // each test file uses a different subset
 
 use origami_fmu::fmi::exports::*;
-use origami_fmu::fmi::resources::{SCENE_FILE, guid, scene_bytes};
+use origami_fmu::fmi::resources::{SCENE_FILE, file_uri, guid, scene_bytes};
 use origami_fmu::fmi::types::*;
 use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::square_with_diagonal;
@@ -94,7 +94,7 @@ pub fn resources(tag: &str, scene: &Scene) -> (String, String) {
     ));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join(SCENE_FILE), &bytes).unwrap();
-    (format!("file://{}", dir.display()), guid(&bytes))
+    (file_uri(&dir), guid(&bytes))
 }
 
 /// One instance with its log; freed on drop.

@@ -5,7 +5,12 @@ import zipfile
 
 from fmpy.validation import validate_fmu
 
-from fmu_helpers import ROOT, build, scene_path
+from fmu_helpers import ROOT, build, cli, scene_path
+
+# Where a cross-built win64 DLL is found, which `build` then packs too
+# (docs/fmu.md, Platforms): scripts/windows_test.sh leaves one.
+WIN64_DLLS = [cli().parent.parent / t / "release" / "origami_fmu.dll"
+              for t in ("x86_64-win7-windows-gnu", "x86_64-pc-windows-gnu")]
 
 
 def test_fmpy_validate_reports_no_problems(fmu, example):
@@ -15,12 +20,17 @@ def test_fmpy_validate_reports_no_problems(fmu, example):
 def test_fmu_layout(fmu, example):
     # a FOLD source also travels as resources/scene.fold
     extra = ["resources/scene.fold"] if scene_path(example).suffix == ".fold" else []
+    if any(p.is_file() for p in WIN64_DLLS):
+        extra.append("binaries/win64/origami_fmu.dll")
     with zipfile.ZipFile(fmu(example)) as z:
         assert sorted(z.namelist()) == sorted([
             "binaries/linux64/origami_fmu.so",
             "modelDescription.xml",
             "resources/scene.json",
         ] + extra)
+        assert z.read("binaries/linux64/origami_fmu.so")[:4] == b"\x7fELF"
+        if "binaries/win64/origami_fmu.dll" in extra:
+            assert z.read("binaries/win64/origami_fmu.dll")[:2] == b"MZ"
 
 
 def test_model_description_is_the_checked_in_one(fmu, example):

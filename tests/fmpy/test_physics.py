@@ -48,8 +48,8 @@ def test_undamped_run_conserves_energy(unzipped):
     50 ms, which must be positive (the ramp put energy in). At tolerance
     1e-6: the energy is constant to the integrator's accuracy, and the
     default 1e-4 lets it drift 1.6-1.8 % over those 950 ms (measured
-    2026-12-02). An ideal actuator (actuator.time_constant 0), so that the
-    rest angles stop with the input at 50 ms."""
+    2026-12-02). An ideal actuator (actuator.time_constant 0, the default,
+    set here explicitly), so that the rest angles stop with the input at 50 ms."""
     inst = Instance(unzipped("square"), "energy").initialize(
         {"solver.rho_inf": 1.0, "solver.tolerance": 1e-6,
          "actuator.time_constant": 0.0})
@@ -97,9 +97,9 @@ def test_forced_solver_failure_is_discarded_and_a_smaller_step_succeeds(unzipped
     FMI 2.0's retry: restore the state saved before the step and take a
     1 us step with the same input (held, the panel turns by about 2e-5
     rad): it succeeds with finite outputs. An ideal actuator
-    (actuator.time_constant 0): the torque acts at once (the automatic
-    actuator of this soft sheet, 0.13 s, would pass only 0.3 % of it
-    within the step, and the panel folds to 1 rad without a failure)."""
+    (actuator.time_constant 0, the default, set here explicitly): the
+    torque acts at once (a servo of 0.13 s would pass only 0.3 % of it
+    within the step, and the panel would fold to 1 rad without a failure)."""
     from fmpy.fmi2 import fmi2Terminated
 
     inst = Instance(unzipped("case_c_nocut"), "discard", logging_on=True).initialize(

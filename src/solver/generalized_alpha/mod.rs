@@ -102,6 +102,9 @@ pub struct Settings {
     pub max_newton: usize,
     /// Full or modified Newton.
     pub newton: NewtonMode,
+    /// Filter the local error estimate through the iteration matrix
+    /// ([`filter_error`]).
+    pub error_filter: bool,
 }
 
 /// [`Settings::stick_bound`] of a scene whose contact has friction: scaled
@@ -143,6 +146,8 @@ struct Workspace {
     jacobian: Option<JacobianPoint>,
     /// Secant updates of the kept matrix within a step.
     secant: Broyden,
+    /// The filtered error estimate on the free DOFs.
+    filtered: Vec<f64>,
 }
 
 /// The implicit stepper: generalized-alpha with Newton's iteration.
@@ -279,15 +284,17 @@ impl GeneralizedAlpha {
         };
         let have_rhs = predictor::predict(&ctx, next, ws, out);
         newton::iterate(&ctx, solver, have_rhs, next, ws, out)?;
-        out.error = local_error(
-            next,
-            cur,
-            asm,
-            attempt.h,
-            self.coeffs.beta,
-            &self.scales.error,
-            self.settings.tolerance,
-        );
+        let c = error_constant(attempt.h, self.coeffs.beta);
+        for (i, e) in ws.dq.iter_mut().enumerate() {
+            *e = match asm.free[i] {
+                FIXED => 0.0,
+                _ => c * (next.qdd[i] - cur.qdd[i]),
+            };
+        }
+        if self.settings.error_filter {
+            filter_error(asm, solver, self.coeffs, ws);
+        }
+        out.error = error_norm(asm, &ws.dq, &self.scales.error, self.settings.tolerance);
         Ok(())
     }
 }
@@ -338,24 +345,49 @@ impl StepContext<'_> {
     }
 }
 
-/// Local error estimate h^2 |beta - 1/6| (qdd_{n+1} - qdd_n) (at least
-/// h^2/24 of it), RMS over the free DOFs, scaled by tolerance and DOF size.
-fn local_error(
-    next: &Dynamics,
-    cur: &Dynamics,
-    asm: &Assembler,
-    h: f64,
-    beta: f64,
-    scales: &[f64],
-    tolerance: f64,
-) -> f64 {
-    let c = h * h * (beta - 1.0 / 6.0).abs().max(1.0 / 24.0);
+/// The local error estimate's factor: h^2 |beta - 1/6| (at least h^2/24)
+/// times the change of the acceleration over the step.
+fn error_constant(h: f64, beta: f64) -> f64 {
+    h * h * (beta - 1.0 / 6.0).abs().max(1.0 / 24.0)
+}
+
+/// Filter the raw estimate `ws.dq` (all DOFs) in place through the
+/// factored iteration matrix S = K + c_c C + c_m M: `S^-1 c_m M e`. A mode
+/// of frequency w keeps 1 / (1 + w^2 / c_m) of its estimate: resolved
+/// modes (w^2 << c_m, about 1 / (beta h^2)) all of it, stiff ones the
+/// displacement their acceleration change stands for. Left raw where the
+/// solver holds no factorization or the solve fails.
+fn filter_error(asm: &Assembler, solver: &mut SparseSolver, co: Coefficients, ws: &mut Workspace) {
+    let Some(h_matrix) = ws.jacobian.as_ref().map(|jp| jp.h) else {
+        return;
+    };
+    let cm = co.matrix(h_matrix).m;
+    asm.mass_mul(&ws.dq, &mut ws.mqdd);
+    ws.filtered.resize(asm.n_free, 0.0);
+    for (i, &fi) in asm.free.iter().enumerate() {
+        if fi != FIXED {
+            ws.filtered[fi] = cm * ws.mqdd[i];
+        }
+    }
+    if solver.solve_in_place(&mut ws.filtered).is_err() {
+        return;
+    }
+    for (i, &fi) in asm.free.iter().enumerate() {
+        if fi != FIXED {
+            ws.dq[i] = ws.filtered[fi];
+        }
+    }
+}
+
+/// RMS over the free DOFs of the error estimate `e`, scaled by tolerance
+/// and DOF size.
+fn error_norm(asm: &Assembler, e: &[f64], scales: &[f64], tolerance: f64) -> f64 {
     let mut sum = 0.0;
     let mut cnt = 0usize;
     for (i, &fi) in asm.free.iter().enumerate() {
         if fi != FIXED {
-            let e = c * (next.qdd[i] - cur.qdd[i]) / (tolerance * scales[i]);
-            sum += e * e;
+            let x = e[i] / (tolerance * scales[i]);
+            sum += x * x;
             cnt += 1;
         }
     }

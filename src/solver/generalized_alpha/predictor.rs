@@ -9,8 +9,8 @@
 use super::{StepContext, Workspace};
 use crate::assembly::FIXED;
 use crate::solver::stepper::{Dynamics, Outcome};
-// Phase times are CPU time: the calling thread's clock, not the wall.
-use crate::cpu_time::CpuInstant as Instant;
+// Phase times are CPU time, read where phase timing is on (phase_timer).
+use crate::solver::phase_timer::PhaseTimer;
 
 /// Which guess.
 #[derive(Clone, Copy, PartialEq)]
@@ -105,7 +105,7 @@ fn residual_size(
         }
     }
     ctx.update_rates(guess);
-    let t0 = Instant::now();
+    let t0 = PhaseTimer::start();
     let ok = ctx.residual(guess, ws, None).is_ok();
     out.assembly_time += t0.elapsed();
     if !ok {
