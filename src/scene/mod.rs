@@ -395,6 +395,10 @@ pub struct SolverSettings {
     /// digits on refined meshes (`src/element/quadrature.rs`).
     #[serde(default)]
     pub quadrature: crate::element::Rule,
+    /// The shell's bending energy (Rust API only, not a scene key: the
+    /// benches compare the split energy with the default).
+    #[serde(skip)]
+    pub bending: crate::element::Bending,
     /// The stepper's numerical constants (Rust API only, not a scene key).
     #[serde(skip)]
     pub integration: crate::solver::IntegrationParameters,
@@ -445,6 +449,7 @@ impl Default for SolverSettings {
             input_timing: InputTiming::Hold,
             error_filter: false,
             quadrature: crate::element::Rule::Dunavant7,
+            bending: crate::element::Bending::Pointwise,
             integration: Default::default(),
         }
     }
