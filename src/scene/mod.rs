@@ -412,7 +412,7 @@ fn default_max_internal_steps() -> usize {
 }
 
 /// Default of [`SolverSettings::max_step_cpu`], s.
-pub const DEFAULT_MAX_STEP_CPU: f64 = 60.0;
+pub const DEFAULT_MAX_STEP_CPU: f64 = 300.0;
 
 fn default_max_step_cpu() -> f64 {
     DEFAULT_MAX_STEP_CPU
