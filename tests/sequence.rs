@@ -585,3 +585,51 @@ fn rabbit_ears_blintz_folds_through_its_32_frames() {
     }
     println!("blintz: every frame's angles within {worst_angle:.3} deg");
 }
+
+/// A scene file (the FMU's `resources/scene.json`) whose sequence was
+/// edited is refused with the reason, never a panic; so is a model of a
+/// scene whose sequence does not fit it.
+#[test]
+fn a_tampered_sequence_is_refused() {
+    use origami_fmu::fmi::resources::{parse_scene, scene_bytes};
+    let (s, _) = load(&strip(two_stages())).unwrap();
+    let good: Value = serde_json::from_slice(&scene_bytes(&s)).unwrap();
+    assert!(parse_scene(&scene_bytes(&s)).is_ok());
+    let edits: Vec<(&str, Box<dyn Fn(&mut Value)>)> = vec![
+        ("add up to", Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(0.2))),
+        ("does not exist", Box::new(|v| v["sequence"]["stages"][1]["targets"][0][0] = json!(1_000_000))),
+        ("within [-pi, pi]", Box::new(|v| v["sequence"]["stages"][1]["targets"][0][1] = json!(10.0))),
+        ("folds no crease", Box::new(|v| v["sequence"]["stages"][1]["targets"] = json!([]))),
+        ("no stages", Box::new(|v| v["sequence"]["stages"] = json!([]))),
+        ("no rest_angle actuator", Box::new(|v| v["sequence"]["actuator"] = json!("push"))),
+        ("share", Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(-1.0))),
+        ("", Box::new(|v| v["sequence"]["stages"][0]["share"] = json!("half"))),
+    ];
+    for (what, edit) in edits {
+        let mut v = good.clone();
+        edit(&mut v);
+        let bytes = serde_json::to_vec(&v).unwrap();
+        let e = parse_scene(&bytes).expect_err(what).to_string();
+        assert!(e.contains(what), "{what}: {e}");
+    }
+    let mut bad = s.clone();
+    bad.sequence.as_mut().unwrap().stages[0].share = 0.9;
+    let e = Model::new(bad).err().unwrap().to_string();
+    assert!(e.contains("sequence: the shares add up to"), "{e}");
+}
+
+/// The pictures and the CLI's progress line say where the drive is.
+#[test]
+fn pictures_label_the_stage() {
+    let mut m = model(&strip(two_stages()));
+    m.initialize().unwrap();
+    drive(&mut m, 0.0, 0.75, 0.3, 0.0);
+    let sheet = origami_fmu::pictures::Sheet::new(&m);
+    let frame = sheet.frame(&m, &m.output_values());
+    assert_eq!(frame.stage.as_deref(), Some("stage 2/2, 50 %"));
+    let dir = std::env::temp_dir().join(format!("sequence_pictures_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    origami_fmu::pictures::write_gif(&dir.join("a.gif"), &sheet, &[&frame], "strip").unwrap();
+    origami_fmu::pictures::write_snapshots(&dir.join("a.png"), &sheet, &[&frame, &frame], "strip").unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
