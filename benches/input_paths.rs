@@ -30,9 +30,15 @@
 //!   tolerance 100x tighter at any step (deg), steps (rejected), Newton
 //!   iterations, factorizations. Single crease 0.6 s, Miura 0.3 s.
 //!
+//! - Precision rows (`--only precision`, alone): the held and sloped fold
+//!   ramp (1 s) and the I loop (0.3 s) on the 4x4 Miura at several
+//!   tolerances, plain and filtered error estimate: the largest distance of
+//!   every vertex and fold angle from the same run at tolerance 1e-8, at
+//!   any step, against CPU (the reference runs take minutes).
+//!
 //! `cargo bench --bench input_paths -- [--sizes 4,10,16] [--loop-sizes 4]
-//! [--margins] [--tau T] [--only ramps|loops]` (`--tau`: a servo's time
-//! constant in s for every row). CPU is this thread's CPU time.
+//! [--margins] [--tau T] [--only ramps|loops|precision]` (`--tau`: a servo's
+//! time constant in s for every row). CPU is this thread's CPU time.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -460,10 +466,116 @@ fn sizes(name: &str, default: &[usize]) -> Vec<usize> {
         .unwrap_or_else(|| default.to_vec())
 }
 
+/// What a precision row drives.
+#[derive(Clone, Copy, Debug)]
+enum Run {
+    Ramp(Path),
+    Loop(Loop),
+}
+
+/// Every output after every communication step of `run` on the 4x4 Miura
+/// (the ramp for 1 s, the loop for 0.3 s), and the CPU it took.
+fn outputs_over(run: Run, tolerance: f64, filter: bool) -> (f64, Vec<Vec<f64>>) {
+    let sheet = Sheet::Miura(4);
+    let mut parameters = vec![("solver.tolerance", tolerance)];
+    if filter {
+        parameters.push(("solver.error_filter", 1.0));
+    }
+    let mut m = model(sheet.scene(None), &parameters);
+    let fold = m.input_id("fold").expect("fold input");
+    let (crease, _) = folding_crease(&m);
+    let (h, n) = match run {
+        Run::Ramp(_) => (0.01, 100),
+        Run::Loop(_) => (1e-3, 300),
+    };
+    let set = 45f64.to_radians();
+    let mut c = Controller::default();
+    let mut rows = Vec::with_capacity(n);
+    let clock = CpuInstant::now();
+    for k in 0..n {
+        let t = k as f64 * h;
+        match run {
+            Run::Ramp(path) => {
+                m.set_input(fold, (t / 0.5).min(1.0)).expect("input");
+                if path == Path::Slopes {
+                    let slope = if t < 0.5 { 2.0 } else { 0.0 };
+                    m.set_input_derivative(fold, 1, slope).expect("slope");
+                }
+            }
+            Run::Loop(law) => {
+                let e = set - m.output_values()[crease].abs();
+                m.set_input(fold, c.next(law, e, h)).expect("input");
+            }
+        }
+        m.advance(h).expect("step");
+        rows.push(m.output_values());
+    }
+    (clock.elapsed().as_secs_f64(), rows)
+}
+
+/// Work against precision on the 4x4 Miura: the largest distance over the
+/// run of every vertex (m) and fold angle (deg) from the same run at
+/// tolerance 1e-8, against CPU, with the plain and the filtered estimate.
+fn precision_rows() {
+    let m = model(Sheet::Miura(4).scene(None), &[]);
+    let kinds: Vec<bool> = m
+        .outputs()
+        .iter()
+        .map(|v| v.name.starts_with("vertex["))
+        .collect();
+    let angles: Vec<bool> = m
+        .outputs()
+        .iter()
+        .map(|v| v.name.starts_with("crease["))
+        .collect();
+    println!();
+    println!("| run | estimate | tolerance | CPU s | vertices (m) | fold angles (deg) |");
+    println!("|---|---|---|---|---|---|");
+    let runs = [
+        (
+            "fold ramp, slopes",
+            Run::Ramp(Path::Slopes),
+            &[1e-4, 1e-5][..],
+        ),
+        (
+            "fold ramp, held",
+            Run::Ramp(Path::Held),
+            &[1e-3, 1e-4, 3e-5, 1e-5][..],
+        ),
+        ("I loop", Run::Loop(Loop::I { ki: 10.0 }), &[1e-4, 1e-5][..]),
+    ];
+    for (label, run, tolerances) in runs {
+        let (_, reference) = outputs_over(run, 1e-8, false);
+        for &tol in tolerances {
+            for filter in [false, true] {
+                let (cpu, rows) = outputs_over(run, tol, filter);
+                let (mut dx, mut da): (f64, f64) = (0.0, 0.0);
+                for (a, b) in rows.iter().zip(&reference) {
+                    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                        if kinds[k] {
+                            dx = dx.max((x - y).abs());
+                        } else if angles[k] {
+                            da = da.max((x - y).abs().to_degrees());
+                        }
+                    }
+                }
+                println!(
+                    "| {label} | {} | {tol:.0e} | {cpu:.3} | {dx:.1e} | {da:.2} |",
+                    if filter { "filtered" } else { "raw" }
+                );
+            }
+        }
+    }
+}
+
 fn main() {
     let tau: Option<f64> = arg_text("--tau").map(|v| v.parse().expect("a time constant (s)"));
     let margins = std::env::args().any(|a| a == "--margins");
     let only = arg_text("--only");
+    if only.as_deref() == Some("precision") {
+        precision_rows();
+        return;
+    }
     if only.as_deref() != Some("loops") {
         ramp_rows(&sizes("--sizes", &[4, 10, 16]), tau);
     }

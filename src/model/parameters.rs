@@ -1,13 +1,13 @@
 //! The model's parameters. One row per parameter (the `parameters!` table
-//! below) gives its name, unit and description; [`Parameter::value`] says
-//! which scenes have it and its start value, [`Parameter::apply`] how a
-//! value goes into the scene. Every match over [`Parameter`] is
-//! exhaustive, so no parameter is matched by its name and none can be
-//! silently ignored.
+//! below) gives its name; its unit, range, description and automatic flag
+//! are its row of [`crate::scene::limits::LIMITS`], the one table of named
+//! values; [`Parameter::value`] says which scenes have it and its start
+//! value, [`Parameter::apply`] how a value goes into the scene (a match
+//! over every parameter, so none can be silently ignored).
 
 use super::{Error, Model, Phase, VariableSpec, physics};
 use crate::assembly::Physics;
-use crate::scene::limits::LimitError;
+use crate::scene::limits::{Limit, LimitError};
 use crate::scene::{ActuatorMode, CreaseStiffness, InputTiming, RampShape as RampShapeKind, Scene};
 
 /// Whether `sc` has an actuator that the built-in ramp drives.
@@ -22,10 +22,11 @@ fn has_inputs(sc: &Scene) -> bool {
     !super::variables::input_table(sc).is_empty()
 }
 
-/// Declares [`Parameter`], [`ALL`] and `Parameter::info` from one row per
-/// parameter, in the FMU's order: `Variant => (name, unit, description)`.
+/// Declares [`Parameter`] and [`ALL`] from one row per parameter, in the
+/// FMU's order: `Variant => name`. Each name's unit, range, description and
+/// automatic flag are its row of [`crate::scene::limits::LIMITS`].
 macro_rules! parameters {
-    ($($(#[doc = $doc:literal])* $p:ident => ($name:literal, $unit:literal, $what:literal),)*) => {
+    ($($(#[doc = $doc:literal])* $p:ident => $name:literal,)*) => {
         /// One parameter of the model.
         #[derive(Clone, Copy, Debug, PartialEq, Eq)]
         pub(super) enum Parameter {
@@ -36,11 +37,10 @@ macro_rules! parameters {
         const ALL: &[Parameter] = &[$(Parameter::$p,)*];
 
         impl Parameter {
-            /// Name (the FMU variable name, and the name of its limit in
-            /// [`crate::scene::limits`]), unit and description.
-            fn info(self) -> (&'static str, &'static str, &'static str) {
+            /// The FMU variable name.
+            pub(super) fn name(self) -> &'static str {
                 match self {
-                    $(Parameter::$p => ($name, $unit, $what),)*
+                    $(Parameter::$p => $name,)*
                 }
             }
         }
@@ -48,144 +48,66 @@ macro_rules! parameters {
 }
 
 parameters! {
-    YoungsModulus => ("material.youngs_modulus", "Pa", "Young's modulus"),
-    PoissonRatio => ("material.poisson_ratio", "", "Poisson's ratio"),
-    Thickness => ("material.thickness", "m", "sheet thickness"),
-    Density => ("material.density", "kg/m3", "mass density"),
+    YoungsModulus => "material.youngs_modulus",
+    PoissonRatio => "material.poisson_ratio",
+    Thickness => "material.thickness",
+    Density => "material.density",
     /// Only in scenes whose crease stiffness is a length scale.
-    CreaseLengthScale => (
-        "crease.length_scale",
-        "m",
-        "crease stiffness = (crease length / length_scale) * bending stiffness"
-    ),
+    CreaseLengthScale => "crease.length_scale",
     /// Only in scenes whose crease stiffness is given per unit length.
-    CreaseStiffnessPerLength => (
-        "crease.stiffness_per_length",
-        "N/rad",
-        "rotational crease stiffness per unit crease length"
-    ),
-    DampingAlpha => ("damping.alpha", "1/s", "Rayleigh mass-proportional damping"),
-    DampingBeta => ("damping.beta", "s", "Rayleigh stiffness-proportional damping"),
-    DampingCrease => ("damping.crease", "N.s/rad", "crease damping per unit length"),
+    CreaseStiffnessPerLength => "crease.stiffness_per_length",
+    DampingAlpha => "damping.alpha",
+    DampingBeta => "damping.beta",
+    DampingCrease => "damping.crease",
     /// Gravity components are only in scenes with gravity.
-    GravityX => ("gravity.x", "m/s2", "gravity, x component"),
-    GravityY => ("gravity.y", "m/s2", "gravity, y component"),
-    GravityZ => ("gravity.z", "m/s2", "gravity, z component"),
-    RhoInf => ("solver.rho_inf", "", "generalized-alpha spectral radius"),
-    MaxStep => ("solver.max_step", "s", "largest internal step"),
-    Tolerance => ("solver.tolerance", "", "relative solver tolerance"),
-    MaxInternalSteps => (
-        "solver.max_internal_steps",
-        "",
-        "most internal steps one communication step may take before it fails"
-    ),
-    ErrorFilter => (
-        "solver.error_filter",
-        "",
-        "1: the local error estimate filtered through the iteration matrix (ringing far above the step's frequency counts by its displacement and is damped by the scheme: cheaper under held inputs, loses that ringing's energy); 0 (default): the plain estimate"
-    ),
+    GravityX => "gravity.x",
+    GravityY => "gravity.y",
+    GravityZ => "gravity.z",
+    RhoInf => "solver.rho_inf",
+    MaxStep => "solver.max_step",
+    Tolerance => "solver.tolerance",
+    MaxInternalSteps => "solver.max_internal_steps",
+    ErrorFilter => "solver.error_filter",
     /// Only in scenes with inputs.
-    InputFirstOrderHold => (
-        "input.first_order_hold",
-        "",
-        "0 (default): an input set before a step is held over it (FMI 2.0); 1: first-order hold, each step ramps from the previous value to the one set, so a sample acts one step late (no input derivatives then)"
-    ),
+    InputFirstOrderHold => "input.first_order_hold",
     /// Only in scenes with contact.
-    ContactFriction => ("contact.friction", "", "Coulomb friction coefficient of self-contact"),
+    ContactFriction => "contact.friction",
     /// Only in scenes with actuators.
-    ActuatorTimeConstant => (
-        "actuator.time_constant",
-        "s",
-        "time constant of the actuators' servo, a critically damped response to their inputs; 0 (the default): ideal, the input acts at once"
-    ),
+    ActuatorTimeConstant => "actuator.time_constant",
     /// Only in scenes with a rest-angle actuator.
-    RampTime => (
-        "ramp.time",
-        "s",
-        "built-in signal: when > 0, every rest-angle actuator (fold) goes from 0 to 1 over this time and holds 1, and values set on those inputs are not used; 0 = off, the master drives them"
-    ),
+    RampTime => "ramp.time",
     /// Only in scenes with a rest-angle actuator.
-    RampShape => ("ramp.shape", "", "shape of the built-in signal: 0 linear, 1 smooth (zero slope at both ends)"),
+    RampShape => "ramp.shape",
 }
 
 use Parameter::*;
 
 impl Parameter {
-    /// The FMU variable name.
-    pub(super) fn name(self) -> &'static str {
-        self.info().0
+    /// Its row of the one table of named values.
+    fn limit(self) -> &'static Limit {
+        crate::scene::limits::limit(self.name()).expect("every parameter has a limit (tested)")
     }
 
-    /// Whether setting it switches automatic damping off.
+    /// Whether the model chooses it until set: setting one switches the
+    /// automatic damping off.
     pub(super) fn is_damping(self) -> bool {
-        match self {
-            DampingAlpha | DampingBeta | DampingCrease => true,
-            YoungsModulus
-            | PoissonRatio
-            | Thickness
-            | Density
-            | CreaseLengthScale
-            | CreaseStiffnessPerLength
-            | GravityX
-            | GravityY
-            | GravityZ
-            | RhoInf
-            | MaxStep
-            | Tolerance
-            | MaxInternalSteps
-            | ErrorFilter
-            | InputFirstOrderHold
-            | ContactFriction
-            | ActuatorTimeConstant
-            | RampTime
-            | RampShape => false,
-        }
+        self.limit().automatic
     }
 
     /// Its value in `sc`, where `ph` is `physics(sc)` (the damping in
     /// effect: the automatic choice, unless the scene sets damping); None
     /// when the scene has no such parameter.
     fn value(self, sc: &Scene, ph: &Physics) -> Option<f64> {
-        let m = &sc.material;
-        let s = &sc.solver;
         match self {
-            YoungsModulus => Some(m.youngs_modulus),
-            PoissonRatio => Some(m.poisson_ratio),
-            Thickness => Some(m.thickness),
-            Density => Some(m.density),
-            CreaseLengthScale => match sc.crease {
-                CreaseStiffness::LengthScale(l) => Some(l),
-                CreaseStiffness::PerLength(_) => None,
-            },
-            CreaseStiffnessPerLength => match sc.crease {
-                CreaseStiffness::PerLength(k) => Some(k),
-                CreaseStiffness::LengthScale(_) => None,
-            },
             DampingAlpha => Some(ph.alpha),
             DampingBeta => Some(ph.beta),
             DampingCrease => Some(ph.crease_c_per_length),
-            GravityX => sc.gravity.map(|g| g[0]),
-            GravityY => sc.gravity.map(|g| g[1]),
-            GravityZ => sc.gravity.map(|g| g[2]),
-            RhoInf => Some(s.rho_inf),
-            MaxStep => Some(s.max_step),
-            Tolerance => Some(s.tolerance),
-            MaxInternalSteps => Some(s.max_internal_steps as f64),
-            ErrorFilter => Some(if s.error_filter { 1.0 } else { 0.0 }),
-            InputFirstOrderHold => has_inputs(sc).then_some(match s.input_timing {
-                InputTiming::Hold => 0.0,
-                InputTiming::FirstOrderHold => 1.0,
-            }),
-            ContactFriction => sc.contact.map(|c| c.friction),
             ActuatorTimeConstant => {
                 (!sc.actuators.is_empty()).then(|| super::actuator_time_constant(sc))
             }
             RampTime | RampShape if !has_rest_angle_actuator(sc) => None,
-            RampTime => Some(sc.ramp.time),
-            RampShape => Some(match sc.ramp.shape {
-                RampShapeKind::Linear => 0.0,
-                RampShapeKind::Smooth => 1.0,
-            }),
+            InputFirstOrderHold if !has_inputs(sc) => None,
+            _ => (self.limit().value)(sc),
         }
     }
 
@@ -243,7 +165,12 @@ impl Parameter {
 
     /// The variable of the FMU.
     fn spec(self, start: f64, sc: &Scene) -> VariableSpec {
-        let (name, unit, description) = self.info();
+        let Limit {
+            name,
+            unit,
+            description,
+            ..
+        } = *self.limit();
         let auto = if sc.auto_damping && self.is_damping() {
             " (automatic damping until a damping parameter is set)"
         } else {

@@ -5,8 +5,11 @@
 //!
 //! Names are the FMU parameter names (`material.thickness`,
 //! `solver.max_step`, ...); the scene keys map onto them one to one.
+//! [`LIMITS`] is the one table of them: name, range, unit, description,
+//! whether the model chooses it automatically, and where a scene holds it.
+//! The FMU's parameters take their unit and description from it.
 
-use super::{Scene, SolverSettings};
+use super::{CreaseStiffness, InputTiming, RampShape, Scene, SolverSettings};
 use crate::text::num;
 
 /// Largest magnitude of a physical number: beyond it, products of a few
@@ -63,19 +66,56 @@ impl Range {
     }
 }
 
-/// A named value with its range and unit.
+/// A named value: its range, unit and description, whether the model
+/// chooses it automatically, and where a scene holds it. The one table of
+/// these ([`LIMITS`]) serves the scene reader, the scene check, the FMU
+/// parameters (`crate::model`, which reads name, unit, description and the
+/// automatic flag from it) and the model description.
 #[derive(Clone, Copy, Debug)]
 pub struct Limit {
-    /// FMU parameter name.
+    /// FMU parameter name (the scene keys map onto it one to one).
     pub name: &'static str,
     /// Admissible values.
     pub range: Range,
-    /// Unit for messages ("" when dimensionless).
+    /// Unit, as the model description names it ("" when dimensionless).
     pub unit: &'static str,
+    /// What it is, in a line.
+    pub description: &'static str,
+    /// Chosen by the model from the scene until it is set (the damping).
+    pub automatic: bool,
+    /// Its value in a scene, where the scene has one.
+    pub value: fn(&Scene) -> Option<f64>,
 }
 
-const fn lim(name: &'static str, range: Range, unit: &'static str) -> Limit {
-    Limit { name, range, unit }
+const fn lim(
+    name: &'static str,
+    range: Range,
+    unit: &'static str,
+    description: &'static str,
+    value: fn(&Scene) -> Option<f64>,
+) -> Limit {
+    Limit {
+        name,
+        range,
+        unit,
+        description,
+        automatic: false,
+        value,
+    }
+}
+
+/// A [`lim`] the model chooses until it is set.
+const fn automatic(
+    name: &'static str,
+    range: Range,
+    unit: &'static str,
+    description: &'static str,
+    value: fn(&Scene) -> Option<f64>,
+) -> Limit {
+    Limit {
+        automatic: true,
+        ..lim(name, range, unit, description, value)
+    }
 }
 
 /// Largest `solver.max_internal_steps`: with at most [`MAX_NEWTON`] Newton
@@ -98,63 +138,241 @@ pub const MAX_TOLERANCE: f64 = 0.5;
 /// Smallest `solver.min_step` and `solver.max_step` (s).
 pub const MIN_STEP: f64 = 1e-15;
 
-/// Every checked value.
+/// Every named value of a scene, in the FMU's parameter order.
 pub const LIMITS: &[Limit] = &[
-    lim("material.youngs_modulus", Range::Positive, "Pa"),
-    lim("material.poisson_ratio", Range::Open(-1.0, 0.5), ""),
-    lim("material.thickness", Range::Positive, "m"),
-    lim("material.density", Range::Positive, "kg/m^3"),
-    lim("crease.length_scale", Range::Positive, "m"),
+    lim(
+        "material.youngs_modulus",
+        Range::Positive,
+        "Pa",
+        "Young's modulus",
+        |s| Some(s.material.youngs_modulus),
+    ),
+    lim(
+        "material.poisson_ratio",
+        Range::Open(-1.0, 0.5),
+        "",
+        "Poisson's ratio",
+        |s| Some(s.material.poisson_ratio),
+    ),
+    lim(
+        "material.thickness",
+        Range::Positive,
+        "m",
+        "sheet thickness",
+        |s| Some(s.material.thickness),
+    ),
+    lim(
+        "material.density",
+        Range::Positive,
+        "kg/m3",
+        "mass density",
+        |s| Some(s.material.density),
+    ),
+    lim(
+        "crease.length_scale",
+        Range::Positive,
+        "m",
+        "crease stiffness = (crease length / length_scale) * bending stiffness",
+        |s| match s.crease {
+            CreaseStiffness::LengthScale(l) => Some(l),
+            CreaseStiffness::PerLength(_) => None,
+        },
+    ),
     lim(
         "crease.stiffness_per_length",
         Range::NonNegative,
-        "N m/(rad m)",
+        "N/rad",
+        "rotational crease stiffness per unit crease length",
+        |s| match s.crease {
+            CreaseStiffness::PerLength(k) => Some(k),
+            CreaseStiffness::LengthScale(_) => None,
+        },
     ),
-    lim("damping.alpha", Range::NonNegative, "1/s"),
-    lim("damping.beta", Range::NonNegative, "s"),
-    lim("damping.crease", Range::NonNegative, "N m s/(rad m)"),
-    lim("gravity.x", Range::Any, "m/s^2"),
-    lim("gravity.y", Range::Any, "m/s^2"),
-    lim("gravity.z", Range::Any, "m/s^2"),
-    lim("solver.rho_inf", Range::Closed(0.0, 1.0), ""),
+    automatic(
+        "damping.alpha",
+        Range::NonNegative,
+        "1/s",
+        "Rayleigh mass-proportional damping",
+        |s| Some(s.damping.alpha),
+    ),
+    automatic(
+        "damping.beta",
+        Range::NonNegative,
+        "s",
+        "Rayleigh stiffness-proportional damping",
+        |s| Some(s.damping.beta),
+    ),
+    automatic(
+        "damping.crease",
+        Range::NonNegative,
+        "N.s/rad",
+        "crease damping per unit length",
+        |s| Some(s.damping.crease),
+    ),
+    lim(
+        "gravity.x",
+        Range::Any,
+        "m/s2",
+        "gravity, x component",
+        |s| s.gravity.map(|g| g[0]),
+    ),
+    lim(
+        "gravity.y",
+        Range::Any,
+        "m/s2",
+        "gravity, y component",
+        |s| s.gravity.map(|g| g[1]),
+    ),
+    lim(
+        "gravity.z",
+        Range::Any,
+        "m/s2",
+        "gravity, z component",
+        |s| s.gravity.map(|g| g[2]),
+    ),
+    lim(
+        "solver.rho_inf",
+        Range::Closed(0.0, 1.0),
+        "",
+        "generalized-alpha spectral radius",
+        |s| Some(s.solver.rho_inf),
+    ),
     lim(
         "solver.max_step",
         Range::Closed(MIN_STEP, MAX_MAGNITUDE),
         "s",
+        "largest internal step",
+        |s| Some(s.solver.max_step),
     ),
     lim(
         "solver.min_step",
         Range::Closed(MIN_STEP, MAX_MAGNITUDE),
         "s",
+        "smallest internal step before an advance fails",
+        |s| Some(s.solver.min_step),
     ),
     lim(
         "solver.tolerance",
         Range::Closed(MIN_TOLERANCE, MAX_TOLERANCE),
         "",
+        "relative solver tolerance",
+        |s| Some(s.solver.tolerance),
     ),
-    lim("solver.max_newton", Range::Whole(1, MAX_NEWTON), ""),
+    lim(
+        "solver.max_newton",
+        Range::Whole(1, MAX_NEWTON),
+        "",
+        "most Newton iterations of one internal step",
+        |s| Some(s.solver.max_newton as f64),
+    ),
     lim(
         "solver.max_internal_steps",
         Range::Whole(1, MAX_INTERNAL_STEPS),
         "",
+        "most internal steps one communication step may take before it fails",
+        |s| Some(s.solver.max_internal_steps as f64),
     ),
-    lim("solver.stop_time", Range::Positive, "s"),
-    lim("solver.error_filter", Range::Whole(0, 1), ""),
-    lim("input.first_order_hold", Range::Whole(0, 1), ""),
-    lim("contact.friction", Range::NonNegative, ""),
-    lim("actuator.time_constant", Range::NonNegative, "s"),
-    lim("ramp.time", Range::Closed(0.0, 1e9), "s"),
-    lim("ramp.shape", Range::Whole(0, 1), ""),
-    lim("contact.stiffness", Range::Positive, "N/m"),
-    lim("contact.thickness", Range::Positive, "m"),
+    lim(
+        "solver.stop_time",
+        Range::Positive,
+        "s",
+        "default experiment stop time",
+        |s| Some(s.solver.stop_time),
+    ),
+    lim(
+        "solver.error_filter",
+        Range::Whole(0, 1),
+        "",
+        "1: the local error estimate filtered through the iteration matrix (ringing far above the step's frequency counts by its displacement and is damped by the scheme: cheaper under held inputs, loses that ringing's energy); 0 (default): the plain estimate",
+        |s| Some(if s.solver.error_filter { 1.0 } else { 0.0 }),
+    ),
+    lim(
+        "input.first_order_hold",
+        Range::Whole(0, 1),
+        "",
+        "0 (default): an input set before a step is held over it (FMI 2.0); 1: first-order hold, each step ramps from the previous value to the one set, so a sample acts one step late (no input derivatives then)",
+        |s| {
+            Some(match s.solver.input_timing {
+                InputTiming::Hold => 0.0,
+                InputTiming::FirstOrderHold => 1.0,
+            })
+        },
+    ),
+    lim(
+        "contact.friction",
+        Range::NonNegative,
+        "",
+        "Coulomb friction coefficient of self-contact",
+        |s| s.contact.map(|c| c.friction),
+    ),
+    lim(
+        "actuator.time_constant",
+        Range::NonNegative,
+        "s",
+        "time constant of the actuators' servo, a critically damped response to their inputs; 0 (the default): ideal, the input acts at once",
+        |s| s.actuator_time_constant,
+    ),
+    lim(
+        "ramp.time",
+        Range::Closed(0.0, 1e9),
+        "s",
+        "built-in signal: when > 0, every rest-angle actuator (fold) goes from 0 to 1 over this time and holds 1, and values set on those inputs are not used; 0 = off, the master drives them",
+        |s| Some(s.ramp.time),
+    ),
+    lim(
+        "ramp.shape",
+        Range::Whole(0, 1),
+        "",
+        "shape of the built-in signal: 0 linear, 1 smooth (zero slope at both ends)",
+        |s| {
+            Some(match s.ramp.shape {
+                RampShape::Linear => 0.0,
+                RampShape::Smooth => 1.0,
+            })
+        },
+    ),
+    lim(
+        "contact.stiffness",
+        Range::Positive,
+        "N/m",
+        "barrier stiffness (automatic when absent)",
+        |s| s.contact.and_then(|c| c.stiffness),
+    ),
+    lim(
+        "contact.thickness",
+        Range::Positive,
+        "m",
+        "distance contact keeps between the mid-surfaces",
+        |s| s.contact.map(|c| c.thickness),
+    ),
     lim(
         "contact.barrier_width",
         Range::OpenClosed(0.0, 1.0),
-        "a fraction of the thickness",
+        "",
+        "width of the barrier, a fraction of the thickness",
+        |s| s.contact.map(|c| c.width),
     ),
-    lim("contact.stick_velocity", Range::Positive, "m/s"),
-    lim("contact.damping_ratio", Range::NonNegative, ""),
-    lim("contact.subdivisions", Range::Whole(1, 8), ""),
+    lim(
+        "contact.stick_velocity",
+        Range::Positive,
+        "m/s",
+        "slip velocity below which friction sticks",
+        |s| s.contact.map(|c| c.stick_velocity),
+    ),
+    lim(
+        "contact.damping_ratio",
+        Range::NonNegative,
+        "",
+        "damping ratio of the barrier's dashpots",
+        |s| s.contact.map(|c| c.damping_ratio),
+    ),
+    lim(
+        "contact.subdivisions",
+        Range::Whole(1, 8),
+        "",
+        "contact samples per facet side",
+        |s| s.contact.map(|c| c.subdivisions as f64),
+    ),
 ];
 
 /// The limit of `name`, if it has one.
@@ -291,60 +509,15 @@ pub fn check_solver_relations(s: &SolverSettings) -> Result<(), LimitError> {
 /// Every value of a scene that has a limit, by name (what the FMU's scene
 /// check and a parameter rebuild run).
 pub fn check_scene(s: &Scene) -> Result<(), LimitError> {
-    let m = &s.material;
-    let d = &s.damping;
-    let so = &s.solver;
-    let mut values = vec![
-        ("material.youngs_modulus", m.youngs_modulus),
-        ("material.poisson_ratio", m.poisson_ratio),
-        ("material.thickness", m.thickness),
-        ("material.density", m.density),
-        ("damping.alpha", d.alpha),
-        ("damping.beta", d.beta),
-        ("damping.crease", d.crease),
-        ("solver.rho_inf", so.rho_inf),
-        ("solver.max_step", so.max_step),
-        ("solver.min_step", so.min_step),
-        ("solver.tolerance", so.tolerance),
-        ("solver.max_newton", so.max_newton as f64),
-        ("solver.max_internal_steps", so.max_internal_steps as f64),
-        ("solver.stop_time", so.stop_time),
-        ("ramp.time", s.ramp.time),
-    ];
-    match s.crease {
-        super::CreaseStiffness::LengthScale(l) => values.push(("crease.length_scale", l)),
-        super::CreaseStiffness::PerLength(k) => values.push(("crease.stiffness_per_length", k)),
-    }
-    if let Some(g) = s.gravity {
-        values.extend([
-            ("gravity.x", g[0]),
-            ("gravity.y", g[1]),
-            ("gravity.z", g[2]),
-        ]);
-    }
-    if let Some(t) = s.actuator_time_constant {
-        values.push(("actuator.time_constant", t));
-    }
-    if let Some(c) = &s.contact {
-        values.extend([
-            ("contact.friction", c.friction),
-            ("contact.thickness", c.thickness),
-            ("contact.barrier_width", c.width),
-            ("contact.stick_velocity", c.stick_velocity),
-            ("contact.damping_ratio", c.damping_ratio),
-            ("contact.subdivisions", c.subdivisions as f64),
-        ]);
-        if let Some(k) = c.stiffness {
-            values.push(("contact.stiffness", k));
+    for l in LIMITS {
+        if let Some(x) = (l.value)(s) {
+            check(l.name, x).map_err(|e| LimitError::Named {
+                name: l.name,
+                error: Box::new(e),
+            })?;
         }
     }
-    for (name, x) in values {
-        check(name, x).map_err(|e| LimitError::Named {
-            name,
-            error: Box::new(e),
-        })?;
-    }
-    check_solver_relations(so).map_err(|e| LimitError::Named {
+    check_solver_relations(&s.solver).map_err(|e| LimitError::Named {
         name: "solver.min_step",
         error: Box::new(e),
     })
