@@ -595,15 +595,40 @@ fn a_tampered_sequence_is_refused() {
     let (s, _) = load(&strip(two_stages())).unwrap();
     let good: Value = serde_json::from_slice(&scene_bytes(&s)).unwrap();
     assert!(parse_scene(&scene_bytes(&s)).is_ok());
-    let edits: Vec<(&str, Box<dyn Fn(&mut Value)>)> = vec![
-        ("add up to", Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(0.2))),
-        ("does not exist", Box::new(|v| v["sequence"]["stages"][1]["targets"][0][0] = json!(1_000_000))),
-        ("within [-pi, pi]", Box::new(|v| v["sequence"]["stages"][1]["targets"][0][1] = json!(10.0))),
-        ("folds no crease", Box::new(|v| v["sequence"]["stages"][1]["targets"] = json!([]))),
-        ("no stages", Box::new(|v| v["sequence"]["stages"] = json!([]))),
-        ("no rest_angle actuator", Box::new(|v| v["sequence"]["actuator"] = json!("push"))),
-        ("share", Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(-1.0))),
-        ("", Box::new(|v| v["sequence"]["stages"][0]["share"] = json!("half"))),
+    type Edit = Box<dyn Fn(&mut Value)>;
+    let edits: Vec<(&str, Edit)> = vec![
+        (
+            "add up to",
+            Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(0.2)),
+        ),
+        (
+            "does not exist",
+            Box::new(|v| v["sequence"]["stages"][1]["targets"][0][0] = json!(1_000_000)),
+        ),
+        (
+            "within [-pi, pi]",
+            Box::new(|v| v["sequence"]["stages"][1]["targets"][0][1] = json!(10.0)),
+        ),
+        (
+            "folds no crease",
+            Box::new(|v| v["sequence"]["stages"][1]["targets"] = json!([])),
+        ),
+        (
+            "no stages",
+            Box::new(|v| v["sequence"]["stages"] = json!([])),
+        ),
+        (
+            "no rest_angle actuator",
+            Box::new(|v| v["sequence"]["actuator"] = json!("push")),
+        ),
+        (
+            "share",
+            Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(-1.0)),
+        ),
+        (
+            "",
+            Box::new(|v| v["sequence"]["stages"][0]["share"] = json!("half")),
+        ),
     ];
     for (what, edit) in edits {
         let mut v = good.clone();
@@ -630,6 +655,7 @@ fn pictures_label_the_stage() {
     let dir = std::env::temp_dir().join(format!("sequence_pictures_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     origami_fmu::pictures::write_gif(&dir.join("a.gif"), &sheet, &[&frame], "strip").unwrap();
-    origami_fmu::pictures::write_snapshots(&dir.join("a.png"), &sheet, &[&frame, &frame], "strip").unwrap();
+    origami_fmu::pictures::write_snapshots(&dir.join("a.png"), &sheet, &[&frame, &frame], "strip")
+        .unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
 }
