@@ -1,5 +1,6 @@
 //! The shell element on four mesh families (same diagonal, union-jack,
-//! random diagonals, perturbed vertices) for both shape functions: signed
+//! random diagonals, perturbed vertices) for both shape functions and, with
+//! Specht's, both bending energies (pointwise, split): signed
 //! errors of case A (end moment: small, and half a turn) and case B (tip
 //! force on a strip, clamped plate under uniform load) under refinement,
 //! and the observed order between the second and the last mesh. First, the
@@ -8,7 +9,9 @@
 
 use nalgebra::{SMatrix, SVector, Vector3};
 use origami_fmu::benchmarks::{BenchmarkError, FamilyStudy, MeshFamily, plate_physics};
-use origami_fmu::element::{ElemVec, Interpolation, Rule, ShellElement, reference_vector};
+use origami_fmu::element::{
+    Bending, ElemVec, ElementOptions, Interpolation, ShellElement, reference_vector,
+};
 // Times are CPU time (this thread's clock; the benches run on one thread).
 use origami_fmu::cpu_time::CpuInstant as Instant;
 
@@ -45,21 +48,23 @@ fn cost_table() {
         corners.len()
     );
     println!(
-        "| shape functions | build (CPU us) | force (CPU us) | force + tangent (CPU us) | force + tangent vs BCIZ |"
+        "| element | build (CPU ns) | force (CPU ns) | force + tangent (CPU ns) | force + tangent vs BCIZ |"
     );
     println!("|---|---|---|---|---|");
     let mut bciz = f64::NAN;
-    for interp in [Interpolation::Bciz, Interpolation::Specht] {
+    for (name, options) in elements() {
         let build = best(20, || {
             for x in &corners {
-                std::hint::black_box(
-                    ShellElement::with_interpolation(*x, Rule::default(), interp).unwrap(),
-                );
+                std::hint::black_box(ShellElement::with_options(*x, options).unwrap());
             }
         });
         let els: Vec<ShellElement> = corners
             .iter()
-            .map(|x| ShellElement::with_interpolation(*x, Rule::default(), interp).unwrap())
+            .map(|x| {
+                let mut el = ShellElement::with_options(*x, options).unwrap();
+                el.prepare(&mat);
+                el
+            })
             .collect();
         let mut f = SVector::<f64, 27>::zeros();
         let mut k = SMatrix::<f64, 27, 27>::zeros();
@@ -73,17 +78,34 @@ fn cost_table() {
                 std::hint::black_box(el.eval(&mat, e, &mut f, Some(&mut k)));
             }
         });
-        if interp == Interpolation::Bciz {
+        if options.interpolation == Interpolation::Bciz {
             bciz = tangent;
         }
         println!(
-            "| {interp:?} | {:.0} | {:.0} | {:.0} | {:.2} |",
+            "| {name} | {:.0} | {:.0} | {:.0} | {:.2} |",
             1e9 * build / n,
             1e9 * force / n,
             1e9 * tangent / n,
             tangent / bciz
         );
     }
+}
+
+/// The elements compared: BCIZ's and Specht's functions with the pointwise
+/// bending energy, Specht's with the split one.
+fn elements() -> [(&'static str, ElementOptions); 3] {
+    let specht = ElementOptions::from(Interpolation::Specht);
+    [
+        ("BCIZ", ElementOptions::from(Interpolation::Bciz)),
+        ("Specht", specht),
+        (
+            "Specht, split",
+            ElementOptions {
+                bending: Bending::Split,
+                ..specht
+            },
+        ),
+    ]
 }
 
 fn main() {
@@ -97,22 +119,22 @@ fn main() {
         let head: Vec<String> = meshes.iter().map(|n| format!("n = {n}")).collect();
         let (first, last) = (meshes[1], meshes[meshes.len() - 1]);
         println!(
-            "| family | shape functions | {} | order {first}-{last} |",
+            "| family | element | {} | order {first}-{last} |",
             head.join(" | ")
         );
         println!("|---|---|{}---|", "---|".repeat(meshes.len()));
         for family in MeshFamily::ALL {
-            for interp in [Interpolation::Specht, Interpolation::Bciz] {
+            for (name, options) in elements() {
                 let errs: Vec<Result<f64, BenchmarkError>> = meshes
                     .iter()
-                    .map(|&n| study.error(family, interp, n))
+                    .map(|&n| study.error(family, options, n))
                     .collect();
                 let cells: Vec<String> = errs
                     .iter()
                     .map(|e| match e {
                         Ok(x) => format!("{x:+.2e}"),
                         Err(m) => {
-                            eprintln!("{} {family:?} {interp:?}: {m}", study.name());
+                            eprintln!("{} {family:?} {name}: {m}", study.name());
                             "failed".into()
                         }
                     })
@@ -125,7 +147,7 @@ fn main() {
                     _ => String::new(),
                 };
                 println!(
-                    "| {} | {interp:?} | {} | {order} |",
+                    "| {} | {name} | {} | {order} |",
                     family.name(),
                     cells.join(" | ")
                 );

@@ -7,7 +7,7 @@
 //!
 //! `cargo bench --bench throughput -- [--sizes 2,4,8,16] [--time 1.0]
 //! [--tolerance 1e-3] [--newton modified|full] [--max-step 1e-3]
-//! [--quadrature 7|12]`
+//! [--quadrature 7|12] [--bending pointwise|split]`
 //!
 //! CPU is the process's CPU clock, wall the wall clock (they differ on a
 //! loaded machine); the phase shares are the stepping thread's CPU time over
@@ -30,6 +30,7 @@ struct Options {
     newton: NewtonMode,
     max_step: f64,
     quadrature: origami_fmu::element::Rule,
+    bending: origami_fmu::element::Bending,
 }
 
 fn options() -> Options {
@@ -40,6 +41,7 @@ fn options() -> Options {
         newton: NewtonMode::Modified,
         max_step: 1e-3,
         quadrature: origami_fmu::element::Rule::default(),
+        bending: origami_fmu::element::Bending::default(),
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -51,6 +53,13 @@ fn options() -> Options {
             "--tolerance" => o.tolerance = val.parse().expect("tolerance"),
             "--max-step" => o.max_step = val.parse().expect("max step"),
             "--quadrature" => o.quadrature = common::quadrature_rule(&val),
+            "--bending" => {
+                o.bending = match val.as_str() {
+                    "pointwise" => origami_fmu::element::Bending::Pointwise,
+                    "split" => origami_fmu::element::Bending::Split,
+                    _ => panic!("--bending pointwise|split"),
+                }
+            }
             "--newton" => {
                 o.newton = match val.as_str() {
                     "full" => NewtonMode::Full,
@@ -73,8 +82,8 @@ fn main() {
     origami_fmu::solver::set_phase_timing(true);
     let o = options();
     println!(
-        "Miura-ori folding, {} s simulated, tolerance {:.0e}, max step {:.0e} s, {:?} Newton, {:?} quadrature",
-        o.time, o.tolerance, o.max_step, o.newton, o.quadrature
+        "Miura-ori folding, {} s simulated, tolerance {:.0e}, max step {:.0e} s, {:?} Newton, {:?} quadrature, {:?} bending",
+        o.time, o.tolerance, o.max_step, o.newton, o.quadrature, o.bending
     );
     println!(
         "| cells | DOFs | steps | steps/s | Newton its/step | factorizations/step | assembly % | factorization % | solves % | other % | LLT/LDLT/LU | CPU s | wall s | sim/CPU | cost/step exponent |"
@@ -87,6 +96,7 @@ fn main() {
         sc.solver.newton = o.newton;
         sc.solver.max_step = o.max_step;
         sc.solver.quadrature = o.quadrature;
+        sc.solver.bending = o.bending;
         let mut m = Model::new(sc).expect("model");
         m.initialize().expect("initialize");
         let dt = 0.01;

@@ -307,8 +307,7 @@ impl Assembler {
                 ShellElement::with_sides(
                     [mesh.coord(a), mesh.coord(b), mesh.coord(c)],
                     layout.side_vectors(mesh, f),
-                    element.rule,
-                    element.interpolation,
+                    element,
                 )
                 .map_err(|source| BuildError::Element { face: f, source })
             })
@@ -539,6 +538,9 @@ impl Assembler {
     /// Change the physical coefficients (rebuilds the mass matrix).
     pub fn set_physics(&mut self, physics: Physics) {
         self.physics = physics;
+        for el in &mut self.elements {
+            el.prepare(&physics.material);
+        }
         let n_slots = self.layout.n_slots();
         let rho_h = physics.material.density * physics.material.thickness;
         // Accumulate on the slot pattern, element by element in the order

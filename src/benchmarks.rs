@@ -5,9 +5,9 @@
 //! E = 1.2e6, nu = 0 (EI = 100), clamped at x = 0 and rolled up by an end
 //! moment M; M_max = 2 pi EI / L closes it into a full circle.
 
-use crate::assembly::{Assembler, BuildError, Physics};
+use crate::assembly::{Assembler, BuildError, EvalError, Evaluation, MatrixCoeffs, Physics, State};
 use crate::dofs::DofLayout;
-use crate::element::{ElementOptions, Interpolation};
+use crate::element::ElementOptions;
 use crate::ids::VertexId;
 use crate::material::Material;
 use crate::mesh::Mesh;
@@ -15,6 +15,11 @@ use crate::mesh::builders::{Diagonals, grid_family};
 use crate::solver::statics::{self, Load, StaticReport, StaticSettings, StaticsError};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
+
+mod modes;
+mod panel;
+pub use modes::{CANTILEVER_PLATE_MODES, CantileverModes};
+pub use panel::{PANEL_TIP, PanelTip};
 
 /// Why a benchmark case could not be solved.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,6 +41,8 @@ pub enum BenchmarkError {
     Assembly(BuildError),
     /// The static solve failed.
     Statics(StaticsError),
+    /// The eigenvalue problem of a vibration case could not be solved (why).
+    Eigen(&'static str),
 }
 
 impl std::fmt::Display for BenchmarkError {
@@ -53,6 +60,7 @@ impl std::fmt::Display for BenchmarkError {
             }
             BenchmarkError::Assembly(m) => write!(f, "{m}"),
             BenchmarkError::Statics(e) => write!(f, "{e}"),
+            BenchmarkError::Eigen(why) => write!(f, "vibration modes: {why}"),
         }
     }
 }
@@ -217,8 +225,8 @@ pub struct RollUp {
     pub planar: bool,
     /// Static solver settings for the load path up to the largest ratio.
     pub settings: StaticSettings,
-    /// Shape functions of the facets.
-    pub interpolation: Interpolation,
+    /// The facets' element.
+    pub element: ElementOptions,
 }
 
 /// Tip of the strip at one moment level.
@@ -263,7 +271,7 @@ impl RollUp {
                 tolerance: 1e-8,
                 min_increment: 1e-6,
             },
-            interpolation: Interpolation::default(),
+            element: ElementOptions::default(),
         }
     }
 
@@ -309,11 +317,7 @@ impl RollUp {
                 fixed.push(gradient_slot(v, 1)?);
             }
         }
-        let element = ElementOptions {
-            interpolation: self.interpolation,
-            ..ElementOptions::default()
-        };
-        let asm = assembler(&mesh, physics, element, &fixed)?;
+        let asm = assembler(&mesh, physics, self.element, &fixed)?;
         // Trapezoidal shares of the end moment along the tip edge.
         let m_top = top * 2.0 * PI * ROLL_UP_EI / ROLL_UP_L;
         let slots = tip
@@ -390,6 +394,28 @@ pub fn plate_physics(e: f64, nu: f64, h: f64) -> Physics {
     }
 }
 
+/// The stiffness matrix at the flat reference state `mesh` is built on,
+/// unloaded and at rest (free DOFs, in the pattern order of `asm`).
+pub fn reference_stiffness(asm: &Assembler, mesh: &Mesh) -> Result<Vec<f64>, EvalError> {
+    let q = asm.layout.reference_state(mesh);
+    let zeros = vec![0.0; q.len()];
+    let st = State {
+        q: &q,
+        v: &zeros,
+        theta0: &[],
+        moment: &[],
+        theta_prev: &[],
+    };
+    let mut k = vec![0.0; asm.row_idx.len()];
+    let co = MatrixCoeffs {
+        k: 1.0,
+        m: 0.0,
+        c: 0.0,
+    };
+    asm.evaluate(&st, &mut Evaluation::default(), Some((&mut k, co)))?;
+    Ok(k)
+}
+
 /// Supported vertices of a static case.
 #[derive(Clone, Copy, Debug)]
 pub struct Supports<'a> {
@@ -462,8 +488,8 @@ pub struct PlateCase {
     pub slenderness: f64,
     /// Triangulation.
     pub family: MeshFamily,
-    /// Shape functions.
-    pub interpolation: Interpolation,
+    /// The facets' element.
+    pub element: ElementOptions,
     /// Static solver settings (one load step, relative residual 1e-8).
     pub settings: StaticSettings,
 }
@@ -477,7 +503,7 @@ impl PlateCase {
             uniform: true,
             slenderness: 100.0,
             family: MeshFamily::SameDiagonal,
-            interpolation: Interpolation::default(),
+            element: ElementOptions::default(),
             settings: StaticSettings {
                 load_steps: 1,
                 max_iterations: 20,
@@ -504,10 +530,7 @@ impl PlateCase {
             .collect();
         let centre = VertexId((n / 2) * (n + 1) + n / 2);
         let q = 1e-2 * d / a.powi(4);
-        let element = ElementOptions {
-            interpolation: self.interpolation,
-            ..ElementOptions::default()
-        };
+        let element = self.element;
         let uniform = self.uniform;
         let (w, report) = static_deflection(
             &mesh,
@@ -550,8 +573,8 @@ pub struct TipForce {
     pub ny: usize,
     /// Triangulation.
     pub family: MeshFamily,
-    /// Shape functions.
-    pub interpolation: Interpolation,
+    /// The facets' element.
+    pub element: ElementOptions,
 }
 
 impl TipForce {
@@ -561,7 +584,7 @@ impl TipForce {
             nx,
             ny: 1,
             family: MeshFamily::SameDiagonal,
-            interpolation: Interpolation::default(),
+            element: ElementOptions::default(),
         }
     }
 
@@ -577,10 +600,7 @@ impl TipForce {
         };
         let (root, tips) = (at(0.0), at(l));
         let p = 1e-3 * ei / (l * l);
-        let element = ElementOptions {
-            interpolation: self.interpolation,
-            ..ElementOptions::default()
-        };
+        let element = self.element;
         let settings = StaticSettings {
             load_steps: 1,
             max_iterations: 20,
@@ -647,14 +667,15 @@ impl FamilyStudy {
     pub fn error(
         self,
         family: MeshFamily,
-        interpolation: Interpolation,
+        element: impl Into<ElementOptions>,
         n: usize,
     ) -> Result<f64, BenchmarkError> {
+        let element = element.into();
         let roll_up = |ratio: f64| -> Result<f64, BenchmarkError> {
             let case = RollUp {
                 ny: 2,
                 family,
-                interpolation,
+                element,
                 planar: ratio > 0.01,
                 ..RollUp::new(n)
             };
@@ -674,7 +695,7 @@ impl FamilyStudy {
                 let case = TipForce {
                     ny: 2,
                     family,
-                    interpolation,
+                    element,
                     ..TipForce::new(n)
                 };
                 let (w, exact) = case.solve()?;
@@ -683,7 +704,7 @@ impl FamilyStudy {
             FamilyStudy::ClampedPlate => {
                 let case = PlateCase {
                     family,
-                    interpolation,
+                    element,
                     ..PlateCase::new(n)
                 };
                 let (w, exact, _) = case.solve()?;

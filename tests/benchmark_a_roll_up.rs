@@ -57,7 +57,7 @@ fn strip_rolls_up_within_one_percent() {
         let case = RollUp {
             ny,
             planar: false,
-            interpolation,
+            element: interpolation.into(),
             ..RollUp::new(nx)
         };
         check_within_one_percent(case, &[0.25, 0.5]);
@@ -78,10 +78,10 @@ fn strip_rolls_into_full_circle() {
 /// it (0.154 at 32 and 64 cells); the planar strip drifts by much less.
 #[test]
 fn free_strip_sideways_drift() {
-    let lateral = |nx, planar, interpolation| {
+    let lateral = |nx, planar, interpolation: Interpolation| {
         let case = RollUp {
             planar,
-            interpolation,
+            element: interpolation.into(),
             ..RollUp::new(nx)
         };
         case.solve(&[0.75]).unwrap().points[0].lateral
@@ -129,11 +129,11 @@ fn small_moment_linear_rotation() {
 fn union_jack_mesh_converges() {
     let ratio = 0.002;
     let (_, we) = roll_up_exact(ratio);
-    let err = |nx, interpolation| {
+    let err = |nx, interpolation: Interpolation| {
         let case = RollUp {
             family: MeshFamily::UnionJack,
             planar: false,
-            interpolation,
+            element: interpolation.into(),
             ..RollUp::new(nx)
         };
         (case.solve(&[ratio]).unwrap().points[0].w - we).abs() / we

@@ -714,6 +714,50 @@ fn a_discarded_step_terminates_until_a_state_is_restored() {
     }
 }
 
+/// No step is without end: past `solver.max_step_cpu` seconds of CPU a
+/// step is discarded with the state from before it and a log line naming
+/// the limit; the master may restore a state and go on.
+#[test]
+fn a_step_past_its_cpu_limit_is_discarded_with_the_state_before_it() {
+    let m = model();
+    let cap = m
+        .parameters()
+        .iter()
+        .position(|v| v.name == "solver.max_step_cpu")
+        .expect("the parameter solver.max_step_cpu") as u32;
+    let (_, _, o) = vr_ranges();
+    let f = Fmu::new("cpu_cap");
+    let mut t: fmi2Real = -1.0;
+    let mut saved: fmi2FMUstate = null_mut();
+    unsafe {
+        assert_eq!(f.set(&[cap], &[1e-9]), fmi2OK);
+        initialize(&f, None);
+        assert_eq!(fmi2GetFMUstate(f.c, &mut saved), fmi2OK);
+        let before = f.get(&o);
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Discard);
+        let why = f.last_error();
+        assert!(why.contains("solver.max_step_cpu = 1e-9 s"), "{why}");
+        assert!(why.contains("the state is the one before it"), "{why}");
+        assert_eq!(fmi2GetRealStatus(f.c, 2, &mut t), fmi2OK);
+        assert_eq!(t, 0.0, "last successful time");
+        assert_eq!(bits(&[f.get(&o)]), bits(&[before]), "outputs as before");
+        // The state of t = 0 back: stepping again is allowed (and, at this
+        // limit, discarded again).
+        assert_eq!(fmi2SetFMUstate(f.c, saved), fmi2OK);
+        assert_eq!(fmi2DoStep(f.c, 0.0, 0.01, 0), fmi2Discard);
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut saved), fmi2OK);
+        // The limit (a fixed parameter) raised in a new instance: the step
+        // goes through to the bits of an instance at the default limit.
+        let g = Fmu::new("cpu_cap_raised");
+        assert_eq!(g.set(&[cap], &[1e3]), fmi2OK);
+        initialize(&g, None);
+        assert_eq!(fmi2DoStep(g.c, 0.0, 0.01, 0), fmi2OK);
+        let plain = Fmu::initialized("cpu_cap_plain");
+        assert_eq!(fmi2DoStep(plain.c, 0.0, 0.01, 0), fmi2OK);
+        assert_eq!(bits(&[g.get(&o)]), bits(&[plain.get(&o)]));
+    }
+}
+
 /// FMI 2.0 section 2.1.6: with a stop time defined, a step past it is an
 /// error (and changes nothing).
 #[test]

@@ -10,10 +10,12 @@
 //! - [`shape`]: the nine shape functions and their derivatives,
 //! - [`quadrature`]: Dunavant rules ([`Rule`]),
 //! - [`shell`]: [`ShellElement`], energy, internal force and exact tangent,
+//! - [`bending`]: the split bending energy ([`Bending::Split`]),
 //! - [`mass`]: the closed-form mass matrix [`MASS_HAT`].
 // Numerical kernels index several parallel per-node arrays with one loop index.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bending;
 pub mod mass;
 pub mod quadrature;
 pub mod shape;
@@ -29,13 +31,42 @@ pub use mass::{MASS_HAT, element_mass};
 pub use quadrature::Rule;
 pub use shape::{Interpolation, Shape};
 
-/// How every facet is discretized: quadrature rule and shape functions.
+/// How every facet is discretized: quadrature rule, shape functions and
+/// bending energy.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct ElementOptions {
     /// Quadrature of the strain energy.
     pub rule: Rule,
     /// Shape functions (Specht by default).
     pub interpolation: Interpolation,
+    /// How the curvature enters the bending energy.
+    pub bending: Bending,
+}
+
+impl From<Interpolation> for ElementOptions {
+    /// The displacement element of these shape functions (pointwise
+    /// bending energy) with the default rule: what the benchmarks compare.
+    fn from(interpolation: Interpolation) -> Self {
+        ElementOptions {
+            rule: Rule::default(),
+            interpolation,
+            bending: Bending::Pointwise,
+        }
+    }
+}
+
+/// How the bending energy is built from the curvature at the quadrature
+/// points (the membrane energy is the same for both).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Bending {
+    /// `(h^3/24) kappa^T C kappa` at every point: the displacement element.
+    #[default]
+    Pointwise,
+    /// The facet's mean curvature carries its full energy; the curvature's
+    /// variation about it counts through its projection on the curvatures of
+    /// cubic deflections, with the weight [`bending::HIGHER_ORDER_WEIGHT`]
+    /// ([`bending`]).
+    Split,
 }
 pub use shell::{ElementError, MembraneResultants, ShellElement, ShellEnergy};
 

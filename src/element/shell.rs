@@ -29,7 +29,8 @@
 //! the tangent is exactly symmetric.
 
 use super::{
-    ElemVec,
+    Bending, ElemVec, ElementOptions,
+    bending::{Factors, N_CUBIC, Projection, SplitState},
     quadrature::Rule,
     shape::{Interpolation, Shape},
 };
@@ -72,6 +73,8 @@ pub struct ShellElement {
     rule: Rule,
     shape: Shape,
     mass_hat: [[f64; 9]; 9],
+    /// The split bending energy's fields ([`Bending::Split`]), or none.
+    split: Option<Projection>,
     nq: usize,
     qp: [QuadPoint; MAX_QP],
 }
@@ -120,6 +123,7 @@ impl Plane {
 }
 
 /// Deformation measures at one quadrature point.
+#[derive(Clone, Copy, Default)]
 struct Kinematics {
     f1: Vector3<f64>,
     f2: Vector3<f64>,
@@ -270,14 +274,36 @@ impl ShellElement {
     /// Fails ([`ElementError`] naming the reason) for a degenerate or
     /// clockwise triangle.
     pub fn new(x: [Vector2<f64>; 3], rule: Rule) -> Result<Self, ElementError> {
-        Self::with_interpolation(x, rule, Interpolation::default())
+        Self::with_options(
+            x,
+            ElementOptions {
+                rule,
+                ..ElementOptions::default()
+            },
+        )
     }
 
-    /// Like [`ShellElement::new`] with the given shape functions.
+    /// Like [`ShellElement::new`] with the given shape functions and the
+    /// default bending energy.
     pub fn with_interpolation(
         x: [Vector2<f64>; 3],
         rule: Rule,
         interpolation: Interpolation,
+    ) -> Result<Self, ElementError> {
+        Self::with_options(
+            x,
+            ElementOptions {
+                rule,
+                interpolation,
+                ..ElementOptions::default()
+            },
+        )
+    }
+
+    /// Like [`ShellElement::new`] with every option given.
+    pub fn with_options(
+        x: [Vector2<f64>; 3],
+        options: ElementOptions,
     ) -> Result<Self, ElementError> {
         let chords = [
             x[1] - x[0],
@@ -287,7 +313,7 @@ impl ShellElement {
             x[0] - x[2],
             x[1] - x[2],
         ];
-        Self::with_sides(x, chords, rule, interpolation)
+        Self::with_sides(x, chords, options)
     }
 
     /// A facet whose sides may be curved in the (flat) reference: corners
@@ -303,9 +329,13 @@ impl ShellElement {
     pub fn with_sides(
         x: [Vector2<f64>; 3],
         sides: [Vector2<f64>; 6],
-        rule: Rule,
-        interpolation: Interpolation,
+        options: ElementOptions,
     ) -> Result<Self, ElementError> {
+        let ElementOptions {
+            rule,
+            interpolation,
+            bending,
+        } = options;
         let finite = |p: &Vector2<f64>| p.x.is_finite() && p.y.is_finite();
         if !x.iter().all(finite) || !sides.iter().all(finite) {
             return Err(ElementError::NonFinite(x));
@@ -391,6 +421,16 @@ impl ShellElement {
         } else {
             curved_mass_hat(&shape, &e0)
         };
+        // The points in the facet frame (on the chord triangle for a
+        // curved-sided facet: the fields need only be linear and independent).
+        let split = (bending == Bending::Split).then(|| {
+            let at: Vec<Vector2<f64>> = pts
+                .iter()
+                .map(|(l, _)| to_frame(x[0] * l[0] + x[1] * l[1] + x[2] * l[2]))
+                .collect();
+            let wa: Vec<f64> = qp[..pts.len()].iter().map(|q| q.wa).collect();
+            Projection::new(&at, &wa)
+        });
         Ok(ShellElement {
             area: if straight { 0.5 * det } else { area },
             frame: [e1, e2],
@@ -398,9 +438,19 @@ impl ShellElement {
             rule,
             shape,
             mass_hat,
+            split,
             nq: pts.len(),
             qp,
         })
+    }
+
+    /// How the element's bending energy is built.
+    pub fn bending(&self) -> Bending {
+        if self.split.is_some() {
+            Bending::Split
+        } else {
+            Bending::Pointwise
+        }
     }
 
     /// The element's shape functions.
@@ -441,12 +491,55 @@ impl ShellElement {
         let h = mat.thickness;
         let (hm, hb) = (0.5 * h, h * h * h / 24.0);
         let mut out = ShellEnergy::default();
-        for q in &self.qp[..self.nq] {
-            let kin = kinematics(q, e);
+        let Some(proj) = &self.split else {
+            for q in &self.qp[..self.nq] {
+                let kin = kinematics(q, e);
+                out.membrane += q.wa * hm * dot3(kin.eps, pl.apply(1.0, kin.eps));
+                out.bending += q.wa * hb * dot3(kin.kappa, pl.apply(1.0, kin.kappa));
+            }
+            return out;
+        };
+        let kins = self.kinematics_at(e);
+        for (q, kin) in self.qp[..self.nq].iter().zip(&kins) {
             out.membrane += q.wa * hm * dot3(kin.eps, pl.apply(1.0, kin.eps));
-            out.bending += q.wa * hb * dot3(kin.kappa, pl.apply(1.0, kin.kappa));
+        }
+        let mut scratch = None;
+        let f = proj.factors_for(pl.nu, &mut scratch);
+        out.bending = hb * self.split_state(proj, f, &pl, &kins).energy;
+        out
+    }
+
+    /// The kinematics at every quadrature point (unused entries default).
+    #[inline(always)]
+    fn kinematics_at(&self, e: &ElemVec) -> [Kinematics; MAX_QP] {
+        let mut out = [Kinematics::default(); MAX_QP];
+        for (o, q) in out.iter_mut().zip(&self.qp[..self.nq]) {
+            *o = kinematics(q, e);
         }
         out
+    }
+
+    /// The split bending energy at the curvatures `kins` ([`super::bending`]).
+    #[inline(always)]
+    fn split_state(
+        &self,
+        proj: &Projection,
+        f: &Factors,
+        pl: &Plane,
+        kins: &[Kinematics; MAX_QP],
+    ) -> SplitState {
+        let kappa: [[f64; 3]; MAX_QP] = std::array::from_fn(|q| kins[q].kappa);
+        proj.state(f, &kappa[..self.nq], pl.c)
+    }
+
+    /// Keeps what the element's energy needs for `mat` that depends on the
+    /// material only (the split bending energy's factors for its Poisson's
+    /// ratio), so that evaluations with it need not recompute it. Results
+    /// are the same with or without.
+    pub fn prepare(&mut self, mat: &Material) {
+        if let Some(p) = &mut self.split {
+            p.prepare(mat.poisson_ratio);
+        }
     }
 
     /// Energy, internal force f = dU/de (27, index 3*k + c for nodal vector k, component c) and,
@@ -539,11 +632,38 @@ impl ShellElement {
         let (hm, hb) = (h, h * h * h / 12.0);
         force.fill(0.0);
         let mut out = ShellEnergy::default();
+        let kins = self.kinematics_at(e);
+        let mut scratch = None;
+        let factors = self
+            .split
+            .as_ref()
+            .map(|proj| proj.factors_for(pl.nu, &mut scratch));
+        let split = self
+            .split
+            .as_ref()
+            .zip(factors)
+            .map(|(proj, f)| self.split_state(proj, f, &pl, &kins));
+        // The split energy's gradients: of sum_q wa kappa_q (mean_grads[k][V])
+        // and of b_m (cubic_grads[m][k]).
+        let mut mean_grads = [[Vector3::zeros(); 3]; 9];
+        let mut cubic_grads = [[Vector3::zeros(); 9]; N_CUBIC];
         for (iq, q) in self.qp[..self.nq].iter().enumerate() {
-            let kin = kinematics(q, e);
+            let kin = &kins[iq];
             // Weighted stress resultants and moments (Voigt).
             let nm = pl.apply(q.wa * hm, kin.eps);
-            let mb = pl.apply(q.wa * hb, kin.kappa);
+            let mb = match &split {
+                None => pl.apply(q.wa * hb, kin.kappa),
+                Some(sp) => {
+                    let mut m = pl.apply(q.wa * hb, sp.mean);
+                    let f = factors.expect("a split state has its factors");
+                    for (y, w) in sp.y.iter().zip(&f.wc) {
+                        for v in 0..3 {
+                            m[v] += hb * pl.c * y * w[iq][v];
+                        }
+                    }
+                    m
+                }
+            };
             out.membrane += 0.5 * dot3(kin.eps, nm);
             out.bending += 0.5 * dot3(kin.kappa, mb);
 
@@ -575,7 +695,47 @@ impl ShellElement {
                     a,
                     c,
                 };
-                add_tangent_upper(bl, q, &kin, &pl, h, &stress);
+                let material = match &split {
+                    None => Material3::Pointwise,
+                    Some(_) => Material3::Split {
+                        wc_phi: std::array::from_fn(|m| {
+                            factors.expect("a split state has its factors").wc[m][iq]
+                        }),
+                        mean_grads: &mut mean_grads,
+                        cubic_grads: &mut cubic_grads,
+                    },
+                };
+                add_tangent_upper(bl, q, kin, &pl, h, &stress, material);
+            }
+        }
+        if let (Some(bl), Some(f), Some(proj)) = (blocks, factors, &self.split) {
+            // (h^3/12) (d(A kappa_mean)^T C d(A kappa_mean) / A + a db^T G^-1 db):
+            // every block a sum of outer products, three and four; with db
+            // over c, a db^T G^-1 db = c |l db|^2.
+            let hb = h * h * h / 12.0;
+            let s = hb / proj.area();
+            let c_mean = mean_grads.map(|g| {
+                [
+                    (g[0] + g[1] * pl.nu) * (s * pl.c),
+                    (g[0] * pl.nu + g[1]) * (s * pl.c),
+                    g[2] * (s * pl.c * 0.5 * (1.0 - pl.nu)),
+                ]
+            });
+            let gamma: [[Vector3<f64>; 9]; N_CUBIC] = std::array::from_fn(|t| {
+                std::array::from_fn(|k| {
+                    (0..N_CUBIC).fold(Vector3::zeros(), |a, m| a + cubic_grads[m][k] * f.l[t][m])
+                })
+            });
+            for k in 0..9 {
+                for l in k..9 {
+                    let b = &mut bl[k][l];
+                    for v in 0..3 {
+                        add_outer(b, 1.0, &mean_grads[k][v], &c_mean[l][v]);
+                    }
+                    for g in &gamma {
+                        add_outer(b, hb * pl.c, &g[k], &g[l]);
+                    }
+                }
             }
         }
         out
@@ -640,6 +800,19 @@ struct Stress<'a> {
     c: Vector3<f64>,
 }
 
+/// How a point adds the bending energy's material tangent: its own
+/// `(beta_k . D beta_l) n_hat n_hat^T`, or (split energy) by adding its
+/// share of the measures' gradients (the blocks come after the points).
+enum Material3<'a> {
+    Pointwise,
+    Split {
+        /// `wa (CA + nu CB) phi_m` at the point.
+        wc_phi: [[f64; 3]; N_CUBIC],
+        mean_grads: &'a mut [[Vector3<f64>; 3]; 9],
+        cubic_grads: &'a mut [[Vector3<f64>; 9]; N_CUBIC],
+    },
+}
+
 /// Adds one quadrature point's tangent to the blocks `(k, l)`, `k <= l`.
 ///
 /// Per node the derivatives enter through `N_k,1`, `N_k,2` and the Voigt
@@ -655,6 +828,7 @@ fn add_tangent_upper(
     pl: &Plane,
     h: f64,
     st: &Stress,
+    material: Material3,
 ) {
     let inv = 1.0 / kin.n_len;
     // d kappa_V / d e_k = beta_kV n_hat with beta_kV = N_k,V + N_k,1 p_V + N_k,2 q_V:
@@ -668,13 +842,16 @@ fn add_tangent_upper(
     let mut y1 = [ZERO3; 9];
     let mut y2 = [ZERO3; 9];
     let mut yv = [ZERO3; 9];
+    let pointwise = matches!(material, Material3::Pointwise);
     let mut beta = [[0.0; 3]; 9];
     let mut dbeta = [[0.0; 3]; 9];
     for l in 0..9 {
         let (n1, n2, ntl) = (q.n1[l], q.n2[l], st.nt[l]);
         let nv = [q.n11[l], q.n22[l], 2.0 * q.n12[l]];
         beta[l] = [0, 1, 2].map(|v| nv[v] + n1 * pv[v] + n2 * qv[v]);
-        dbeta[l] = pl.apply(sb, beta[l]);
+        if pointwise {
+            dbeta[l] = pl.apply(sb, beta[l]);
+        }
         let mut m = ZERO3;
         axpy(&mut m, n1, &x.x11);
         axpy(&mut m, n2, &x.x12);
@@ -690,12 +867,33 @@ fn add_tangent_upper(
         axpy(&mut m, n2, &x.gv2);
         yv[l] = m;
     }
+    if let Material3::Split {
+        wc_phi,
+        mean_grads,
+        cubic_grads,
+    } = material
+    {
+        for l in 0..9 {
+            for v in 0..3 {
+                mean_grads[l][v] += kin.n_hat * (q.wa * beta[l][v]);
+            }
+        }
+        for (wp, g) in wc_phi.iter().zip(cubic_grads.iter_mut()) {
+            for l in 0..9 {
+                g[l] += kin.n_hat * dot3(*wp, beta[l]);
+            }
+        }
+    }
     let nn = outer(&kin.n_hat, &kin.n_hat);
     for k in 0..9 {
         let (n1, n2, ntk) = (q.n1[k], q.n2[k], st.nt[k]);
         for l in k..9 {
             // Bending material part: (beta_k . D beta_l) n_hat n_hat^T.
-            let d = dot3(beta[k], dbeta[l]);
+            let d = if pointwise {
+                dot3(beta[k], dbeta[l])
+            } else {
+                0.0
+            };
             let b = &mut bl[k][l];
             for i in 0..3 {
                 for j in 0..3 {
@@ -860,6 +1058,18 @@ mod tests {
         ]
     }
 
+    /// The element on `x` with both bending energies (pointwise, split).
+    fn both(x: [Vector2<f64>; 3], rule: Rule) -> [ShellElement; 2] {
+        [Bending::Pointwise, Bending::Split].map(|bending| {
+            let options = ElementOptions {
+                rule,
+                bending,
+                ..ElementOptions::default()
+            };
+            ShellElement::with_options(x, options).unwrap()
+        })
+    }
+
     fn material(h: f64) -> Material {
         Material {
             youngs_modulus: 2.5,
@@ -984,21 +1194,22 @@ mod tests {
         let mat = material(0.1);
         for rule in [Rule::Dunavant7, Rule::Dunavant12] {
             for x in triangles() {
-                let el = ShellElement::new(x, rule).unwrap();
-                let e0 = reference_vector(&x);
-                let mut f = SVector::zeros();
-                let mut k = SMatrix::<f64, 27, 27>::zeros();
-                let en = el.eval(&mat, &e0, &mut f, Some(&mut k));
-                assert!(en.total().abs() < 1e-30 && f.amax() < 1e-15);
-                assert_eq!(k, k.transpose());
-                let ev = k.symmetric_eigenvalues();
-                let max = ev.amax();
-                let rank = ev.iter().filter(|v| v.abs() > 1e-8 * max).count();
-                assert_eq!(rank, 21, "{rule:?} {x:?}: {ev}");
-                // A clear gap: zero modes at round-off, the rest well away.
-                let mut a: Vec<f64> = ev.iter().map(|v| v.abs() / max).collect();
-                a.sort_by(f64::total_cmp);
-                assert!(a[5] < 1e-13 && a[6] > 1e-6, "{a:?}");
+                for el in both(x, rule) {
+                    let e0 = reference_vector(&x);
+                    let mut f = SVector::zeros();
+                    let mut k = SMatrix::<f64, 27, 27>::zeros();
+                    let en = el.eval(&mat, &e0, &mut f, Some(&mut k));
+                    assert!(en.total().abs() < 1e-30 && f.amax() < 1e-15);
+                    assert_eq!(k, k.transpose());
+                    let ev = k.symmetric_eigenvalues();
+                    let max = ev.amax();
+                    let rank = ev.iter().filter(|v| v.abs() > 1e-8 * max).count();
+                    assert_eq!(rank, 21, "{rule:?} {x:?}: {ev}");
+                    // A clear gap: zero modes at round-off, the rest well away.
+                    let mut a: Vec<f64> = ev.iter().map(|v| v.abs() / max).collect();
+                    a.sort_by(f64::total_cmp);
+                    assert!(a[5] < 1e-13 && a[6] > 1e-6, "{a:?}");
+                }
             }
         }
     }
@@ -1023,52 +1234,54 @@ mod tests {
             for (i, x) in triangles().into_iter().enumerate() {
                 let n = if i == 2 { 5 } else { 1 };
                 for trial in 0..n {
-                    let el = ShellElement::new(x, rule).unwrap();
                     let e = random_deformation(&x, &mut rng);
-                    let mut f1 = SVector::zeros();
-                    let mut f2 = SVector::zeros();
-                    let mut k1 = SMatrix::<f64, 27, 27>::zeros();
-                    let mut k2 = SMatrix::<f64, 27, 27>::zeros();
-                    let en = el.eval(&m1, &e, &mut f1, Some(&mut k1));
-                    el.eval(&m2, &e, &mut f2, Some(&mut k2));
-                    let (fm, fb) = split(f1, f2);
-                    let (km, kb) = split(k1, k2);
-                    assert_eq!(k1, k1.transpose());
+                    for el in both(x, rule) {
+                        let mut f1 = SVector::zeros();
+                        let mut f2 = SVector::zeros();
+                        let mut k1 = SMatrix::<f64, 27, 27>::zeros();
+                        let mut k2 = SMatrix::<f64, 27, 27>::zeros();
+                        let en = el.eval(&m1, &e, &mut f1, Some(&mut k1));
+                        el.eval(&m2, &e, &mut f2, Some(&mut k2));
+                        let (fm, fb) = split(f1, f2);
+                        let (km, kb) = split(k1, k2);
+                        assert_eq!(k1, k1.transpose());
 
-                    let en2 = el.energy(&m1, &e);
-                    assert!((en.membrane - en2.membrane).abs() <= 1e-14 * en2.membrane);
-                    assert!((en.bending - en2.bending).abs() <= 1e-14 * en2.bending);
-                    assert!(en.membrane > 0.0 && en.bending > 0.0);
-                    let mut f_no_k = SVector::zeros();
-                    el.eval(&m1, &e, &mut f_no_k, None);
-                    assert_eq!(f1, f_no_k);
+                        let en2 = el.energy(&m1, &e);
+                        assert!((en.membrane - en2.membrane).abs() <= 1e-14 * en2.membrane);
+                        assert!((en.bending - en2.bending).abs() <= 1e-14 * en2.bending);
+                        assert!(en.membrane > 0.0 && en.bending > 0.0);
+                        let mut f_no_k = SVector::zeros();
+                        el.eval(&m1, &e, &mut f_no_k, None);
+                        assert_eq!(f1, f_no_k);
 
-                    let d = 1e-6;
-                    let mut fm_fd = SVector::<f64, 27>::zeros();
-                    let mut fb_fd = SVector::<f64, 27>::zeros();
-                    let mut km_fd = SMatrix::<f64, 27, 27>::zeros();
-                    let mut kb_fd = SMatrix::<f64, 27, 27>::zeros();
-                    for j in 0..27 {
-                        let (ep, em) = (perturbed(&e, j, d), perturbed(&e, j, -d));
-                        let (up, um) = (el.energy(&m1, &ep), el.energy(&m1, &em));
-                        fm_fd[j] = (up.membrane - um.membrane) / (2.0 * d);
-                        fb_fd[j] = (up.bending - um.bending) / (2.0 * d);
-                        let (fpm, fpb) = split(force(&el, &m1, &ep), force(&el, &m2, &ep));
-                        let (fmm, fmb) = split(force(&el, &m1, &em), force(&el, &m2, &em));
-                        km_fd.set_column(j, &((fpm - fmm) / (2.0 * d)));
-                        kb_fd.set_column(j, &((fpb - fmb) / (2.0 * d)));
-                    }
-                    let errs = [
-                        ("membrane force", (fm_fd - fm).norm() / fm.norm()),
-                        ("bending force", (fb_fd - fb).norm() / fb.norm()),
-                        ("membrane tangent", (km_fd - km).norm() / km.norm()),
-                        ("bending tangent", (kb_fd - kb).norm() / kb.norm()),
-                    ];
-                    for (what, err) in errs {
-                        assert!(
-                            err < 1e-6,
-                            "{rule:?} tri {i} trial {trial}: {what} error {err:e}"
-                        );
+                        let d = 1e-6;
+                        let mut fm_fd = SVector::<f64, 27>::zeros();
+                        let mut fb_fd = SVector::<f64, 27>::zeros();
+                        let mut km_fd = SMatrix::<f64, 27, 27>::zeros();
+                        let mut kb_fd = SMatrix::<f64, 27, 27>::zeros();
+                        for j in 0..27 {
+                            let (ep, em) = (perturbed(&e, j, d), perturbed(&e, j, -d));
+                            let (up, um) = (el.energy(&m1, &ep), el.energy(&m1, &em));
+                            fm_fd[j] = (up.membrane - um.membrane) / (2.0 * d);
+                            fb_fd[j] = (up.bending - um.bending) / (2.0 * d);
+                            let (fpm, fpb) = split(force(&el, &m1, &ep), force(&el, &m2, &ep));
+                            let (fmm, fmb) = split(force(&el, &m1, &em), force(&el, &m2, &em));
+                            km_fd.set_column(j, &((fpm - fmm) / (2.0 * d)));
+                            kb_fd.set_column(j, &((fpb - fmb) / (2.0 * d)));
+                        }
+                        let errs = [
+                            ("membrane force", (fm_fd - fm).norm() / fm.norm()),
+                            ("bending force", (fb_fd - fb).norm() / fb.norm()),
+                            ("membrane tangent", (km_fd - km).norm() / km.norm()),
+                            ("bending tangent", (kb_fd - kb).norm() / kb.norm()),
+                        ];
+                        for (what, err) in errs {
+                            assert!(
+                                err < 1e-6,
+                                "{rule:?} {:?} tri {i} trial {trial}: {what} error {err:e}",
+                                el.bending()
+                            );
+                        }
                     }
                 }
             }
@@ -1091,45 +1304,77 @@ mod tests {
         let mut rng = Rng(0x1a99);
         for rule in [Rule::Dunavant12, Rule::Dunavant7] {
             let x = triangles()[2];
-            let el = ShellElement::new(x, rule).unwrap();
-            let e = random_deformation(&x, &mut rng);
-            let other = random_deformation(&x, &mut rng);
-            let own = el.membrane_resultants(&mat, &e);
-            let lag = el.membrane_resultants(&mat, &other);
-            let (mut f0, mut f1, mut f2) = (SVector::zeros(), SVector::zeros(), SVector::zeros());
-            let mut k0 = SMatrix::<f64, 27, 27>::zeros();
-            let mut k1 = k0;
-            let mut k2 = k0;
-            el.eval(&mat, &e, &mut f0, Some(&mut k0));
-            el.eval_lagged(&mat, &e, &mut f1, Some(&mut k1), Some(&own));
-            assert_eq!(f0, f1);
-            assert_eq!(k0, k1, "{rule:?}: own resultants give the exact tangent");
-            el.eval_lagged(&mat, &e, &mut f2, Some(&mut k2), Some(&lag));
-            assert_eq!(f0, f2, "the force is the state's own");
-            let diff = k2 - k0;
-            assert!(
-                diff.norm() > 1e-6 * k0.norm(),
-                "{rule:?}: resultants differ"
-            );
-            for k in 0..9 {
-                for l in 0..9 {
-                    let b = diff.fixed_view::<3, 3>(3 * k, 3 * l);
-                    let c = b[(0, 0)];
-                    let tol = 1e-12 * k0.norm();
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            let want = if i == j { c } else { 0.0 };
-                            assert!((b[(i, j)] - want).abs() < tol, "{rule:?} block ({k},{l})");
+            for el in both(x, rule) {
+                let e = random_deformation(&x, &mut rng);
+                let other = random_deformation(&x, &mut rng);
+                let own = el.membrane_resultants(&mat, &e);
+                let lag = el.membrane_resultants(&mat, &other);
+                let (mut f0, mut f1, mut f2) =
+                    (SVector::zeros(), SVector::zeros(), SVector::zeros());
+                let mut k0 = SMatrix::<f64, 27, 27>::zeros();
+                let mut k1 = k0;
+                let mut k2 = k0;
+                el.eval(&mat, &e, &mut f0, Some(&mut k0));
+                el.eval_lagged(&mat, &e, &mut f1, Some(&mut k1), Some(&own));
+                assert_eq!(f0, f1);
+                assert_eq!(k0, k1, "{rule:?}: own resultants give the exact tangent");
+                el.eval_lagged(&mat, &e, &mut f2, Some(&mut k2), Some(&lag));
+                assert_eq!(f0, f2, "the force is the state's own");
+                let diff = k2 - k0;
+                assert!(
+                    diff.norm() > 1e-6 * k0.norm(),
+                    "{rule:?}: resultants differ"
+                );
+                for k in 0..9 {
+                    for l in 0..9 {
+                        let b = diff.fixed_view::<3, 3>(3 * k, 3 * l);
+                        let c = b[(0, 0)];
+                        let tol = 1e-12 * k0.norm();
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                let want = if i == j { c } else { 0.0 };
+                                assert!((b[(i, j)] - want).abs() < tol, "{rule:?} block ({k},{l})");
+                            }
                         }
                     }
                 }
+                // Linear in the resultants: halfway resultants, halfway matrix.
+                let mid: MembraneResultants =
+                    std::array::from_fn(|q| std::array::from_fn(|v| 0.5 * (own[q][v] + lag[q][v])));
+                let mut km = k0;
+                el.eval_lagged(&mat, &e, &mut f2, Some(&mut km), Some(&mid));
+                assert!((km - (k0 + k2) * 0.5).norm() < 1e-12 * k0.norm());
             }
-            // Linear in the resultants: halfway resultants, halfway matrix.
-            let mid: MembraneResultants =
-                std::array::from_fn(|q| std::array::from_fn(|v| 0.5 * (own[q][v] + lag[q][v])));
-            let mut km = k0;
-            el.eval_lagged(&mat, &e, &mut f2, Some(&mut km), Some(&mid));
-            assert!((km - (k0 + k2) * 0.5).norm() < 1e-12 * k0.norm());
+        }
+    }
+
+    /// Keeping the split energy's factors for the material changes no bit of
+    /// the results; kept for another Poisson's ratio, they are not used.
+    #[test]
+    fn prepared_elements_give_the_same_results() {
+        let mut rng = Rng(0xbeef);
+        let x = triangles()[2];
+        let e = random_deformation(&x, &mut rng);
+        let (mat, other) = (
+            material(0.1),
+            Material {
+                poisson_ratio: 0.1,
+                ..material(0.1)
+            },
+        );
+        for el in both(x, Rule::default()) {
+            let run = |el: &ShellElement| {
+                let mut f = SVector::zeros();
+                let mut k = SMatrix::<f64, 27, 27>::zeros();
+                let en = el.eval(&mat, &e, &mut f, Some(&mut k));
+                (en, f, k, el.energy(&mat, &e))
+            };
+            let plain = run(&el);
+            let mut kept = el;
+            kept.prepare(&mat);
+            assert_eq!(run(&kept), plain, "{:?}", el.bending());
+            kept.prepare(&other);
+            assert_eq!(run(&kept), plain, "{:?}", el.bending());
         }
     }
 
@@ -1149,73 +1394,78 @@ mod tests {
             x[0] - x[2],
             x[1] - x[2],
         ];
-        let el =
-            ShellElement::with_sides(x, sides, Rule::default(), Interpolation::Specht).unwrap();
-        let straight = ShellElement::new(x, Rule::default()).unwrap();
-        assert!(el.area() > straight.area(), "the side bulges out");
-        let v3 = |v: Vector2<f64>| Vector3::new(v.x, v.y, 0.0);
-        let e0: ElemVec = [
-            v3(x[0]),
-            v3(sides[0]),
-            v3(sides[1]),
-            v3(x[1]),
-            v3(sides[2]),
-            v3(sides[3]),
-            v3(x[2]),
-            v3(sides[4]),
-            v3(sides[5]),
-        ];
-        let mut rng = Rng(0xc0ffee);
-        // A deformation: the reference vector under a smooth map plus noise.
-        let mut e = rigid(&e0, &rng.rotation(), rng.vec3());
-        for v in e.iter_mut() {
-            *v += 0.05 * rng.vec3();
+        for bending in [Bending::Pointwise, Bending::Split] {
+            let options = |bending| ElementOptions {
+                bending,
+                ..ElementOptions::default()
+            };
+            let el = ShellElement::with_sides(x, sides, options(bending)).unwrap();
+            let straight = ShellElement::new(x, Rule::default()).unwrap();
+            assert!(el.area() > straight.area(), "the side bulges out");
+            let v3 = |v: Vector2<f64>| Vector3::new(v.x, v.y, 0.0);
+            let e0: ElemVec = [
+                v3(x[0]),
+                v3(sides[0]),
+                v3(sides[1]),
+                v3(x[1]),
+                v3(sides[2]),
+                v3(sides[3]),
+                v3(x[2]),
+                v3(sides[4]),
+                v3(sides[5]),
+            ];
+            let mut rng = Rng(0xc0ffee);
+            // A deformation: the reference vector under a smooth map plus noise.
+            let mut e = rigid(&e0, &rng.rotation(), rng.vec3());
+            for v in e.iter_mut() {
+                *v += 0.05 * rng.vec3();
+            }
+            let unit = total(&el, &m1, &e);
+            assert!(unit > 0.0);
+            assert!(total(&el, &m1, &e0) < 1e-28, "reference strain energy");
+            let moved = rigid(&e0, &rng.rotation(), rng.vec3());
+            assert!(total(&el, &m1, &moved) < 1e-12 * unit);
+            assert!(force(&el, &m1, &moved).norm() < 1e-10 * force(&el, &m1, &e).norm());
+            let (mut f1, mut f2) = (SVector::zeros(), SVector::zeros());
+            let (mut k1, mut k2) = (
+                SMatrix::<f64, 27, 27>::zeros(),
+                SMatrix::<f64, 27, 27>::zeros(),
+            );
+            el.eval(&m1, &e, &mut f1, Some(&mut k1));
+            el.eval(&m2, &e, &mut f2, Some(&mut k2));
+            let (fm, fb) = split(f1, f2);
+            let (km, kb) = split(k1, k2);
+            let d = 1e-6;
+            let mut f_fd = [SVector::<f64, 27>::zeros(); 2];
+            let mut k_fd = [SMatrix::<f64, 27, 27>::zeros(); 2];
+            for j in 0..27 {
+                let (ep, em) = (perturbed(&e, j, d), perturbed(&e, j, -d));
+                let (up, um) = (el.energy(&m1, &ep), el.energy(&m1, &em));
+                f_fd[0][j] = (up.membrane - um.membrane) / (2.0 * d);
+                f_fd[1][j] = (up.bending - um.bending) / (2.0 * d);
+                let (fpm, fpb) = split(force(&el, &m1, &ep), force(&el, &m2, &ep));
+                let (fmm, fmb) = split(force(&el, &m1, &em), force(&el, &m2, &em));
+                k_fd[0].set_column(j, &((fpm - fmm) / (2.0 * d)));
+                k_fd[1].set_column(j, &((fpb - fmb) / (2.0 * d)));
+            }
+            for (what, err) in [
+                ("membrane force", (f_fd[0] - fm).norm() / fm.norm()),
+                ("bending force", (f_fd[1] - fb).norm() / fb.norm()),
+                ("membrane tangent", (k_fd[0] - km).norm() / km.norm()),
+                ("bending tangent", (k_fd[1] - kb).norm() / kb.norm()),
+            ] {
+                assert!(err < 1e-6, "{what} error {err:e}");
+            }
+            let mh = el.mass_hat();
+            let m = SMatrix::<f64, 9, 9>::from_fn(|i, j| mh[i][j]);
+            assert!((m - m.transpose()).amax() < 1e-15);
+            assert!(m.symmetric_eigenvalues().min() > 0.0);
+            let trans: f64 = [0, 3, 6]
+                .iter()
+                .flat_map(|&i| [0, 3, 6].map(|j| mh[i][j]))
+                .sum();
+            assert!((trans - 1.0).abs() < 1e-12, "{trans}");
         }
-        let unit = total(&el, &m1, &e);
-        assert!(unit > 0.0);
-        assert!(total(&el, &m1, &e0) < 1e-28, "reference strain energy");
-        let moved = rigid(&e0, &rng.rotation(), rng.vec3());
-        assert!(total(&el, &m1, &moved) < 1e-12 * unit);
-        assert!(force(&el, &m1, &moved).norm() < 1e-10 * force(&el, &m1, &e).norm());
-        let (mut f1, mut f2) = (SVector::zeros(), SVector::zeros());
-        let (mut k1, mut k2) = (
-            SMatrix::<f64, 27, 27>::zeros(),
-            SMatrix::<f64, 27, 27>::zeros(),
-        );
-        el.eval(&m1, &e, &mut f1, Some(&mut k1));
-        el.eval(&m2, &e, &mut f2, Some(&mut k2));
-        let (fm, fb) = split(f1, f2);
-        let (km, kb) = split(k1, k2);
-        let d = 1e-6;
-        let mut f_fd = [SVector::<f64, 27>::zeros(); 2];
-        let mut k_fd = [SMatrix::<f64, 27, 27>::zeros(); 2];
-        for j in 0..27 {
-            let (ep, em) = (perturbed(&e, j, d), perturbed(&e, j, -d));
-            let (up, um) = (el.energy(&m1, &ep), el.energy(&m1, &em));
-            f_fd[0][j] = (up.membrane - um.membrane) / (2.0 * d);
-            f_fd[1][j] = (up.bending - um.bending) / (2.0 * d);
-            let (fpm, fpb) = split(force(&el, &m1, &ep), force(&el, &m2, &ep));
-            let (fmm, fmb) = split(force(&el, &m1, &em), force(&el, &m2, &em));
-            k_fd[0].set_column(j, &((fpm - fmm) / (2.0 * d)));
-            k_fd[1].set_column(j, &((fpb - fmb) / (2.0 * d)));
-        }
-        for (what, err) in [
-            ("membrane force", (f_fd[0] - fm).norm() / fm.norm()),
-            ("bending force", (f_fd[1] - fb).norm() / fb.norm()),
-            ("membrane tangent", (k_fd[0] - km).norm() / km.norm()),
-            ("bending tangent", (k_fd[1] - kb).norm() / kb.norm()),
-        ] {
-            assert!(err < 1e-6, "{what} error {err:e}");
-        }
-        let mh = el.mass_hat();
-        let m = SMatrix::<f64, 9, 9>::from_fn(|i, j| mh[i][j]);
-        assert!((m - m.transpose()).amax() < 1e-15);
-        assert!(m.symmetric_eigenvalues().min() > 0.0);
-        let trans: f64 = [0, 3, 6]
-            .iter()
-            .flat_map(|&i| [0, 3, 6].map(|j| mh[i][j]))
-            .sum();
-        assert!((trans - 1.0).abs() < 1e-12, "{trans}");
     }
 
     /// `B^T D B` alone, with B from finite differences of the strains: used to
@@ -1277,31 +1527,32 @@ mod tests {
     fn rigid_motions_give_zero_energy_and_force() {
         let mat = material(0.1);
         for x in triangles() {
-            let el = ShellElement::new(x, Rule::default()).unwrap();
-            let e0 = reference_vector(&x);
-            // Unit deformation: strain ~1 and curvature ~1/L.
-            let unit = from_field(&x, |p| {
-                let r = Vector3::new(2.0 * p.x, p.y, 0.5 * (p.x * p.x + p.y * p.y));
-                let j = Matrix3x2::new(2.0, 0.0, 0.0, 1.0, p.x, p.y);
-                (r, j)
-            });
-            let u_unit = total(&el, &mat, &unit);
-            let f_unit = force(&el, &mat, &unit).norm();
-            let axes = [
-                Vector3::x(),
-                Vector3::y(),
-                Vector3::z(),
-                Vector3::new(1.0, 2.0, -0.5),
-                Vector3::new(-0.3, 0.1, 0.9),
-            ];
-            for axis in axes {
-                for angle in [0.0, 0.3, 1.7, PI, 4.5, 2.0 * PI - 0.1, 2.0 * PI] {
-                    let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
-                    let e = rigid(&e0, &rot, Vector3::new(3.0, -1.5, 0.7));
-                    let u = total(&el, &mat, &e);
-                    let f = force(&el, &mat, &e).norm();
-                    assert!(u < 1e-12 * u_unit, "axis {axis} angle {angle}: {u:e}");
-                    assert!(f < 1e-12 * f_unit, "axis {axis} angle {angle}: {f:e}");
+            for el in both(x, Rule::default()) {
+                let e0 = reference_vector(&x);
+                // Unit deformation: strain ~1 and curvature ~1/L.
+                let unit = from_field(&x, |p| {
+                    let r = Vector3::new(2.0 * p.x, p.y, 0.5 * (p.x * p.x + p.y * p.y));
+                    let j = Matrix3x2::new(2.0, 0.0, 0.0, 1.0, p.x, p.y);
+                    (r, j)
+                });
+                let u_unit = total(&el, &mat, &unit);
+                let f_unit = force(&el, &mat, &unit).norm();
+                let axes = [
+                    Vector3::x(),
+                    Vector3::y(),
+                    Vector3::z(),
+                    Vector3::new(1.0, 2.0, -0.5),
+                    Vector3::new(-0.3, 0.1, 0.9),
+                ];
+                for axis in axes {
+                    for angle in [0.0, 0.3, 1.7, PI, 4.5, 2.0 * PI - 0.1, 2.0 * PI] {
+                        let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
+                        let e = rigid(&e0, &rot, Vector3::new(3.0, -1.5, 0.7));
+                        let u = total(&el, &mat, &e);
+                        let f = force(&el, &mat, &e).norm();
+                        assert!(u < 1e-12 * u_unit, "axis {axis} angle {angle}: {u:e}");
+                        assert!(f < 1e-12 * f_unit, "axis {axis} angle {angle}: {f:e}");
+                    }
                 }
             }
         }
@@ -1322,33 +1573,35 @@ mod tests {
         ];
         for rule in [Rule::Dunavant7, Rule::Dunavant12] {
             for x in triangles() {
-                let el = ShellElement::new(x, rule).unwrap();
-                for kk in curvatures {
-                    let [k11, k22, k12] = kk.map(|v| 1e-4 * v);
-                    let e = from_field(&x, |p| {
-                        let w = 0.5 * (k11 * p.x * p.x + 2.0 * k12 * p.x * p.y + k22 * p.y * p.y);
-                        let r = Vector3::new(p.x, p.y, w);
-                        let j = Matrix3x2::new(
-                            1.0,
-                            0.0,
-                            0.0,
-                            1.0,
-                            k11 * p.x + k12 * p.y,
-                            k12 * p.x + k22 * p.y,
-                        );
-                        (r, j)
-                    });
-                    let kv = Vector3::new(k11, k22, 2.0 * k12);
-                    let want = el.area() * h * h * h / 24.0 * kv.dot(&(c * kv));
-                    for e in [e, rigid(&e, &rng.rotation(), rng.vec3())] {
-                        let en = el.energy(&mat, &e);
-                        let rel = (en.bending - want).abs() / want;
-                        assert!(
-                            rel < 1e-6,
-                            "{rule:?} {x:?} k {kk:?}: {} vs {want} ({rel:e})",
-                            en.bending
-                        );
-                        assert!(en.membrane < 1e-6 * want, "membrane {}", en.membrane);
+                for el in both(x, rule) {
+                    for kk in curvatures {
+                        let [k11, k22, k12] = kk.map(|v| 1e-4 * v);
+                        let e = from_field(&x, |p| {
+                            let w =
+                                0.5 * (k11 * p.x * p.x + 2.0 * k12 * p.x * p.y + k22 * p.y * p.y);
+                            let r = Vector3::new(p.x, p.y, w);
+                            let j = Matrix3x2::new(
+                                1.0,
+                                0.0,
+                                0.0,
+                                1.0,
+                                k11 * p.x + k12 * p.y,
+                                k12 * p.x + k22 * p.y,
+                            );
+                            (r, j)
+                        });
+                        let kv = Vector3::new(k11, k22, 2.0 * k12);
+                        let want = el.area() * h * h * h / 24.0 * kv.dot(&(c * kv));
+                        for e in [e, rigid(&e, &rng.rotation(), rng.vec3())] {
+                            let en = el.energy(&mat, &e);
+                            let rel = (en.bending - want).abs() / want;
+                            assert!(
+                                rel < 1e-6,
+                                "{rule:?} {x:?} k {kk:?}: {} vs {want} ({rel:e})",
+                                en.bending
+                            );
+                            assert!(en.membrane < 1e-6 * want, "membrane {}", en.membrane);
+                        }
                     }
                 }
             }
@@ -1363,30 +1616,31 @@ mod tests {
         let mut rng = Rng(3);
         for rule in [Rule::Dunavant7, Rule::Dunavant12] {
             for x in triangles() {
-                let el = ShellElement::new(x, rule).unwrap();
-                for _ in 0..4 {
-                    let a = Matrix3x2::new(
-                        1.0 + 0.1 * rng.sym(),
-                        0.1 * rng.sym(),
-                        0.1 * rng.sym(),
-                        1.0 + 0.1 * rng.sym(),
-                        0.0,
-                        0.0,
-                    );
-                    let rot = rng.rotation();
-                    let a = rot.matrix() * a;
-                    let t = rng.vec3();
-                    let e = from_field(&x, |p| (a * p + t, a));
-                    let g = (a.transpose() * a - nalgebra::Matrix2::identity()) * 0.5;
-                    let eps = Vector3::new(g[(0, 0)], g[(1, 1)], 2.0 * g[(0, 1)]);
-                    let want = el.area() * h / 2.0 * eps.dot(&(c * eps));
-                    let en = el.energy(&mat, &e);
-                    assert!(
-                        (en.membrane - want).abs() < 1e-12 * want,
-                        "{} vs {want}",
-                        en.membrane
-                    );
-                    assert!(en.bending < 1e-12 * want, "bending {}", en.bending);
+                for el in both(x, rule) {
+                    for _ in 0..4 {
+                        let a = Matrix3x2::new(
+                            1.0 + 0.1 * rng.sym(),
+                            0.1 * rng.sym(),
+                            0.1 * rng.sym(),
+                            1.0 + 0.1 * rng.sym(),
+                            0.0,
+                            0.0,
+                        );
+                        let rot = rng.rotation();
+                        let a = rot.matrix() * a;
+                        let t = rng.vec3();
+                        let e = from_field(&x, |p| (a * p + t, a));
+                        let g = (a.transpose() * a - nalgebra::Matrix2::identity()) * 0.5;
+                        let eps = Vector3::new(g[(0, 0)], g[(1, 1)], 2.0 * g[(0, 1)]);
+                        let want = el.area() * h / 2.0 * eps.dot(&(c * eps));
+                        let en = el.energy(&mat, &e);
+                        assert!(
+                            (en.membrane - want).abs() < 1e-12 * want,
+                            "{} vs {want}",
+                            en.membrane
+                        );
+                        assert!(en.bending < 1e-12 * want, "bending {}", en.bending);
+                    }
                 }
             }
         }

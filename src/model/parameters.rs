@@ -67,6 +67,7 @@ parameters! {
     MaxStep => "solver.max_step",
     Tolerance => "solver.tolerance",
     MaxInternalSteps => "solver.max_internal_steps",
+    MaxStepCpu => "solver.max_step_cpu",
     ErrorFilter => "solver.error_filter",
     /// Only in scenes with inputs.
     InputFirstOrderHold => "input.first_order_hold",
@@ -138,6 +139,7 @@ impl Parameter {
             MaxStep => sc.solver.max_step = x,
             Tolerance => sc.solver.tolerance = x,
             MaxInternalSteps => sc.solver.max_internal_steps = x as usize,
+            MaxStepCpu => sc.solver.max_step_cpu = x,
             ErrorFilter => sc.solver.error_filter = x != 0.0,
             InputFirstOrderHold => {
                 sc.solver.input_timing = if x == 0.0 {

@@ -6,8 +6,11 @@
 use super::inputs::{DriveValues, StepSignal};
 use super::system::System;
 use super::{Error, Model, ModelState, Phase};
+use crate::cpu_time;
 use crate::solver::step_control::{StepController, Verdict, equal_substeps};
-use crate::solver::stepper::{Attempt, Dynamics, Failure, Mechanics, Outcome, StepPolicy};
+use crate::solver::stepper::{
+    Attempt, Dynamics, Failure, Mechanics, Outcome, StepError, StepPolicy,
+};
 use crate::text::num;
 use serde::{Deserialize, Serialize};
 
@@ -250,6 +253,9 @@ struct Advance {
     report: StepReport,
     /// The integrator's linear-solver times at the start.
     linear_times: (std::time::Duration, std::time::Duration),
+    /// The thread CPU time past which the advance fails
+    /// (`solver.max_step_cpu`; `None` where it is too large to count).
+    deadline: Option<std::time::Duration>,
 }
 
 impl Advance {
@@ -272,6 +278,9 @@ impl Advance {
                 ..Default::default()
             },
             linear_times: sys.stepper.linear_times(&sys.solver),
+            deadline: std::time::Duration::try_from_secs_f64(sys.settings.max_step_cpu)
+                .ok()
+                .and_then(|cap| cpu_time::now(cpu_time::Clock::Thread).checked_add(cap)),
         };
         let mut u = std::mem::take(&mut adv.u);
         adv.signal.inputs_at(0.0, &mut u);
@@ -299,6 +308,23 @@ impl Advance {
             &mut self.d
         };
         sys.inputs.move_obstacles(u, (&d1, &d2), d);
+    }
+
+    /// The advance's CPU passed `solver.max_step_cpu`, at elapsed time `s`.
+    fn out_of_time(&self, cap: f64, s: f64) -> Error {
+        Error::StepFailed {
+            time: self.t0 + s,
+            reason: format!(
+                "the step from t = {} s used more than solver.max_step_cpu = {} s of CPU \
+                 ({} internal steps, {} rejected, {} Newton iterations); the state is the \
+                 one before it: use a smaller communication step or raise the limit",
+                num(self.t0),
+                num(cap),
+                self.report.steps,
+                self.report.rejected,
+                self.report.newton_iterations
+            ),
+        }
     }
 
     fn too_many(&self, cap: usize) -> Error {
@@ -363,6 +389,12 @@ impl Advance {
             if self.report.steps + self.report.rejected >= cap {
                 return Err(self.too_many(cap));
             }
+            if self
+                .deadline
+                .is_some_and(|d| cpu_time::now(cpu_time::Clock::Thread) > d)
+            {
+                return Err(self.out_of_time(settings.max_step_cpu, s));
+            }
             let remaining = big_h - s;
             let (h, s_end) = match (&mut ctl, substeps) {
                 (_, Some((_, h))) => (h, (k + 1) as f64 * h),
@@ -378,6 +410,9 @@ impl Advance {
                     // The failed attempt's work counts too.
                     self.report.add_attempt(&outcome);
                     self.report.rejected += 1;
+                    if matches!(reason, StepError::OutOfTime) {
+                        return Err(self.out_of_time(settings.max_step_cpu, s));
+                    }
                     if !ctl.as_mut().is_some_and(|c| c.failed(h)) {
                         return Err(Error::StepFailed {
                             time: self.t0 + s,
@@ -446,6 +481,7 @@ impl Advance {
             h,
             drive: &drive,
             memory: state.memory.newton,
+            deadline: self.deadline,
         };
         let mech = Mechanics {
             asm: &sys.asm,

@@ -176,6 +176,7 @@ impl System {
         let physics = physics(sc);
         let element = ElementOptions {
             rule: sc.solver.quadrature,
+            bending: sc.solver.bending,
             ..ElementOptions::default()
         };
         let mut asm = Assembler::new(mesh, physics, element, &fixed).map_err(Error::Build)?;

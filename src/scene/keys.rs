@@ -15,7 +15,7 @@
 //! | `ancf:attachments` | `[{name, vertices}]` |
 //! | `ancf:contact` | `{enabled, friction, stiffness, thickness, barrier_width, stick_velocity, damping_ratio, subdivisions}` |
 //! | `ancf:obstacles` | `[{name, shape, ...its parameters, friction, moving}]` |
-//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, input_timing, error_filter, quadrature}` |
+//! | `ancf:solver` | `{integrator, rho_inf, max_step, min_step, tolerance, max_newton, newton, stop_time, max_internal_steps, max_step_cpu, input_timing, error_filter, quadrature}` |
 //! | `ancf:outputs` | `["positions", "fold_angles", "energies", "reactions"]` |
 //! | `ancf:refine` | levels of uniform refinement (integer) |
 //! | `ancf:import` | `{size, unit, f_edges}`: how the FOLD geometry is read |
@@ -1175,6 +1175,7 @@ fn key_solver(
             "newton",
             "stop_time",
             "max_internal_steps",
+            "max_step_cpu",
             "input_timing",
             "error_filter",
             "quadrature",
@@ -1214,6 +1215,9 @@ fn key_solver(
     }
     if let Some(n) = o.num_limited("max_internal_steps", "solver.max_internal_steps")? {
         s.max_internal_steps = n as usize;
+    }
+    if let Some(x) = o.num_limited("max_step_cpu", "solver.max_step_cpu")? {
+        s.max_step_cpu = x;
     }
     if let Some(name) = o.string("input_timing")? {
         s.input_timing = enum_value(

@@ -273,6 +273,13 @@ pub const LIMITS: &[Limit] = &[
         |s| Some(s.solver.max_internal_steps as f64),
     ),
     lim(
+        "solver.max_step_cpu",
+        Range::Positive,
+        "s",
+        "most CPU time one communication step may take before it is discarded with the state from before it",
+        |s| Some(s.solver.max_step_cpu),
+    ),
+    lim(
         "solver.stop_time",
         Range::Positive,
         "s",

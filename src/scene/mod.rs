@@ -454,6 +454,11 @@ pub struct SolverSettings {
     /// it fails cleanly, whatever the integrator: bounds the work of a call.
     #[serde(default = "default_max_internal_steps")]
     pub max_internal_steps: usize,
+    /// Most CPU time (s, the calling thread's clock) one advance (one
+    /// `fmi2DoStep`) may take before it fails cleanly with the state from
+    /// before it: a master never waits on a step without end.
+    #[serde(default = "default_max_step_cpu")]
+    pub max_step_cpu: f64,
     /// How an input set before a step acts over it (parameter
     /// `input.first_order_hold`).
     #[serde(default)]
@@ -468,6 +473,10 @@ pub struct SolverSettings {
     /// digits on refined meshes (`src/element/quadrature.rs`).
     #[serde(default)]
     pub quadrature: crate::element::Rule,
+    /// The shell's bending energy (Rust API only, not a scene key: the
+    /// benches compare the split energy with the default).
+    #[serde(skip)]
+    pub bending: crate::element::Bending,
     /// The stepper's numerical constants (Rust API only, not a scene key).
     #[serde(skip)]
     pub integration: crate::solver::IntegrationParameters,
@@ -478,6 +487,13 @@ pub const DEFAULT_MAX_INTERNAL_STEPS: usize = 100_000;
 
 fn default_max_internal_steps() -> usize {
     DEFAULT_MAX_INTERNAL_STEPS
+}
+
+/// Default of [`SolverSettings::max_step_cpu`], s.
+pub const DEFAULT_MAX_STEP_CPU: f64 = 60.0;
+
+fn default_max_step_cpu() -> f64 {
+    DEFAULT_MAX_STEP_CPU
 }
 
 /// How an input value set before a step acts over that step.
@@ -507,9 +523,11 @@ impl Default for SolverSettings {
             newton: NewtonMode::Modified,
             stop_time: 1.0,
             max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
+            max_step_cpu: DEFAULT_MAX_STEP_CPU,
             input_timing: InputTiming::Hold,
             error_filter: false,
             quadrature: crate::element::Rule::Dunavant7,
+            bending: crate::element::Bending::Pointwise,
             integration: Default::default(),
         }
     }

@@ -124,6 +124,9 @@ pub enum StepError {
     Assembly(Box<crate::assembly::EvalError>),
     /// The sparse solver failed.
     Linear(crate::solver::linear::LinearError),
+    /// The advance's CPU limit passed during the iteration: the advance
+    /// ends here (not retried with a shorter step).
+    OutOfTime,
 }
 
 impl From<crate::assembly::EvalError> for StepError {
@@ -155,6 +158,7 @@ impl fmt::Display for StepError {
             ),
             StepError::Assembly(m) => write!(f, "{m}"),
             StepError::Linear(e) => write!(f, "{e}"),
+            StepError::OutOfTime => write!(f, "the step's CPU limit passed"),
         }
     }
 }
@@ -197,6 +201,9 @@ pub struct Attempt<'a> {
     pub drive: &'a Drive<'a>,
     /// The memory of the steps accepted so far.
     pub memory: NewtonMemory,
+    /// The calling thread's CPU time past which an iteration gives up
+    /// ([`StepError::OutOfTime`]); `None`: no limit.
+    pub deadline: Option<std::time::Duration>,
 }
 
 /// A time integration scheme: one step of a given size from a state.

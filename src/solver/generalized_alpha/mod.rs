@@ -281,6 +281,7 @@ impl GeneralizedAlpha {
             scales: &self.scales,
             params: &self.params,
             settings: &self.settings,
+            deadline: attempt.deadline,
         };
         let have_rhs = predictor::predict(&ctx, next, ws, out);
         newton::iterate(&ctx, solver, have_rhs, next, ws, out)?;
@@ -309,6 +310,8 @@ struct StepContext<'a> {
     scales: &'a Scales,
     params: &'a IntegrationParameters,
     settings: &'a Settings,
+    /// The attempt's CPU deadline ([`Attempt::deadline`]).
+    deadline: Option<std::time::Duration>,
 }
 
 impl StepContext<'_> {
