@@ -15,14 +15,19 @@
 //! reading every output costs, are parts 3 and 4 of `benches/contact.rs`.)
 //!
 //! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird]
-//! [--fold PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]`
+//! [--fold PATH ...] [--scene PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]
+//! [--ramp S] [--hold S]` (the suite runs unless `--fold` or `--scene` alone are given)
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
 //! targets, not flat and not in the default list; `--cpu-limit S` stops a
 //! run once its fold and its checks together have taken S CPU s, reported
 //! as not finished.)
 //! (`--fold PATH` adds a FOLD file of your own, its creases driven to +-180
-//! degrees by their sign: e.g. Rabbit Ear's kraft-bird-base.fold, which this
-//! repository cannot hold.)
+//! degrees by their sign; `--scene PATH` a scene as it is, its own targets
+//! or folding sequence (`ancf:sequence`, keyframes), the flat-fold error
+//! against the flat-folding map of its final fold angles where they are all
+//! 0 or +-180 degrees. `--ramp S` and `--hold S` set the drive: the `fold`
+//! input from 0 to 1 over S s, then held for S s (defaults 1 and 0.5).
+//! `--help` prints this.)
 
 mod common;
 use common::cpu_seconds;
@@ -71,12 +76,50 @@ fn waterbomb_base(scene: &mut Scene) {
     }
 }
 
-fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> Row {
+/// The scene's mesh with each crease's target where the drive ends: its
+/// sequence's last target (0 for a crease no stage names) or its own.
+fn final_targets(scene: &Scene) -> origami_fmu::mesh::Mesh {
+    let mut mesh = scene.mesh.clone();
+    if let Some(sq) = &scene.sequence {
+        let entries = sq.entries();
+        for e in 0..mesh.edges().len() {
+            let edge = &mesh.edges()[e];
+            if edge.kind != EdgeKind::Crease {
+                continue;
+            }
+            let t = edge
+                .fold_edge
+                .and_then(|fe| entries.get(&fe))
+                .and_then(|list| list.last())
+                .map_or(0.0, |&(_, t)| t);
+            mesh.set_fold_target(EdgeId(e), t).unwrap();
+        }
+    }
+    mesh
+}
+
+/// Whether every crease of `mesh` ends flat or at +-180 degrees.
+fn ends_flat(mesh: &origami_fmu::mesh::Mesh) -> bool {
+    mesh.edges().iter().all(|e| {
+        e.kind != EdgeKind::Crease
+            || e.fold_target == 0.0
+            || (e.fold_target.abs() - PI).abs() < 1e-9
+    })
+}
+
+/// How the `fold` input is driven: 0 -> 1 over `ramp` s, then held `hold` s.
+#[derive(Clone, Copy)]
+struct Drive {
+    ramp: f64,
+    hold: f64,
+}
+
+fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, drive: Drive) -> Row {
     let mut scene = scene;
     if contact {
         scene.contact = Some(scene.default_contact());
     }
-    let map = flat.then(|| flat_folded_positions(&scene.mesh));
+    let map = flat.then(|| flat_folded_positions(&final_targets(&scene)));
     let mut model = Model::new(scene).unwrap();
     model.initialize().unwrap();
     let fold = model.input_id("fold").unwrap();
@@ -94,11 +137,20 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> 
     };
     // The checks' CPU: with the fold's, against the limit.
     let mut checking = 0.0;
-    for k in 0..150 {
+    let n = ((drive.ramp + drive.hold) / dt).round() as usize;
+    for k in 0..n {
         let t = k as f64 * dt;
-        model.set_input(fold, t.min(1.0)).unwrap();
+        model.set_input(fold, (t / drive.ramp).min(1.0)).unwrap();
         model
-            .set_input_derivative(fold, 1, if t < 1.0 { 1.0 } else { 0.0 })
+            .set_input_derivative(
+                fold,
+                1,
+                if t < drive.ramp {
+                    1.0 / drive.ramp
+                } else {
+                    0.0
+                },
+            )
             .unwrap();
         let c0 = cpu_seconds();
         let r = model.advance(dt);
@@ -118,7 +170,7 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> 
             }
         }
         row.outputs += 1;
-        if row.cpu + checking > cpu_limit && k + 1 < 150 {
+        if row.cpu + checking > cpu_limit && k + 1 < n {
             row.failed = Some(format!(
                 "stopped at {:.2} s: over the {cpu_limit} CPU s limit",
                 t + dt
@@ -145,26 +197,46 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64) -> 
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "--help" || a == "-h") {
+        println!(
+            "{}",
+            include_str!("contact_patterns.rs")
+                .lines()
+                .take_while(|l| l.starts_with("//!"))
+                .map(|l| l.trim_start_matches("//!").trim_start())
+                .collect::<Vec<_>>()
+                .join("\n")
+        );
+        return;
+    }
+    let list = |flag: &str| -> Vec<String> {
+        args.iter()
+            .enumerate()
+            .filter(|(_, a)| *a == flag)
+            .filter_map(|(i, _)| args.get(i + 1).cloned())
+            .collect()
+    };
+    let number = |flag: &str, default: f64| -> f64 {
+        origami_fmu::benchmarks::arg_text(flag).map_or(default, |v| v.parse().unwrap())
+    };
+    let drive = Drive {
+        ramp: number("--ramp", 1.0),
+        hold: number("--hold", 0.5),
+    };
     let value = origami_fmu::benchmarks::arg_text;
+    let folds = list("--fold");
+    let own = list("--scene");
+    // The suite unless files alone are asked for.
+    let suite = if folds.is_empty() && own.is_empty() {
+        "miura,yoshimura,kresling,waterbomb,smallbird,bird".to_string()
+    } else {
+        String::new()
+    };
     let patterns: Vec<String> = value("--patterns")
-        .map(|v| v.split(',').map(String::from).collect())
-        .unwrap_or_else(|| {
-            [
-                "miura",
-                "yoshimura",
-                "kresling",
-                "waterbomb",
-                "smallbird",
-                "bird",
-            ]
-            .map(String::from)
-            .to_vec()
-        });
-    let folds: Vec<String> = args
-        .iter()
-        .enumerate()
-        .filter(|(_, a)| *a == "--fold")
-        .filter_map(|(i, _)| args.get(i + 1).cloned())
+        .unwrap_or(suite)
+        .split(',')
+        .filter(|p| !p.is_empty())
+        .map(String::from)
         .collect();
     let which = value("--contact").unwrap_or_else(|| "both".into());
     let modes: Vec<bool> = match which.as_str() {
@@ -223,8 +295,14 @@ fn main() {
         fold_flat(&mut s);
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, true));
     }
+    for f in &own {
+        let (s, _) = origami_fmu::scene::load(f).unwrap();
+        let flat = ends_flat(&final_targets(&s));
+        scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, flat));
+    }
     println!(
-        "## Patterns folded over 1 s and held to 1.5 s (default settings, 10 ms steps; CPU of the folds, the checks apart)"
+        "## Patterns folded over {} s and held {} s more (default settings, 10 ms steps; CPU of the folds, the checks apart)",
+        drive.ramp, drive.hold
     );
     println!(
         "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing (16/side) | flat-fold error |"
@@ -233,7 +311,7 @@ fn main() {
     for (name, scene, flat) in &scenes {
         for &contact in &modes {
             let facets = scene.mesh.triangles().len();
-            let r = run(scene.clone(), contact, check, *flat, cpu_limit);
+            let r = run(scene.clone(), contact, check, *flat, cpu_limit, drive);
             println!(
                 "| {name} | {facets} | {} | {:.2} | {} | {} | {} | {} | {:.2} (at {:.2} s) | {} | {} |",
                 if contact { "on" } else { "off" },

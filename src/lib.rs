@@ -50,6 +50,7 @@ pub mod ids;
 pub mod material;
 pub mod mesh;
 pub mod model;
+pub mod motion;
 pub mod paraview;
 pub mod scene;
 

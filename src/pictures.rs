@@ -63,6 +63,9 @@ pub struct Frame {
     pub points: Vec<[f64; 3]>,
     /// Colour value of every face: mean |fold angle| of its creases, deg.
     pub face_values: Vec<f64>,
+    /// Where a folding sequence is ("stage 2/5 (petals), 40 %"); None
+    /// without one.
+    pub stage: Option<String>,
 }
 
 /// Union-find root of `a`.
@@ -170,10 +173,17 @@ impl Sheet {
                 (sum / ls.len() as f64).to_degrees()
             })
             .collect();
+        let stage = model
+            .scene()
+            .sequence
+            .as_ref()
+            .zip(model.sequence_position())
+            .map(|(sq, p)| sq.describe(p));
         Frame {
             time: model.time(),
             points,
             face_values,
+            stage,
         }
     }
 }
@@ -465,7 +475,13 @@ pub fn write_gif(
         return Err(PictureError::NoFrames("animate"));
     }
     let (w, h) = (480u32, 400u32);
-    let fit = Fit::new(frames, w - 70, h - 40);
+    // A second line of text above the sheet for a sequence's stage.
+    let top = if frames.iter().any(|f| f.stage.is_some()) {
+        48
+    } else {
+        30
+    };
+    let fit = Fit::new(frames, w - 70, h - 10 - top as u32);
     let vmax = color_limit(frames);
     let backend = BitMapBackend::gif(path, (w, h), 83).map_err(|source| PictureError::Create {
         path: path.to_path_buf(),
@@ -478,7 +494,7 @@ pub fn write_gif(
         let repeat = if k == last { 12 } else { 1 };
         for _ in 0..repeat {
             root.fill(&WHITE).map_err(PictureError::Drawing)?;
-            let panel = root.margin(30, 10, 0, 70);
+            let panel = root.margin(top, 10, 0, 70);
             draw_sheet(&panel, sheet, f, &fit, vmax)?;
             root.draw(&Text::new(
                 format!("{title}   t = {:.3} s", f.time),
@@ -486,6 +502,10 @@ pub fn write_gif(
                 (FAMILY, 14).into_font(),
             ))
             .map_err(PictureError::Drawing)?;
+            if let Some(stage) = &f.stage {
+                root.draw(&Text::new(stage.clone(), (8, 27), (FAMILY, 13).into_font()))
+                    .map_err(PictureError::Drawing)?;
+            }
             color_bar(&root, (w as i32 - 50, 80), 200, vmax)?;
             root.present().map_err(PictureError::Drawing)?;
         }
@@ -508,7 +528,13 @@ pub fn write_snapshots(
     let rows = frames.len().div_ceil(cols);
     let (pw, ph) = (320u32, 250u32);
     let (w, h) = (pw * cols as u32 + 70, ph * rows as u32 + 36);
-    let fit = Fit::new(frames, pw - 10, ph - 34);
+    // A second label line in each panel for a sequence's stage.
+    let top = if frames.iter().any(|f| f.stage.is_some()) {
+        46
+    } else {
+        30
+    };
+    let fit = Fit::new(frames, pw - 10, ph - 4 - top as u32);
     let vmax = color_limit(frames);
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
     root.fill(&WHITE).map_err(PictureError::Drawing)?;
@@ -528,7 +554,16 @@ pub fn write_snapshots(
                 (FAMILY, 13).into_font(),
             ))
             .map_err(PictureError::Drawing)?;
-        let inner = panel.margin(30, 4, 5, 5);
+        if let Some(stage) = &f.stage {
+            panel
+                .draw(&Text::new(
+                    stage.clone(),
+                    (10, 18),
+                    (FAMILY, 12).into_font(),
+                ))
+                .map_err(PictureError::Drawing)?;
+        }
+        let inner = panel.margin(top, 4, 5, 5);
         draw_sheet(&inner, sheet, f, &fit, vmax)?;
     }
     color_bar(&root, (w as i32 - 50, 60), (h as i32 - 130).max(60), vmax)?;

@@ -170,6 +170,29 @@ fn variable_lines(o: &mut String, scene: &scene::Scene, model: &Model) {
             String::new()
         }
     );
+    if let Some(sq) = &scene.sequence {
+        let stages: Vec<String> = sq
+            .stages
+            .iter()
+            .enumerate()
+            .map(|(k, st)| {
+                format!(
+                    "{} ({} creases, {:.3} of the drive)",
+                    sq.stage_name(k),
+                    st.targets.len(),
+                    st.share
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            o,
+            "  sequence:  {} stages walked by the input '{}' (outputs sequence.stage, \
+             sequence.progress): {}",
+            stages.len(),
+            sq.actuator,
+            list(&stages)
+        );
+    }
     if !scene.obstacles.is_empty() {
         let names: Vec<String> = scene
             .obstacles

@@ -73,6 +73,8 @@ pub enum CliError {
     },
     /// `--ramp` is negative or not finite.
     RampTime,
+    /// `--fold-out` (to this file) for a scene that is not a FOLD file.
+    FoldOutNeedsFold(PathBuf),
     /// The `--input` table is unusable.
     InputCsv(InputCsvError),
     /// The run stopped before its stop time (what was written stays).
@@ -247,6 +249,11 @@ impl std::fmt::Display for CliError {
             CliError::RampTime => {
                 write!(f, "--ramp must be zero or a positive number of seconds")
             }
+            CliError::FoldOutNeedsFold(out) => write!(
+                f,
+                "--fold-out {} writes the motion over the scene's FOLD crease pattern; this                  scene is a scene JSON: simulate the FOLD file instead",
+                out.display()
+            ),
             CliError::InputCsv(e) => write!(f, "{e}"),
             CliError::RunStopped {
                 source,

@@ -96,12 +96,33 @@ pub struct SceneOptions {
     /// `contact.friction`) [default: the scene's, else 0.3]. Needs contact on.
     #[arg(long, value_name = "MU")]
     pub friction: Option<f64>,
+    /// Read the frames after the crease pattern as keyframes of a folding sequence, one stage
+    /// each: auto (when every one carries fold angles or folded coordinates, and the file has
+    /// no ancf:sequence), on (an error when they do not), off.
+    #[arg(long, value_name = "WHEN", value_enum, default_value_t = KeyframesArg::Auto)]
+    pub keyframes: KeyframesArg,
+}
+
+/// `--keyframes`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum KeyframesArg {
+    /// When every frame after the crease pattern carries fold angles.
+    #[default]
+    Auto,
+    /// Always (an error when a frame does not carry fold angles).
+    On,
+    /// Never: the crease pattern alone.
+    Off,
 }
 
 impl SceneOptions {
     /// Whether an option that only applies to FOLD files is given.
     fn any(&self) -> bool {
-        self.frame.is_some() || self.size.is_some() || self.unit.is_some() || self.f_edges.is_some()
+        self.frame.is_some()
+            || self.size.is_some()
+            || self.unit.is_some()
+            || self.f_edges.is_some()
+            || self.keyframes != KeyframesArg::Auto
     }
 
     /// Apply `--contact` and `--friction` to a loaded scene.
@@ -136,6 +157,11 @@ impl SceneOptions {
                 FEdges::Smooth => FlatEdges::Smooth,
             }),
             contact: self.contact,
+            keyframes: match self.keyframes {
+                KeyframesArg::Auto => scene::Keyframes::Auto,
+                KeyframesArg::On => scene::Keyframes::On,
+                KeyframesArg::Off => scene::Keyframes::Off,
+            },
         }
     }
 }

@@ -60,6 +60,12 @@ pub struct SimulateArgs {
     /// the model's mesh, per-facet strain energy and per-crease fold angle.
     #[arg(long, value_name = "DIR")]
     pub pvd: Option<PathBuf>,
+    /// Write the motion as a multi-frame FOLD file: the crease pattern (in metres) and one frame
+    /// per output step with the simulated vertices_coords and edges_foldAngle (Rabbit Ear,
+    /// Origami Simulator and the FOLD library read it; read back here, its frames are the
+    /// stages of a folding sequence). FOLD scenes only.
+    #[arg(long, value_name = "FILE")]
+    pub fold_out: Option<PathBuf>,
     /// How a FOLD scene is read (--frame, --size, --unit, --f-edges).
     #[command(flatten)]
     pub read: super::SceneOptions,
@@ -288,7 +294,7 @@ impl Progress {
         }
     }
 
-    fn update(&mut self, k: usize, t: f64, steps: usize) {
+    fn update(&mut self, k: usize, t: f64, steps: usize, stage: Option<String>) {
         if !self.shown && self.started.elapsed().as_secs_f64() > 1.0 {
             self.shown = true;
             self.bar
@@ -297,8 +303,9 @@ impl Progress {
                 .enable_steady_tick(std::time::Duration::from_millis(250));
         }
         let wall = self.started.elapsed().as_secs_f64().max(1e-9);
+        let stage = stage.map(|s| format!("{s}, ")).unwrap_or_default();
         self.bar.set_message(format!(
-            "t = {t:.3} / {} s, {steps} internal steps, {:.3} simulated s per s",
+            "t = {t:.3} / {} s, {stage}{steps} internal steps, {:.3} simulated s per s",
             self.stop,
             t / wall
         ));
@@ -345,6 +352,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         p.record(0, &model, &values);
     }
     let mut series = pvd_series(args, &model)?;
+    let mut motion = motion(args, &model)?;
+    if let Some(m) = motion.as_mut() {
+        m.record(&model);
+    }
     let clock = crate::cpu_time::Stopwatch::start();
     let mut progress = Progress::new(n, stop);
     let mut total = crate::model::StepReport::default();
@@ -371,9 +382,23 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         if let Some(s) = series.as_mut() {
             s.write(&model)?;
         }
-        progress.update(k, t, total.steps);
+        if let Some(m) = motion.as_mut() {
+            m.record(&model);
+        }
+        progress.update(k, t, total.steps, stage(&model));
     }
     progress.finish();
+    if let (Some(m), Some(path)) = (&motion, &args.fold_out) {
+        m.write(path).map_err(super::error::io("write", path))?;
+        super::err(&format!(
+            "motion: {} frames -> {}\n",
+            m.len(),
+            path.display()
+        ));
+    }
+    if let Some(s) = stage(&model) {
+        super::err(&format!("sequence: {s} at t = {} s\n", model.time()));
+    }
     let (cpu, wall) = (clock.cpu(), clock.wall());
     if let Some(c) = csv.as_mut() {
         c.flush()?;
@@ -402,6 +427,36 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
             stop,
         }),
     }
+}
+
+/// Where the scene's folding sequence is now ("stage 2/5 (petals), 40 %").
+fn stage(model: &Model) -> Option<String> {
+    let sq = model.scene().sequence.as_ref()?;
+    Some(sq.describe(model.sequence_position()?))
+}
+
+/// The motion recorder of `--fold-out`, over the FOLD frame the scene was
+/// read from (a scene JSON has none: refused).
+fn motion(args: &SimulateArgs, model: &Model) -> Result<Option<crate::motion::Motion>, CliError> {
+    let Some(out) = &args.fold_out else {
+        return Ok(None);
+    };
+    if args.scene.extension().is_some_and(|e| e == "json") {
+        return Err(CliError::FoldOutNeedsFold(out.clone()));
+    }
+    let text =
+        std::fs::read_to_string(&args.scene).map_err(super::error::io("read", &args.scene))?;
+    let frame = args
+        .read
+        .frame
+        .as_deref()
+        .map(|f| f.parse().expect("infallible"));
+    let (cp, _) =
+        crate::scene::fold::parse(&text, frame.as_ref()).map_err(|source| CliError::Scene {
+            path: args.scene.clone(),
+            source,
+        })?;
+    Ok(Some(crate::motion::Motion::new(&cp, model)))
 }
 
 /// The communication step, the stop time and the ramp are usable.
@@ -434,8 +489,19 @@ fn choose_signals(args: &SimulateArgs, model: &mut Model) -> Result<Option<Signa
     let has = set_parameter(model, "ramp.time", args.ramp)?;
     set_parameter(model, "ramp.shape", shape)?;
     if has && args.ramp > 0.0 {
+        let walks = model
+            .scene()
+            .sequence
+            .as_ref()
+            .map(|sq| {
+                format!(
+                    "; the fold input walks the {} stage(s) of the folding sequence",
+                    sq.stages.len()
+                )
+            })
+            .unwrap_or_default();
         super::err(&format!(
-            "input: every rest-angle actuator ramps from 0 to 1 over {} s ({}), then holds 1\n",
+            "input: every rest-angle actuator ramps from 0 to 1 over {} s ({}), then holds 1{walks}\n",
             args.ramp,
             if shape == 0.0 { "linear" } else { "smooth" }
         ));
@@ -545,7 +611,7 @@ mod tests {
         use std::io::IsTerminal;
         let mut p = Progress::new(10, 1.0);
         p.started -= std::time::Duration::from_secs(2);
-        p.update(5, 0.5, 42);
+        p.update(5, 0.5, 42, Some("stage 1/2, 50 %".into()));
         assert!(p.shown);
         assert_eq!(p.bar.is_hidden(), !std::io::stderr().is_terminal());
         p.finish();

@@ -283,6 +283,20 @@ fn validate_scene(s: &Scene) -> Result<(), ResourceError> {
             })?;
         }
     }
+    if let Some(sq) = &s.sequence {
+        sq.check(s.fold_edge_count)
+            .map_err(|m| ResourceError::Scene(SceneError::invalid("sequence", m)))?;
+        let driver = s.actuators.iter().find(|a| a.name == sq.actuator);
+        check(
+            driver.is_some_and(|a| a.mode == crate::scene::ActuatorMode::RestAngle),
+            || {
+                (
+                    "sequence.actuator".into(),
+                    format!("no rest_angle actuator is named '{}'", sq.actuator),
+                )
+            },
+        )?;
+    }
     for (i, sup) in s.supports.iter().enumerate() {
         for &v in &sup.vertices {
             check(v.index() < nv, || {

@@ -18,7 +18,7 @@ use super::attach::FrameInput;
 use super::{Error, InputId, Model, ModelState, Phase, VariableSpec};
 use crate::assembly::Assembler;
 use crate::frame::{Motion, Pose};
-use crate::scene::{ActuatorMode, InputRamp, InputTiming, Scene};
+use crate::scene::{ActuatorMode, InputRamp, InputTiming, Scene, sequence};
 use crate::solver::stepper::Drive;
 
 /// How the actuators follow their inputs: ideal (a time constant of 0, at
@@ -391,11 +391,41 @@ impl StepSignal {
     }
 }
 
+/// A folding sequence in the input path: the rest angles of the creases
+/// it folds as a function of its actuator's value (piecewise linear,
+/// continuous; [`crate::scene::sequence`]).
+pub(super) struct SequenceDrive {
+    /// The actuator (input) whose value walks the stages.
+    pub(super) actuator: usize,
+    /// The drive at each stage start, and 1.
+    pub(super) breakpoints: Vec<f64>,
+    /// Each crease end it folds with its (stage, target) entries.
+    pub(super) ends: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+impl SequenceDrive {
+    /// Where the drive is under the actuator values `u`.
+    pub(super) fn locate(&self, u: &[f64]) -> sequence::Position {
+        sequence::locate(&self.breakpoints, u[self.actuator])
+    }
+
+    /// Add the sequence's fold angles under `u` to the rest angles `theta0`.
+    fn add_rest(&self, u: &[f64], theta0: &mut [f64]) {
+        let p = self.locate(u);
+        for (end, entries) in &self.ends {
+            theta0[*end] += sequence::angle_at(entries, p);
+        }
+    }
+}
+
 /// How input values become rest angles, moments, forces and prescribed
 /// DOFs of the assembly.
 pub(super) struct InputMap {
-    /// For each crease end: (actuator index, fold target) of rest-angle actuators.
+    /// For each crease end: (actuator index, fold target) of rest-angle
+    /// actuators (not the sequence's).
     pub(super) rest: Vec<Vec<(usize, f64)>>,
+    /// The folding sequence, if the scene has one.
+    pub(super) sequence: Option<SequenceDrive>,
     /// For each crease end: torque actuators acting on it.
     pub(super) torque: Vec<Vec<usize>>,
     /// Length share of each crease end (moments are per unit length).
@@ -431,15 +461,25 @@ pub(super) struct DriveValues {
 }
 
 impl InputMap {
-    /// Fill `d` from the input values `u`.
-    pub(super) fn drive_into(&self, u: &[f64], d: &mut DriveValues) {
+    /// The rest angle of every crease end under the input values `u`:
+    /// `pi + u x target` of its rest-angle actuator, or where its folding
+    /// sequence puts it.
+    fn rest_into(&self, u: &[f64], theta0: &mut Vec<f64>) {
         let pi = std::f64::consts::PI;
-        d.theta0.clear();
-        d.theta0.extend(
+        theta0.clear();
+        theta0.extend(
             self.rest
                 .iter()
                 .map(|r| pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>()),
         );
+        if let Some(sq) = &self.sequence {
+            sq.add_rest(u, theta0);
+        }
+    }
+
+    /// Fill `d` from the input values `u`.
+    pub(super) fn drive_into(&self, u: &[f64], d: &mut DriveValues) {
+        self.rest_into(u, &mut d.theta0);
         d.moment.clear();
         d.moment.extend(
             self.torque
@@ -485,9 +525,10 @@ impl InputMap {
     }
 
     /// Work done at once when input `i` jumps from `u[i]` to `new` while
-    /// held: the crease springs of its rest-angle actuators, at the crease
-    /// angles `theta`, change their energy (a moment or a force does no
-    /// work without motion).
+    /// held: the crease springs whose rest angles it moves (its rest-angle
+    /// actuator's creases, or its sequence's), at the crease angles
+    /// `theta`, change their energy (a moment or a force does no work
+    /// without motion).
     pub(super) fn jump_work(
         &self,
         asm: &Assembler,
@@ -496,21 +537,20 @@ impl InputMap {
         u: &[f64],
         theta: &[f64],
     ) -> f64 {
-        let pi = std::f64::consts::PI;
+        let mut before = Vec::new();
+        self.rest_into(u, &mut before);
+        let mut moved = u.to_vec();
+        moved[i] = new;
+        let mut after = Vec::new();
+        self.rest_into(&moved, &mut after);
         let kl = asm.physics.crease_k_per_length;
         let mut w = 0.0;
-        for (e, r) in self.rest.iter().enumerate() {
-            let dr: f64 = r
-                .iter()
-                .filter(|&&(a, _)| a == i)
-                .map(|&(_, tgt)| (new - u[i]) * tgt)
-                .sum();
-            if dr == 0.0 {
+        for (e, (r0, r1)) in before.iter().zip(&after).enumerate() {
+            if r1 == r0 {
                 continue;
             }
-            let r0 = pi + r.iter().map(|&(a, tgt)| u[a] * tgt).sum::<f64>();
             let k = kl * asm.creases[e].length;
-            w += 0.5 * k * ((theta[e] - r0 - dr).powi(2) - (theta[e] - r0).powi(2));
+            w += 0.5 * k * ((theta[e] - r1).powi(2) - (theta[e] - r0).powi(2));
         }
         w
     }

@@ -2,7 +2,7 @@
 //! solver, stepper settings and the input map ([`Model::build`]).
 
 use super::attach::{self, About, FrameInput, Reaction, Reactions};
-use super::inputs::{Actuation, DriveValues, InputMap};
+use super::inputs::{Actuation, DriveValues, InputMap, SequenceDrive};
 use super::{Error, Model, fold_edges, physics};
 use crate::assembly::{Assembler, EvalError, Evaluation, State};
 use crate::contact::ContactTerm;
@@ -132,6 +132,7 @@ impl System {
     /// The system of scene `sc` (parameters applied); nothing else changes,
     /// so a failure leaves the model as it was.
     pub(super) fn new(sc: &Scene) -> Result<System, Error> {
+        check_sequence(sc)?;
         let mesh = &sc.mesh;
         let layout = crate::dofs::DofLayout::new(mesh);
         let q_ref = layout.reference_state(mesh);
@@ -219,6 +220,7 @@ impl System {
         )
         .map_err(Error::Solver)?;
         let (rest, torque) = crease_actuators(sc, &asm);
+        let sequence = sequence_drive(sc, &asm);
         let gravity = sc.gravity.map(|g| gravity_force(mesh, &asm, g));
         let angle_ends = angle_ends(sc, &asm);
         let length = mesh.size().max(f64::MIN_POSITIVE);
@@ -230,6 +232,7 @@ impl System {
             settings: sc.solver,
             inputs: InputMap {
                 rest,
+                sequence,
                 torque,
                 end_length: asm.creases.iter().map(|c| c.length).collect(),
                 gravity,
@@ -374,8 +377,13 @@ fn crease_actuators(sc: &Scene, asm: &Assembler) -> (Vec<Vec<(usize, f64)>>, Vec
             }
         }
     }
+    let sequence = sequence_actuator(sc);
     for (i, ce) in asm.creases.iter().enumerate() {
         for &a in &driven_by[ce.edge.index()] {
+            if Some(a) == sequence {
+                // Its rest angles follow the stages ([`sequence_drive`]).
+                continue;
+            }
             match sc.actuators[a].mode {
                 ActuatorMode::RestAngle => rest[i].push((a, mesh.edge(ce.edge).fold_target)),
                 ActuatorMode::Torque => torque[i].push(a),
@@ -383,6 +391,53 @@ fn crease_actuators(sc: &Scene, asm: &Assembler) -> (Vec<Vec<(usize, f64)>>, Vec
         }
     }
     (rest, torque)
+}
+
+/// A scene's sequence fits it: valid stages and a rest-angle actuator of
+/// its name.
+fn check_sequence(sc: &Scene) -> Result<(), Error> {
+    let Some(sq) = &sc.sequence else {
+        return Ok(());
+    };
+    sq.check(sc.fold_edge_count)
+        .map_err(|m| Error::Scene(format!("sequence: {m}")))?;
+    if sequence_actuator(sc).is_none() {
+        return Err(Error::Scene(format!(
+            "sequence: no rest_angle actuator is named '{}'",
+            sq.actuator
+        )));
+    }
+    Ok(())
+}
+
+/// The index of the actuator that walks the scene's sequence, if any.
+fn sequence_actuator(sc: &Scene) -> Option<usize> {
+    let sq = sc.sequence.as_ref()?;
+    sc.actuators
+        .iter()
+        .position(|a| a.name == sq.actuator && a.mode == ActuatorMode::RestAngle)
+}
+
+/// The scene's folding sequence on the crease ends: each end of a crease
+/// the sequence folds (by its FOLD edge) with that edge's stage targets.
+fn sequence_drive(sc: &Scene, asm: &Assembler) -> Option<SequenceDrive> {
+    let sq = sc.sequence.as_ref()?;
+    let actuator = sequence_actuator(sc)?;
+    let entries = sq.entries();
+    let ends = asm
+        .creases
+        .iter()
+        .enumerate()
+        .filter_map(|(i, ce)| {
+            let fe = sc.mesh.edge(ce.edge).fold_edge?;
+            entries.get(&fe).map(|list| (i, list.clone()))
+        })
+        .collect();
+    Some(SequenceDrive {
+        actuator,
+        breakpoints: sq.breakpoints(),
+        ends,
+    })
 }
 
 /// For each crease output (FOLD edge), its crease ends in order.

@@ -157,8 +157,28 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
         }
     }
     wrench_outputs(scene, &mut v);
+    if scene.sequence.is_some() {
+        for (name, unit, what) in SEQUENCE_OUTPUTS {
+            v.push(spec(name.into(), unit, what.into(), 0.0));
+        }
+    }
     v
 }
+
+/// The outputs of a scene with a folding sequence (last): where the drive is.
+const SEQUENCE_OUTPUTS: [(&str, &str, &str); 2] = [
+    (
+        "sequence.stage",
+        "",
+        "the stage of the folding sequence the fold input is in (0-based; at a boundary, the \
+         stage just finished)",
+    ),
+    (
+        "sequence.progress",
+        "",
+        "progress through that stage, 0 to 1",
+    ),
+];
 
 /// The wrench outputs: attachments', the reactions' (where the scene
 /// asks for them) and obstacles'.
@@ -374,6 +394,9 @@ impl Model {
 
     /// [`Model::output`] at position `k` (in range).
     pub(crate) fn output_value(&self, k: usize) -> f64 {
+        if let Some(x) = self.sequence_output(k) {
+            return x;
+        }
         if let Some(o) = &self.state.outputs {
             return self.contact_output(k).unwrap_or(o[k]);
         }
@@ -559,7 +582,64 @@ impl Model {
         for k in 0..self.scene.obstacles.len() {
             out.extend(ev.obstacle_wrenches.get(k).copied().unwrap_or_default());
         }
+        if let Some(p) = self.sequence_position() {
+            out.extend([p.stage as f64, p.progress]);
+        }
         out
+    }
+
+    /// The fold angle (rad, valley positive) of every FOLD crease now, in
+    /// increasing edge order: the `crease[e].angle` outputs (read from the
+    /// state where the scene has no such outputs).
+    pub fn crease_angles(&self) -> Vec<(FoldEdgeId, f64)> {
+        let edges = fold_edges(&self.scene);
+        let Some(sys) = self
+            .sys
+            .as_ref()
+            .filter(|_| self.state.phase == Phase::Running)
+        else {
+            return edges.into_iter().map(|e| (e, 0.0)).collect();
+        };
+        let first = self
+            .scene
+            .outputs
+            .fold_angles
+            .then(|| self.output_id(&format!("crease[{}].angle", edges.first()?)))
+            .flatten();
+        edges
+            .into_iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let angle = match first {
+                    Some(OutputId(o)) => self.output_value(o + k),
+                    None => fold_angle(&sys.angle_ends[k], &self.state.crease_theta),
+                };
+                (e, angle)
+            })
+            .collect()
+    }
+
+    /// Where the folding sequence's drive is now (its actuator's value):
+    /// None without a sequence or before initialization.
+    pub fn sequence_position(&self) -> Option<crate::scene::sequence::Position> {
+        let sys = self.sys.as_ref()?;
+        let sq = sys.inputs.sequence.as_ref()?;
+        (self.state.phase == Phase::Running).then(|| sq.locate(&self.drive_inputs()))
+    }
+
+    /// Output `k` if it is one of the sequence's (stage, progress).
+    fn sequence_output(&self, k: usize) -> Option<f64> {
+        self.scene.sequence.as_ref()?;
+        let first = self.outputs.len().checked_sub(2)?;
+        if k < first {
+            return None;
+        }
+        let p = self.sequence_position()?;
+        Some(if k == first {
+            p.stage as f64
+        } else {
+            p.progress
+        })
     }
 
     /// Index of the first contact output (`contact.min_gap`), if any.

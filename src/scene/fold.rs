@@ -371,21 +371,16 @@ impl<'a> Frames<'a> {
             .collect()
     }
 
-    /// Pick a frame as [`parse`] does and read it.
-    pub fn frame(
-        &self,
-        frame: Option<&FrameSelector>,
-    ) -> Result<(FoldFile, Vec<String>), SceneError> {
+    /// Whether frame `k` itself (not a parent) has the key `key`.
+    pub fn has_own(&self, k: usize, key: &str) -> bool {
+        self.frames.get(k).is_some_and(|f| f.contains_key(key))
+    }
+
+    /// The number of the frame `frame` picks, as [`Frames::frame`] picks it.
+    pub fn index(&self, frame: Option<&FrameSelector>) -> Result<usize, SceneError> {
         let frames = &self.frames;
         let top = &frames[0];
-        let prefix = |k: usize| {
-            if k == 0 {
-                String::new()
-            } else {
-                format!("file_frames[{}].", k - 1)
-            }
-        };
-        let selected = match frame {
+        Ok(match frame {
             None => {
                 if top.contains_key("vertices_coords") || frames.len() == 1 {
                     0
@@ -412,7 +407,24 @@ impl<'a> Frames<'a> {
                 .ok_or_else(|| {
                     SceneError::invalid("frame_title", format!("no frame is titled '{t}'"))
                 })?,
+        })
+    }
+
+    /// Pick a frame as [`parse`] does and read it.
+    pub fn frame(
+        &self,
+        frame: Option<&FrameSelector>,
+    ) -> Result<(FoldFile, Vec<String>), SceneError> {
+        let frames = &self.frames;
+        let top = &frames[0];
+        let prefix = |k: usize| {
+            if k == 0 {
+                String::new()
+            } else {
+                format!("file_frames[{}].", k - 1)
+            }
         };
+        let selected = self.index(frame)?;
 
         // Resolve frame inheritance: the chain from the selected frame up.
         let mut chain = vec![selected];

@@ -8,6 +8,7 @@
 //! | `ancf:damping` | `{alpha, beta}` or `"auto"` |
 //! | `ancf:actuators` | `[{name, edges, mode, start}]` |
 //! | `ancf:actuation` | `{time_constant}` (s: the actuators' servo; 0 or absent: ideal) |
+//! | `ancf:sequence` | `[{edges, fraction \| degrees, share, title}]`: stages the `fold` input walks |
 //! | `ancf:supports` | `[{vertices, fix}]` |
 //! | `ancf:loads` | `{gravity, vertex_forces: [{name, vertex}]}` |
 //! | `ancf:motions` | `[{name, vertex}]` |
@@ -41,7 +42,7 @@ use serde_json::{Map, Value};
 /// may not use them.
 pub const RESERVED_NAMES: &[&str] = &[
     "vertex", "crease", "energy", "material", "damping", "gravity", "solver", "contact", "time",
-    "support",
+    "support", "sequence",
 ];
 
 /// Most levels of `ancf:refine` (each multiplies the triangles by 4).
@@ -73,6 +74,36 @@ pub struct ActuatorSpec {
     /// `ancf:actuators[i]`, for messages.
     pub key: String,
 }
+
+/// What a stage's creases reach at its end, as written.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StageTarget {
+    /// `fraction`: this share of each crease's target in the file
+    /// (`edges_foldAngle`, or +-180 degrees by its letter); default 1.
+    Fraction(f64),
+    /// `degrees` as a number: every crease of the stage to this angle.
+    Degrees(f64),
+    /// `degrees` as a list: one angle per edge of the `edges` list.
+    DegreesEach(Vec<f64>),
+}
+
+/// A stage of `ancf:sequence` as written in the file (edges not yet resolved).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageSpec {
+    /// Creases it folds (actuator syntax).
+    pub edges: EdgeSelection,
+    /// Where they end.
+    pub target: StageTarget,
+    /// Its share of the drive (`None`: all stages share equally).
+    pub share: Option<f64>,
+    /// A label.
+    pub title: Option<String>,
+    /// `ancf:sequence[i]`, for messages.
+    pub key: String,
+}
+
+/// Longest stage title (characters).
+pub const MAX_TITLE: usize = 200;
 
 /// A support as written in the file.
 #[derive(Clone, Debug, PartialEq)]
@@ -127,6 +158,8 @@ pub struct PhysicsKeys {
     pub actuators: Option<Vec<ActuatorSpec>>,
     /// `ancf:actuation.time_constant`; `None`: ideal actuators.
     pub actuator_time_constant: Option<f64>,
+    /// `ancf:sequence`: the stages the `fold` input walks.
+    pub sequence: Option<Vec<StageSpec>>,
     /// `ancf:supports`.
     pub supports: Vec<SupportSpec>,
     /// `ancf:loads.gravity`.
@@ -400,6 +433,7 @@ const PARSERS: &[(&str, KeyParser)] = &[
     ("ancf:damping", key_damping),
     ("ancf:actuators", key_actuators),
     ("ancf:actuation", key_actuation),
+    ("ancf:sequence", key_sequence),
     ("ancf:supports", key_supports),
     ("ancf:loads", key_loads),
     ("ancf:motions", key_motions),
@@ -437,6 +471,12 @@ fn check_unique_names(p: &PhysicsKeys) -> Result<(), SceneError> {
     // Input names must be unique across actuators, forces, motions and
     // attachments.
     let mut seen: Vec<(&str, String)> = Vec::new();
+    if p.sequence.is_some() {
+        seen.push((
+            super::sequence::INPUT,
+            "ancf:sequence (the input that walks its stages)".into(),
+        ));
+    }
     let names = p
         .actuators
         .iter()
@@ -571,44 +611,7 @@ fn key_actuators(
         let o = Obj::new(&key, item, &["name", "edges", "mode", "start"])?;
         let name = expect_string(o.required("name")?, &o.path("name"))?;
         check_name(&o.path("name"), name)?;
-        let edges = match o.get("edges") {
-            None => EdgeSelection::All,
-            Some(Value::String(s)) => match s.as_str() {
-                "all" => EdgeSelection::All,
-                "M" => EdgeSelection::Assignment(Assignment::Mountain),
-                "V" => EdgeSelection::Assignment(Assignment::Valley),
-                "U" => EdgeSelection::Assignment(Assignment::Unassigned),
-                "F" => EdgeSelection::Assignment(Assignment::Flat),
-                other => {
-                    return Err(SceneError::invalid(
-                        o.path("edges"),
-                        format!(
-                            "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\", \
-                             \"F\" or a list of FOLD edge indices"
-                        ),
-                    ));
-                }
-            },
-            Some(list @ Value::Array(_)) => {
-                let l = index_list(list, &o.path("edges"))?;
-                if l.is_empty() {
-                    return Err(SceneError::invalid(
-                        o.path("edges"),
-                        "the list is empty; an actuator needs at least one crease",
-                    ));
-                }
-                EdgeSelection::List(l)
-            }
-            Some(other) => {
-                return Err(SceneError::invalid(
-                    o.path("edges"),
-                    format!(
-                        "expected \"all\", \"M\", \"V\", \"U\", \"F\" or a list of FOLD edge indices, found {}",
-                        type_name(other)
-                    ),
-                ));
-            }
-        };
+        let edges = edge_selection(&o, "an actuator")?;
         let mode = match o.string("mode")? {
             None => ActuatorMode::RestAngle,
             Some(s) => enum_value(
@@ -630,6 +633,180 @@ fn key_actuators(
         });
     }
     p.actuators = Some(list);
+    Ok(())
+}
+
+/// An `edges` field: "all", an assignment letter or a list of FOLD edge
+/// indices (default "all"); `who` says what needs a crease ("an actuator").
+fn edge_selection(o: &Obj, who: &str) -> Result<EdgeSelection, SceneError> {
+    Ok(match o.get("edges") {
+        None => EdgeSelection::All,
+        Some(Value::String(s)) => match s.as_str() {
+            "all" => EdgeSelection::All,
+            "M" => EdgeSelection::Assignment(Assignment::Mountain),
+            "V" => EdgeSelection::Assignment(Assignment::Valley),
+            "U" => EdgeSelection::Assignment(Assignment::Unassigned),
+            "F" => EdgeSelection::Assignment(Assignment::Flat),
+            other => {
+                return Err(SceneError::invalid(
+                    o.path("edges"),
+                    format!(
+                        "unknown selection \"{other}\"; expected \"all\", \"M\", \"V\", \"U\", \
+                         \"F\" or a list of FOLD edge indices"
+                    ),
+                ));
+            }
+        },
+        Some(list @ Value::Array(_)) => {
+            let l = index_list(list, &o.path("edges"))?;
+            if l.is_empty() {
+                return Err(SceneError::invalid(
+                    o.path("edges"),
+                    format!("the list is empty; {who} needs at least one crease"),
+                ));
+            }
+            EdgeSelection::List(l)
+        }
+        Some(other) => {
+            return Err(SceneError::invalid(
+                o.path("edges"),
+                format!(
+                    "expected \"all\", \"M\", \"V\", \"U\", \"F\" or a list of FOLD edge indices, found {}",
+                    type_name(other)
+                ),
+            ));
+        }
+    })
+}
+
+/// `ancf:sequence`: the stages, each with its creases, their targets, its
+/// share of the drive and a title.
+fn key_sequence(
+    v: &Value,
+    p: &mut PhysicsKeys,
+    _warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let items = expect_array(v, "ancf:sequence")?;
+    if items.is_empty() {
+        return Err(SceneError::invalid(
+            "ancf:sequence",
+            "the list is empty; a sequence needs at least one stage",
+        ));
+    }
+    let max = super::sequence::MAX_STAGES;
+    if items.len() > max {
+        return Err(SceneError::invalid(
+            "ancf:sequence",
+            format!("{} stages; at most {max}", items.len()),
+        ));
+    }
+    let mut stages = Vec::with_capacity(items.len());
+    for (i, item) in items.iter().enumerate() {
+        let key = format!("ancf:sequence[{i}]");
+        let o = Obj::new(
+            &key,
+            item,
+            &["edges", "fraction", "degrees", "share", "title"],
+        )?;
+        let edges = edge_selection(&o, "a stage")?;
+        let target = match (o.get("fraction"), o.get("degrees")) {
+            (Some(_), Some(_)) => {
+                return Err(SceneError::invalid(
+                    key,
+                    "give either fraction (of the file's fold angles) or degrees, not both",
+                ));
+            }
+            (Some(_), None) => StageTarget::Fraction(o.num("fraction")?.unwrap_or(1.0)),
+            (None, Some(list @ Value::Array(_))) => {
+                let path = o.path("degrees");
+                let EdgeSelection::List(edge_list) = &edges else {
+                    return Err(SceneError::invalid(
+                        path,
+                        "a list of angles needs a list of edges (one angle each); with a \
+                         selection such as \"M\" give one number",
+                    ));
+                };
+                let angles = expect_array(list, &path)?
+                    .iter()
+                    .enumerate()
+                    .map(|(j, x)| number(x, &format!("{path}[{j}]")))
+                    .collect::<Result<Vec<f64>, _>>()?;
+                if angles.len() != edge_list.len() {
+                    return Err(SceneError::invalid(
+                        path,
+                        format!(
+                            "{} angles for {} edges; give one angle per edge",
+                            angles.len(),
+                            edge_list.len()
+                        ),
+                    ));
+                }
+                StageTarget::DegreesEach(angles)
+            }
+            (None, Some(_)) => StageTarget::Degrees(o.num("degrees")?.unwrap_or(0.0)),
+            (None, None) => StageTarget::Fraction(1.0),
+        };
+        let share = o.num_where(
+            "share",
+            |x| x > 0.0 && x <= 1.0,
+            "in (0, 1]: the stage's part of the fold input's range 0..1",
+        )?;
+        let title = o.string("title")?.map(str::to_string);
+        if let Some(t) = &title
+            && t.chars().count() > MAX_TITLE
+        {
+            return Err(SceneError::invalid(
+                o.path("title"),
+                format!("is longer than {MAX_TITLE} characters"),
+            ));
+        }
+        stages.push(StageSpec {
+            edges,
+            target,
+            share,
+            title,
+            key,
+        });
+    }
+    check_shares(&stages)?;
+    p.sequence = Some(stages);
+    Ok(())
+}
+
+/// Every stage gives a share or none does (equal shares); given shares add
+/// up to 1 (within [`super::sequence::SHARE_TOLERANCE`]).
+fn check_shares(stages: &[StageSpec]) -> Result<(), SceneError> {
+    let given: Vec<f64> = stages.iter().filter_map(|s| s.share).collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    if let Some(s) = stages.iter().find(|s| s.share.is_none()) {
+        return Err(SceneError::invalid(
+            format!("{}.share", s.key),
+            "missing; give every stage a share, or none (then the stages share the drive \
+             equally)",
+        ));
+    }
+    let sum: f64 = given.iter().sum();
+    if (sum - 1.0).abs() > super::sequence::SHARE_TOLERANCE {
+        let mut list: Vec<String> = stages
+            .iter()
+            .enumerate()
+            .take(8)
+            .map(|(k, s)| format!("stage {k}: {}", num(s.share.unwrap_or(0.0))))
+            .collect();
+        if stages.len() > 8 {
+            list.push("...".into());
+        }
+        return Err(SceneError::invalid(
+            "ancf:sequence",
+            format!(
+                "the shares add up to {} ({}); they must add up to 1 (the fold input's range)",
+                num(sum),
+                list.join(", ")
+            ),
+        ));
+    }
     Ok(())
 }
 

@@ -48,6 +48,7 @@ use std::path::Path;
 pub mod build;
 mod error;
 pub mod fold;
+mod keyframes;
 #[doc(hidden)]
 pub mod keys;
 #[doc(hidden)]
@@ -56,6 +57,7 @@ pub mod patterns;
 mod planar;
 #[doc(hidden)]
 pub mod refine;
+pub mod sequence;
 #[doc(hidden)]
 pub mod triangulate;
 
@@ -66,6 +68,7 @@ pub use crate::solver::IntegrationParameters;
 pub use build::from_fold;
 pub use error::SceneError;
 pub use fold::{FoldFile, FrameSelector};
+pub use sequence::{Sequence, Stage};
 
 /// Options of [`load_with`] and [`from_str_with`]: what the command-line
 /// options `--frame`, `--size`, `--unit`, `--f-edges` and `--contact` set. The geometry
@@ -89,6 +92,27 @@ pub struct LoadOptions {
     /// Self-contact on, with the file's `ancf:contact` settings (enabled or
     /// not) where it has them, else the defaults: the CLI's `--contact`.
     pub contact: bool,
+    /// Whether the frames after the one read are keyframes of a folding
+    /// sequence (the CLI's `--keyframes`; default: when they all carry fold
+    /// angles).
+    pub keyframes: Keyframes,
+}
+
+/// Whether the frames of a FOLD file after the crease pattern read are a
+/// folding sequence, one stage per frame (docs/scenes.md, "Frames as
+/// keyframes").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Keyframes {
+    /// When every frame after it folds the same pattern and carries fold
+    /// angles (its own `edges_foldAngle` or folded `vertices_coords`), and
+    /// the file has no `ancf:sequence`; otherwise the frame is read alone
+    /// (with a note saying why, where some frame carries angles).
+    #[default]
+    Auto,
+    /// Always: a frame that is not a keyframe is an error.
+    On,
+    /// Never: the frame is read alone.
+    Off,
 }
 
 /// How FOLD `F` edges are read.
@@ -161,11 +185,14 @@ pub fn from_str_with(
 pub fn from_str_report(text: &str, options: &LoadOptions) -> Result<Loaded, SceneError> {
     let frames = fold::Frames::new(text)?;
     let (file, warnings) = frames.frame(options.frame.as_ref())?;
-    match build::from_fold_with(&file, options) {
+    let cp = frames.index(options.frame.as_ref())?;
+    let (keys, note) = keyframes_of(&frames, cp, &file, options.keyframes)?;
+    match build::from_fold_keyframes(&file, options, &keys) {
         Ok(mut loaded) => {
             let mut all = warnings;
             all.append(&mut loaded.warnings);
             loaded.warnings = all;
+            loaded.notes.extend(note);
             Ok(loaded)
         }
         Err(SceneError::Invalid { key, message }) if build::is_folded_state(&message) => {
@@ -178,6 +205,57 @@ pub fn from_str_report(text: &str, options: &LoadOptions) -> Result<Loaded, Scen
             })
         }
         Err(e) => Err(e),
+    }
+}
+
+/// The keyframes of the file after frame `cp` (read as `file`), as
+/// `mode` asks, with a note for the user: which frames were read as
+/// keyframes, or why they were not (where some frame carries angles).
+fn keyframes_of(
+    frames: &fold::Frames,
+    cp: usize,
+    file: &FoldFile,
+    mode: Keyframes,
+) -> Result<(Vec<keyframes::KeyFrame>, Option<String>), SceneError> {
+    if mode == Keyframes::Off || (mode == Keyframes::Auto && frames.len() <= cp + 1) {
+        return Ok((vec![], None));
+    }
+    if file.ancf.contains_key("ancf:sequence") {
+        if mode == Keyframes::On {
+            return Err(SceneError::invalid(
+                "ancf:sequence",
+                "the file has a sequence of its own; keyframes (--keyframes on) would be a \
+                 second one: remove one of the two",
+            ));
+        }
+        return Ok((vec![], None));
+    }
+    match keyframes::read(frames, cp, file) {
+        Ok(keys) => {
+            let (first, last) = (keys[0].frame, keys[keys.len() - 1].frame);
+            let range = if first == last {
+                format!("frame {first}")
+            } else {
+                format!("frames {first}-{last}")
+            };
+            Ok((
+                keys,
+                Some(format!(
+                    "keyframes: {range} read as a folding sequence after frame {cp}, one stage \
+                     each (the fold input walks them; --keyframes off reads frame {cp} alone)"
+                )),
+            ))
+        }
+        Err(e) if mode == Keyframes::On => Err(e.error),
+        Err(e) if e.any_angles => Ok((
+            vec![],
+            Some(format!(
+                "keyframes: the frames after frame {cp} are not read as a folding sequence: \
+                 {}",
+                e.error
+            )),
+        )),
+        Err(_) => Ok((vec![], None)),
     }
 }
 
@@ -564,6 +642,11 @@ pub struct Scene {
     /// default: the master drives them).
     #[serde(default)]
     pub ramp: InputRamp,
+    /// A folding sequence: stages one rest-angle actuator walks
+    /// (`ancf:sequence`, or a FOLD file's frames as keyframes). Left out of
+    /// the scene file when absent, as attachments are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<Sequence>,
 }
 
 /// Shape of the built-in ramp.
@@ -686,6 +769,7 @@ impl Scene {
             solver: SolverSettings::default(),
             outputs: Outputs::default(),
             ramp: InputRamp::default(),
+            sequence: None,
         }
     }
 }

@@ -180,6 +180,15 @@ pub(super) struct FoldEdges {
     pub target: Vec<f64>,
 }
 
+impl FoldEdges {
+    /// The FOLD edges that are creases, in order.
+    pub(super) fn creases(&self) -> Vec<usize> {
+        (0..self.v.len())
+            .filter(|&e| self.kind[e] == EdgeKind::Crease)
+            .collect()
+    }
+}
+
 pub(super) fn fold_edges(
     listed: Option<Listed>,
     sides: &Sides,

@@ -41,6 +41,7 @@ mod faces;
 #[cfg(test)]
 mod fixtures;
 mod physics;
+mod sequence;
 mod size;
 mod split;
 
@@ -49,6 +50,7 @@ pub use size::{DEFAULT_SIZE, MAX_EXTENT, MIN_EXTENT};
 
 use super::error::SceneError;
 use super::fold::{Assignment, FoldFile};
+use super::keyframes::KeyFrame;
 use super::keys;
 use super::planar;
 use super::{FlatEdges, LoadOptions, Loaded, Scene, refine};
@@ -145,9 +147,19 @@ pub fn is_origami_simulator_export(fold: &FoldFile) -> bool {
 /// [`from_fold`] with the options of [`LoadOptions`] (`frame` is not used
 /// here: the frame is already picked), returning the loader's notes too.
 pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, SceneError> {
+    from_fold_keyframes(fold, options, &[])
+}
+
+/// [`from_fold_with`] with the file's keyframes (the frames after this one,
+/// [`super::keyframes`]): a folding sequence, one stage each.
+pub(crate) fn from_fold_keyframes(
+    fold: &FoldFile,
+    options: &LoadOptions,
+    keyframes: &[KeyFrame],
+) -> Result<Loaded, SceneError> {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
-    let physics = keys::parse(&fold.ancf, &mut warnings)?;
+    let mut physics = keys::parse(&fold.ancf, &mut warnings)?;
 
     let nv = fold.vertices_coords.len();
     if nv == 0 {
@@ -226,6 +238,15 @@ pub fn from_fold_with(fold: &FoldFile, options: &LoadOptions) -> Result<Loaded, 
         .or(fold.file_title.clone())
         .or(fold.frame_title.clone())
         .unwrap_or_else(|| "origami".to_string());
+    if !keyframes.is_empty() && physics.sequence.is_none() {
+        physics.sequence = Some(super::keyframes::stages(
+            keyframes,
+            &mesh,
+            (nv, &copies),
+            (&edges.kind, &edges.target),
+            &mut warnings,
+        )?);
+    }
     let mut scene = Scene::with_defaults(&scene_name, mesh);
     scene.fold_vertex_count = nv;
     scene.fold_edge_count = edges.v.len();

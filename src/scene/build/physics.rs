@@ -15,7 +15,7 @@ use std::collections::HashMap;
 /// file's `enabled` says (with its settings, else the defaults).
 pub(super) fn apply_physics(
     scene: &mut Scene,
-    p: keys::PhysicsKeys,
+    mut p: keys::PhysicsKeys,
     edges: &FoldEdges,
     copies: &[usize],
     contact: bool,
@@ -43,7 +43,16 @@ pub(super) fn apply_physics(
     scene.solver = p.solver;
     scene.outputs = p.outputs;
 
-    apply_actuators(scene, p.actuators, edges, warnings)?;
+    let stages = p.sequence.take();
+    if stages.is_some() && p.actuators.is_none() {
+        // The sequence's own actuator replaces the default `fold`.
+        scene.actuators.clear();
+    } else {
+        apply_actuators(scene, p.actuators.take(), edges, warnings)?;
+    }
+    if let Some(stages) = stages {
+        super::sequence::apply_sequence(scene, stages, edges, warnings)?;
+    }
     let supported = apply_supports(scene, p.supports, nv, copies)?;
     for (vi, key) in &p.vertex_forces {
         let k = format!("{key}.vertex");
@@ -119,10 +128,7 @@ fn apply_actuators(
     edges: &FoldEdges,
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
-    let ne = edges.v.len();
-    let creases: Vec<usize> = (0..ne)
-        .filter(|&e| edges.kind[e] == EdgeKind::Crease)
-        .collect();
+    let creases = edges.creases();
     let zero = |list: &[usize]| list.iter().all(|&e| edges.target[e] == 0.0);
     match actuators {
         None => {
@@ -186,7 +192,7 @@ fn apply_actuators(
 
 /// The FOLD creases an actuator's edge selection picks (checked: they
 /// exist, are creases and are listed once).
-fn select_edges(
+pub(super) fn select_edges(
     selection: &EdgeSelection,
     sel_key: &str,
     creases: &[usize],
