@@ -626,7 +626,7 @@ fn a_tampered_sequence_is_refused() {
             Box::new(|v| v["sequence"]["stages"][0]["share"] = json!(-1.0)),
         ),
         (
-            "",
+            "invalid type: string \"half\"",
             Box::new(|v| v["sequence"]["stages"][0]["share"] = json!("half")),
         ),
     ];
