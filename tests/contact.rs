@@ -1048,3 +1048,45 @@ fn without_contact_nothing_exists() {
             .all(|v| !v.name.starts_with("contact.") && v.name != "energy.friction")
     );
 }
+
+/// The chord error of the sampled surface: zero (to round-off) on a flat
+/// sheet, and on a
+/// sheet rolled onto a cylinder of radius R the sagitta of a sample
+/// spacing l along the curvature, l^2 / (8 R) (the largest of the probes:
+/// a side's midpoint; a right sub-triangle's centroid is l^2 / (9 R) off);
+/// the facets past a limit below it are named.
+#[test]
+fn the_chord_error_of_the_sampled_surface_is_the_sagitta() {
+    use origami_fmu::contact::surface::ContactSurface;
+    let (a, n, radius) = (0.1, 3, 0.2);
+    let mesh = square_with_diagonal(a, false, 0.0);
+    let scene = Scene::with_defaults("chord", mesh.clone());
+    let physics = origami_fmu::model::physics(&scene);
+    let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
+    let surface = ContactSurface::new(&mesh, &asm.layout, &asm.elements, n, true);
+    let mut q = asm.layout.reference_state(&mesh);
+    let (flat, over) = surface.chord_error(&q, 1e-12);
+    assert!(flat < 1e-15 && over.is_empty(), "flat: {flat} m, {over:?}");
+    // Roll about the y axis: x -> (R sin(x/R), y, R (1 - cos(x/R))), the
+    // gradient slots through the map's Jacobian.
+    for v in 0..mesh.n_vertices() {
+        let p = asm.layout.position_slot[v];
+        let x = q[3 * p] / radius;
+        for s in asm.layout.vertex_slots(VertexId(v)) {
+            let g = Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2]);
+            let y = if s == p {
+                Vector3::new(radius * x.sin(), g.y, radius * (1.0 - x.cos()))
+            } else {
+                g.x * Vector3::new(x.cos(), 0.0, x.sin()) + g.y * Vector3::new(0.0, 1.0, 0.0)
+            };
+            q[3 * s..3 * s + 3].copy_from_slice(y.as_slice());
+        }
+    }
+    let l = a / n as f64;
+    let sagitta = l * l / (8.0 * radius);
+    let (worst, over) = surface.chord_error(&q, 0.5 * sagitta);
+    eprintln!("chord error {worst:.4e} m, sagitta {sagitta:.4e} m");
+    assert!((worst / sagitta - 1.0).abs() < 0.02, "{worst} vs {sagitta}");
+    assert_eq!(over, vec![0, 1], "both facets are curved");
+    assert_eq!(surface.chord_error(&q, worst).1, Vec::<usize>::new());
+}

@@ -921,3 +921,45 @@ fn the_experiment_tolerance_sets_the_solver_tolerance() {
     }
     assert_eq!(w.get(&[vr]), vec![start]);
 }
+
+/// A contact surface whose curved facets bend farther from their samples
+/// than the contact thickness (flat-folder's small bird base, 0.1 mm
+/// paper, 3 samples per facet side, folding) is named in the log once, as
+/// a warning, while the step itself returns fmi2OK; the output
+/// `contact.chord_error` says how far.
+#[test]
+fn a_chord_error_past_the_thickness_is_logged_once() {
+    let path = "tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold";
+    let (mut s, _) = origami_fmu::scene::load(path).unwrap();
+    s.contact = Some(s.default_contact());
+    let thickness = s.contact.unwrap().thickness;
+    let m = Model::new(s.clone()).unwrap();
+    let fold = m.parameters().len() as u32;
+    let chord = (m.parameters().len()
+        + m.inputs().len()
+        + m.outputs()
+            .iter()
+            .position(|v| v.name == "contact.chord_error")
+            .expect("the output contact.chord_error")) as u32;
+    let f = Fmu::of("chord", &s, true);
+    initialize(&f, None);
+    let (h, mut t, mut worst) = (0.01, 0.0, 0.0f64);
+    while f.lines("logStatusWarning") == 0 && t < 0.45 {
+        assert_eq!(f.set(&[fold], &[t / 0.5]), fmi2OK);
+        assert_eq!(unsafe { fmi2DoStep(f.c, t, h, 0) }, fmi2OK);
+        t += h;
+        worst = worst.max(f.get(&[chord])[0]);
+    }
+    assert!(worst > thickness, "chord error {worst} m");
+    let log = f.log.lock().unwrap();
+    let line = &log.iter().find(|l| l.1 == "logStatusWarning").unwrap().3;
+    assert!(
+        line.contains("contact.chord_error")
+            && line.contains("past the contact thickness on facets"),
+        "{line}"
+    );
+    drop(log);
+    assert_eq!(f.set(&[fold], &[t / 0.5]), fmi2OK);
+    assert_eq!(unsafe { fmi2DoStep(f.c, t, h, 0) }, fmi2OK);
+    assert_eq!(f.lines("logStatusWarning"), 1, "once an instance");
+}

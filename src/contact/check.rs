@@ -49,7 +49,7 @@ pub struct Sampled {
 /// Sample every facet of `mesh` at `q` with `m` subdivisions per side (the
 /// contact surface's lattice, built for `m`).
 pub fn sample_facets(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize) -> Sampled {
-    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m);
+    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false);
     let mut points = Vec::new();
     surf.positions(q, &mut points);
     let tris = surf

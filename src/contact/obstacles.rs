@@ -170,7 +170,7 @@ impl ObstacleTerm {
                 error,
             })?;
         }
-        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
+        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, false);
         let nf = mesh.triangles().len().max(1);
         let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
         let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()

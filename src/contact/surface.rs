@@ -48,6 +48,11 @@ pub struct ContactSurface {
     pub facet_vertices: Vec<Vec<usize>>,
     /// Fine triangles of each facet (indices into `fine_tris`).
     pub facet_fine_tris: Vec<Vec<usize>>,
+    /// Chord probes: at the centroid and the side midpoints of each fine
+    /// triangle, the curved surface's point there minus the sampled
+    /// surface's (a linear map of the slots, zero where the facet is flat),
+    /// and the probe's facet.
+    pub chord_probes: Vec<(VertexMap, usize)>,
 }
 
 /// Where a lattice sample sits: a mesh corner, a point of a mesh edge
@@ -104,18 +109,46 @@ fn facet_neighbours(mesh: &Mesh) -> Vec<Vec<usize>> {
 }
 
 impl ContactSurface {
-    /// Sample every facet of `mesh` with `n >= 1` subdivisions per side.
+    /// Sample every facet of `mesh` with `n >= 1` subdivisions per side;
+    /// with `chord`, also the [`ContactSurface::chord_probes`] (the contact
+    /// term's surface; a checker's or the obstacles' need none).
     #[allow(clippy::needless_range_loop)] // i, j are lattice coordinates
-    pub fn new(mesh: &Mesh, layout: &DofLayout, elements: &[ShellElement], n: usize) -> Self {
+    pub fn new(
+        mesh: &Mesh,
+        layout: &DofLayout,
+        elements: &[ShellElement],
+        n: usize,
+        chord: bool,
+    ) -> Self {
         let n = n.max(1);
         let q_ref = layout.reference_state(mesh);
         let mut index: HashMap<Site, usize> = HashMap::new();
         let mut maps: Vec<VertexMap> = Vec::new();
         let mut vertex_facets: Vec<Vec<usize>> = Vec::new();
         let mut fine_tris = Vec::new();
+        let mut chord_probes = Vec::new();
         for (f, tri) in mesh.triangles().iter().enumerate() {
             let shape = elements[f].shape();
             let local = &layout.local[f];
+            // The surface point at area coordinates `l` as a slot map, less
+            // the given maps with their weights.
+            let map_at = |l: [f64; 3], less: &[(&VertexMap, f64)]| -> VertexMap {
+                let s = shape.values(l);
+                let mut terms: HashMap<usize, f64> = HashMap::new();
+                for (node, combo) in local.iter().enumerate() {
+                    for (slot, c) in combo.terms() {
+                        *terms.entry(slot).or_insert(0.0) += s[node] * c;
+                    }
+                }
+                for (m, w) in less {
+                    for &(slot, c) in m.iter() {
+                        *terms.entry(slot).or_insert(0.0) -= w * c;
+                    }
+                }
+                let mut m: VertexMap = terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
+                m.sort_unstable_by_key(|&(s, _)| s);
+                m
+            };
             // Lattice (i, j): area coordinates ((n-i-j), i, j) / n.
             let mut id = vec![vec![0usize; n + 1]; n + 1];
             for i in 0..=n {
@@ -142,17 +175,7 @@ impl ContactSurface {
                             i as f64 / n as f64,
                             j as f64 / n as f64,
                         ];
-                        let s = shape.values(l);
-                        let mut terms: HashMap<usize, f64> = HashMap::new();
-                        for (node, combo) in local.iter().enumerate() {
-                            for (slot, c) in combo.terms() {
-                                *terms.entry(slot).or_insert(0.0) += s[node] * c;
-                            }
-                        }
-                        let mut m: VertexMap =
-                            terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
-                        m.sort_unstable_by_key(|&(s, _)| s);
-                        maps.push(m);
+                        maps.push(map_at(l, &[]));
                         vertex_facets.push(Vec::new());
                         maps.len() - 1
                     });
@@ -162,8 +185,26 @@ impl ContactSurface {
                     id[i][j] = v;
                 }
             }
+            let area = |(i, j): (usize, usize)| {
+                let nf = n as f64;
+                [(n - i - j) as f64 / nf, i as f64 / nf, j as f64 / nf]
+            };
             for t in lattice_triangles(n) {
-                fine_tris.push((t.map(|(i, j)| id[i][j]), f));
+                let ids = t.map(|(i, j)| id[i][j]);
+                fine_tris.push((ids, f));
+                if !chord {
+                    continue;
+                }
+                let l = t.map(area);
+                let centre = std::array::from_fn(|c| (l[0][c] + l[1][c] + l[2][c]) / 3.0);
+                let less: Vec<(&VertexMap, f64)> =
+                    ids.iter().map(|&v| (&maps[v], 1.0 / 3.0)).collect();
+                let mut probes = vec![map_at(centre, &less)];
+                for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                    let mid = std::array::from_fn(|c| 0.5 * (l[a][c] + l[b][c]));
+                    probes.push(map_at(mid, &[(&maps[ids[a]], 0.5), (&maps[ids[b]], 0.5)]));
+                }
+                chord_probes.extend(probes.into_iter().map(|m| (m, f)));
             }
         }
         for vf in vertex_facets.iter_mut() {
@@ -199,6 +240,7 @@ impl ContactSurface {
         ContactSurface {
             n,
             facet_fine_tris,
+            chord_probes,
             maps,
             rest,
             vertex_facets,
@@ -209,6 +251,23 @@ impl ContactSurface {
             neighbours,
             facet_vertices,
         }
+    }
+
+    /// The largest distance (m) between the curved facets and the sampled
+    /// surface at slot vector `q` (over [`ContactSurface::chord_probes`]),
+    /// and the facets where it passes `limit`, in order.
+    pub fn chord_error(&self, q: &[f64], limit: f64) -> (f64, Vec<usize>) {
+        let mut worst = 0.0f64;
+        let mut over = Vec::new();
+        for (m, f) in &self.chord_probes {
+            let d = eval_map(m, q).norm();
+            worst = worst.max(d);
+            if d > limit && over.last() != Some(f) {
+                over.push(*f);
+            }
+        }
+        over.dedup();
+        (worst, over)
     }
 
     /// Number of contact vertices.

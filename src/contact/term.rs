@@ -301,7 +301,7 @@ impl ContactTerm {
         if settings.thickness.is_nan() || settings.thickness <= 0.0 {
             return Err(SettingsError::Thickness(settings.thickness));
         }
-        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions);
+        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, true);
         let nf = mesh.triangles().len().max(1);
         let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
         let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
@@ -358,6 +358,11 @@ impl ContactTerm {
     /// The sampled surface.
     pub fn surface(&self) -> &ContactSurface {
         &self.surf
+    }
+
+    /// The distance kept between surfaces (m).
+    pub fn thickness(&self) -> f64 {
+        self.xi
     }
 
     /// Mean facet side (m).

@@ -81,7 +81,10 @@ pub const LOG_CATEGORIES: [(&str, &str); 5] = [
         "logEvents",
         "Life-cycle events and a line per communication step",
     ),
-    ("logStatusWarning", "Calls that returned fmi2Warning"),
+    (
+        "logStatusWarning",
+        "Calls that returned fmi2Warning, and what a step noticed (the chord error of the contact surface past the thickness)",
+    ),
     (
         "logStatusDiscard",
         "Steps that returned fmi2Discard (state rolled back)",
@@ -147,6 +150,11 @@ impl Logger {
     /// True when `fmi2OK` (debug) messages go out: build them only then.
     pub fn debug_enabled(&self) -> bool {
         self.enabled[0] && self.callbacks.logger.is_some()
+    }
+
+    /// Whether `logStatusWarning` reaches the host's logger.
+    pub fn warnings_enabled(&self) -> bool {
+        self.enabled[1] && self.callbacks.logger.is_some()
     }
 
     /// `fmi2SetDebugLogging` (FMI 2.0 section 2.1.5): with `on` and no
@@ -302,6 +310,8 @@ pub struct Instance {
     /// Addresses of the `fmi2FMUstate`s this instance created and has not
     /// freed: `fmi2FreeInstance` frees them (also after a panic).
     states: HashSet<usize>,
+    /// The chord error past the thickness was logged (once an instance).
+    chord_logged: bool,
 }
 
 impl Instance {
@@ -343,6 +353,7 @@ impl Instance {
                     n_in,
                     n_out,
                     states: HashSet::new(),
+                    chord_logged: false,
                 })
             }
             Err(msg) => {
@@ -763,6 +774,39 @@ impl Instance {
         fmi2OK
     }
 
+    /// After a step, once an instance: a warning naming the facets where
+    /// the curved surface lies farther than the contact thickness from the
+    /// sampled surface that contact keeps apart (`contact.chord_error`).
+    fn log_chord_error(&mut self) {
+        if self.chord_logged || !self.log.warnings_enabled() {
+            return;
+        }
+        let Some((worst, facets)) = self.model.chord_error() else {
+            return;
+        };
+        if facets.is_empty() {
+            return;
+        }
+        self.chord_logged = true;
+        let shown: Vec<String> = facets.iter().take(20).map(|f| f.to_string()).collect();
+        let more = if facets.len() > 20 {
+            format!(" and {} more", facets.len() - 20)
+        } else {
+            String::new()
+        };
+        self.log.log(
+            fmi2Warning,
+            &format!(
+                "t = {}: contact.chord_error {} m is past the contact thickness on facets {}{more}: \
+                 contact keeps their sampled surface apart, and the curved facets may cross \
+                 between its samples; raise ancf:contact subdivisions or refine the mesh",
+                num(self.model.time()),
+                num(worst),
+                shown.join(", ")
+            ),
+        );
+    }
+
     /// `fmi2DoStep`: advance from `t` (which must be the FMU's time) by
     /// `h`, not past the stop time. On a solver failure the state is rolled
     /// back, the result is `fmi2Discard` and the instance is in "step
@@ -809,6 +853,7 @@ impl Instance {
                     self.phase = InstancePhase::Error;
                     return self.error(format!("fmi2DoStep: {e}"));
                 }
+                self.log_chord_error();
                 if self.log.debug_enabled() {
                     self.log.log(
                     fmi2OK,

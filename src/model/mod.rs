@@ -334,6 +334,23 @@ impl Model {
         )
     }
 
+    /// The chord error of self-contact's sampled surface now: the largest
+    /// distance (m) between the curved facets and the surface contact
+    /// keeps apart (at the centroid and side midpoints of each sampled
+    /// triangle), and the facets (mesh triangles) where it passes the
+    /// contact thickness. None without self-contact or before
+    /// [`Model::initialize`].
+    pub fn chord_error(&self) -> Option<(f64, Vec<usize>)> {
+        if self.state.phase != Phase::Running {
+            return None;
+        }
+        let c = self.sys.as_ref()?.asm.contact()?;
+        Some(
+            c.surface()
+                .chord_error(&self.state.dynamics.q, c.thickness()),
+        )
+    }
+
     #[doc(hidden)]
     /// The gaps (m) of the sheet's contact samples now, each to its
     /// nearest rigid obstacle beyond the clearance it keeps (half the

@@ -146,7 +146,7 @@ pub(super) fn output_table(scene: &Scene) -> Vec<VariableSpec> {
         }
     }
     if scene.contact.is_some() {
-        for (name, unit, what) in CONTACT_OUTPUTS {
+        for (name, unit, what) in CONTACT_OUTPUTS.into_iter().chain([CHORD_OUTPUT]) {
             v.push(spec(name.into(), unit, what.into(), 0.0));
         }
     } else if !scene.obstacles.is_empty() {
@@ -270,6 +270,13 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
     ("energy.contact", "J", "contact barrier energy"),
     ("energy.friction", "J", "work dissipated by friction"),
 ];
+
+/// The output of a scene with self-contact after [`CONTACT_OUTPUTS`].
+const CHORD_OUTPUT: (&str, &str, &str) = (
+    "contact.chord_error",
+    "m",
+    "largest distance between the curved facets and the sampled surface that contact keeps apart",
+);
 
 /// FOLD edge indices that are creases, in increasing order: the `crease[e]`
 /// outputs.
@@ -566,6 +573,7 @@ impl Model {
                 r.normal_force,
                 ev.term_energy,
                 self.state.work.friction,
+                self.chord_error().map_or(0.0, |c| c.0),
             ]);
         } else if !self.scene.obstacles.is_empty() {
             out.extend([ev.term_energy, self.state.work.friction]);

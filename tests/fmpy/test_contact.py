@@ -27,6 +27,7 @@ CONTACT_OUTPUTS = {
     "contact.normal_force": "N",
     "energy.contact": "J",
     "energy.friction": "J",
+    "contact.chord_error": "m",
 }
 
 
