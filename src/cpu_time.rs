@@ -94,6 +94,36 @@ impl CpuInstant {
     }
 }
 
+/// A limit on the calling thread's CPU time from now. [`Self::passed`]
+/// reads the thread's CPU clock (a system call) only once the wall clock
+/// has run past the limit, since a thread's CPU time never runs ahead of
+/// the wall clock: checked at every Newton iteration, it costs a monotonic
+/// clock read.
+#[derive(Clone, Copy, Debug)]
+pub struct ThreadDeadline {
+    wall: Instant,
+    cpu: Duration,
+    limit: Duration,
+}
+
+impl ThreadDeadline {
+    /// `limit` seconds of this thread's CPU from now; `None` where the
+    /// limit is too large to count (no limit then).
+    pub fn after(limit: f64) -> Option<ThreadDeadline> {
+        let limit = Duration::try_from_secs_f64(limit).ok()?;
+        Some(ThreadDeadline {
+            wall: Instant::now(),
+            cpu: now(Clock::Thread),
+            limit,
+        })
+    }
+
+    /// Whether this thread has used more than the limit since the start.
+    pub fn passed(&self) -> bool {
+        self.wall.elapsed() > self.limit && now(Clock::Thread).saturating_sub(self.cpu) > self.limit
+    }
+}
+
 /// Process CPU time and wall time from one start: what a bench prints
 /// (both, labelled), so that the machine's load shows as their ratio.
 #[derive(Clone, Copy, Debug)]
@@ -125,6 +155,20 @@ impl Stopwatch {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A deadline passes after its CPU, not after a sleep.
+    #[test]
+    fn a_deadline_counts_cpu() {
+        let d = ThreadDeadline::after(0.02).unwrap();
+        std::thread::sleep(Duration::from_millis(40));
+        assert!(!d.passed(), "a sleep passed it");
+        let mut x = 0u64;
+        while !d.passed() {
+            x = std::hint::black_box(x.wrapping_add(1));
+        }
+        assert!(x > 0);
+        assert!(ThreadDeadline::after(1e300).is_none());
+    }
 
     /// A busy loop counts on the thread clock; a sleep does not.
     #[test]

@@ -262,11 +262,11 @@ impl ContactSurface {
         for (m, f) in &self.chord_probes {
             let d = eval_map(m, q).norm();
             worst = worst.max(d);
+            // Probes come facet by facet.
             if d > limit && over.last() != Some(f) {
                 over.push(*f);
             }
         }
-        over.dedup();
         (worst, over)
     }
 

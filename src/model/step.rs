@@ -253,9 +253,9 @@ struct Advance {
     report: StepReport,
     /// The integrator's linear-solver times at the start.
     linear_times: (std::time::Duration, std::time::Duration),
-    /// The thread CPU time past which the advance fails
-    /// (`solver.max_step_cpu`; `None` where it is too large to count).
-    deadline: Option<std::time::Duration>,
+    /// The advance's CPU limit (`solver.max_step_cpu`; `None` where it is
+    /// too large to count).
+    deadline: Option<cpu_time::ThreadDeadline>,
 }
 
 impl Advance {
@@ -278,9 +278,7 @@ impl Advance {
                 ..Default::default()
             },
             linear_times: sys.stepper.linear_times(&sys.solver),
-            deadline: std::time::Duration::try_from_secs_f64(sys.settings.max_step_cpu)
-                .ok()
-                .and_then(|cap| cpu_time::now(cpu_time::Clock::Thread).checked_add(cap)),
+            deadline: cpu_time::ThreadDeadline::after(sys.settings.max_step_cpu),
         };
         let mut u = std::mem::take(&mut adv.u);
         adv.signal.inputs_at(0.0, &mut u);
@@ -389,10 +387,7 @@ impl Advance {
             if self.report.steps + self.report.rejected >= cap {
                 return Err(self.too_many(cap));
             }
-            if self
-                .deadline
-                .is_some_and(|d| cpu_time::now(cpu_time::Clock::Thread) > d)
-            {
+            if self.deadline.is_some_and(|d| d.passed()) {
                 return Err(self.out_of_time(settings.max_step_cpu, s));
             }
             let remaining = big_h - s;

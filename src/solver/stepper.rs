@@ -201,9 +201,9 @@ pub struct Attempt<'a> {
     pub drive: &'a Drive<'a>,
     /// The memory of the steps accepted so far.
     pub memory: NewtonMemory,
-    /// The calling thread's CPU time past which an iteration gives up
+    /// The CPU limit past which an iteration gives up
     /// ([`StepError::OutOfTime`]); `None`: no limit.
-    pub deadline: Option<std::time::Duration>,
+    pub deadline: Option<crate::cpu_time::ThreadDeadline>,
 }
 
 /// A time integration scheme: one step of a given size from a state.

@@ -311,7 +311,7 @@ struct StepContext<'a> {
     params: &'a IntegrationParameters,
     settings: &'a Settings,
     /// The attempt's CPU deadline ([`Attempt::deadline`]).
-    deadline: Option<std::time::Duration>,
+    deadline: Option<crate::cpu_time::ThreadDeadline>,
 }
 
 impl StepContext<'_> {

@@ -80,10 +80,7 @@ pub(super) fn iterate(
     let max_newton = ctx.settings.max_newton;
     let mut nw = Newton::start(ctx, ws);
     for it in 0..max_newton {
-        if ctx
-            .deadline
-            .is_some_and(|d| crate::cpu_time::now(crate::cpu_time::Clock::Thread) > d)
-        {
+        if ctx.deadline.is_some_and(|d| d.passed()) {
             return Err(StepError::OutOfTime);
         }
         nw.choose_matrix();
