@@ -713,6 +713,81 @@ fn bird_base_folds_flat(change: impl Fn(&mut Scene)) {
     );
 }
 
+/// Issue 52's drive: every crease to +-180 deg by its sign, contact at its
+/// defaults, the `fold` input ramped 0 -> 1 over 1 s with its slope, held
+/// to 1.5 s, ramped back to 0 over another second and held to 3 s, in 10
+/// ms steps. Clear at every output; returns the model at the end and the
+/// largest |fold angle| of any crease then (rad).
+fn fold_flat_and_deploy(path: &str) -> (Model, f64) {
+    let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
+    for e in 0..scene.mesh.edges().len() {
+        let edge = &scene.mesh.edges()[e];
+        if edge.kind == origami_fmu::mesh::EdgeKind::Crease && edge.fold_target != 0.0 {
+            let t = PI * edge.fold_target.signum();
+            scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
+        }
+    }
+    scene.contact = Some(scene.default_contact());
+    let mut model = Model::new(scene).unwrap();
+    model.initialize().unwrap();
+    let fold = common::input(&model, "fold");
+    let dt = 0.01;
+    let mut stats = common::Work::default();
+    let mut folded = f64::INFINITY;
+    for k in 0..300 {
+        let t0 = k as f64 * dt;
+        let (u, slope) = match t0 {
+            t if t < 1.0 => (t, 1.0),
+            t if t < 1.5 => (1.0, 0.0),
+            t if t < 2.5 => (2.5 - t, -1.0),
+            _ => (0.0, 0.0),
+        };
+        model.set_input(fold, u).unwrap();
+        model.set_input_derivative(fold, 1, slope).unwrap();
+        stats.advance(&mut model, dt);
+        assert_clear(&model, path);
+        if k == 149 {
+            folded = largest_fold_angle(&model);
+        }
+    }
+    let deployed = largest_fold_angle(&model);
+    eprintln!(
+        "{path}: largest |fold angle| {:.2} deg folded (1.5 s), {:.2} deg deployed (3 s); {}",
+        folded.to_degrees(),
+        deployed.to_degrees(),
+        stats.line()
+    );
+    assert!(
+        folded > 0.9 * PI,
+        "it folds: {:.1} deg",
+        folded.to_degrees()
+    );
+    (model, deployed)
+}
+
+/// The largest |fold angle| over the creases' outputs (rad).
+fn largest_fold_angle(model: &Model) -> f64 {
+    model
+        .outputs()
+        .iter()
+        .zip(model.output_values())
+        .filter(|(v, _)| v.name.starts_with("crease[") && v.name.ends_with(".angle"))
+        .fold(0.0, |m, (_, a)| m.max(a.abs()))
+}
+
+/// Flat-folder's small bird base folded flat with contact and deployed
+/// back (issue 52): within 5 deg of flat once the input is back at 0.
+#[test]
+fn a_bird_base_folded_flat_deploys_back_to_flat() {
+    let path = "tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold";
+    let (_, deployed) = fold_flat_and_deploy(path);
+    assert!(
+        deployed < 5f64.to_radians(),
+        "deployed to {:.2} deg",
+        deployed.to_degrees()
+    );
+}
+
 /// A crease pressed past flat by a held moment (the shipped
 /// controlled_crease.fold, 0.15 N m/m on its crease: without contact the
 /// free panel swings through flat to 294 deg by 0.03 s) stops at flat: no
