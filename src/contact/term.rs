@@ -253,6 +253,10 @@ pub struct ContactTerm {
     spare: std::sync::Mutex<Option<CandidateCache>>,
     /// Where the matrix blocks of the pairs' slot groups sit.
     positions: std::sync::Mutex<BlockPositions>,
+    /// The last slot vector whose contact-vertex positions were asked,
+    /// and those positions (an iterate's evaluation and its collision
+    /// check ask for the same).
+    last_positions: std::sync::Mutex<(Vec<f64>, Vec<Vector3<f64>>)>,
     /// Barrier stiffness of each of `cache.pairs` (N/m, by index), set at
     /// the step start while the pair is outside the barrier and kept while
     /// it is inside (see [`ContactTerm::pair_stiffness`]). Pairs with one
@@ -336,6 +340,7 @@ impl ContactTerm {
             touching: false,
             cache: CandidateCache::default(),
             spare: Default::default(),
+            last_positions: Default::default(),
             positions: Default::default(),
             kappas: Vec::new(),
             restored: None,
@@ -431,10 +436,11 @@ impl ContactTerm {
         let facet_boxes_all: Vec<Aabb> = s.facet_vertices.iter().map(|vs| bx(vs)).collect();
         let mut fine_active = vec![false; facet_boxes_all.len()];
         let mut near_neighbours = Vec::new();
+        let mut normals: Vec<Option<Vector3<f64>>> = vec![None; facet_boxes_all.len()];
         for (f, g) in overlapping(&facet_boxes_all, &facet_boxes_all, true) {
             if s.are_neighbours(f, g) {
                 near_neighbours.push((f, g));
-            } else {
+            } else if !self.facets_apart(x, dx, pad, (f, g), &mut normals) {
                 fine_active[f] = true;
                 fine_active[g] = true;
             }
@@ -480,12 +486,17 @@ impl ContactTerm {
         // straight from the neighbouring facet pairs that are near.
         let mut corner_pairs: Vec<(usize, usize)> = Vec::new();
         let mut edge_pairs: Vec<(usize, usize)> = Vec::new();
+        // Each corner's, corner triangle's and mesh edge's box once.
+        let corner_boxes: Vec<Aabb> = s.corner.iter().map(|&c| bx(&[c])).collect();
+        let tri_boxes: Vec<Aabb> = (0..facet_boxes_all.len())
+            .map(|f| bx(&s.coarse_tri(&self.mesh, f)))
+            .collect();
+        let edge_boxes: Vec<Aabb> = s.coarse_edges.iter().map(|(e, _)| bx(e)).collect();
         for &(f, g) in &near_neighbours {
             for (a, b) in [(f, g), (g, f)] {
-                let tb = bx(&s.coarse_tri(&self.mesh, b));
                 for &v in &self.mesh.triangles()[a] {
                     if !self.mesh.triangles()[b].contains(&v)
-                        && bx(&[s.corner[v.index()]]).overlaps(&tb)
+                        && corner_boxes[v.index()].overlaps(&tri_boxes[b])
                     {
                         corner_pairs.push((v.index(), b));
                     }
@@ -494,7 +505,10 @@ impl ContactTerm {
             for &i in &self.mesh.face_edges()[f] {
                 for &j in &self.mesh.face_edges()[g] {
                     let (ea, eb) = (s.coarse_edges[i.index()].0, s.coarse_edges[j.index()].0);
-                    if i != j && !ea.iter().any(|v| eb.contains(v)) && bx(&ea).overlaps(&bx(&eb)) {
+                    if i != j
+                        && !ea.iter().any(|v| eb.contains(v))
+                        && edge_boxes[i.index()].overlaps(&edge_boxes[j.index()])
+                    {
                         edge_pairs.push((i.min(j).index(), i.max(j).index()));
                     }
                 }
@@ -535,6 +549,48 @@ impl ContactTerm {
         out
     }
 
+    /// Whether facets `f` and `g` are more than `pad` apart along the
+    /// normal of either one's corner triangle at `x`: the samples of each
+    /// (and their ends swept by `dx`) projected on it, every primitive of a
+    /// facet being in their hull. Tilted facets' boxes overlap far more
+    /// often than the facets come near. `normals` caches the axes.
+    fn facets_apart(
+        &self,
+        x: &[Vector3<f64>],
+        dx: Option<&[Vector3<f64>]>,
+        pad: f64,
+        (f, g): (usize, usize),
+        normals: &mut [Option<Vector3<f64>>],
+    ) -> bool {
+        let s = &self.surf;
+        let span = |h: usize, axis: &Vector3<f64>| {
+            let mut lo = f64::INFINITY;
+            let mut hi = f64::NEG_INFINITY;
+            for &i in &s.facet_vertices[h] {
+                let a = axis.dot(&x[i]);
+                let b = dx.map_or(a, |d| axis.dot(&(x[i] + d[i])));
+                lo = lo.min(a.min(b));
+                hi = hi.max(a.max(b));
+            }
+            (lo, hi)
+        };
+        [f, g].into_iter().any(|h| {
+            let axis = *normals[h].get_or_insert_with(|| {
+                let c = s.coarse_tri(&self.mesh, h).map(|i| x[i]);
+                (c[1] - c[0])
+                    .cross(&(c[2] - c[0]))
+                    .try_normalize(0.0)
+                    .unwrap_or_else(Vector3::zeros)
+            });
+            if axis == Vector3::zeros() {
+                return false;
+            }
+            let (a0, a1) = span(f, &axis);
+            let (b0, b1) = span(g, &axis);
+            b0 - a1 > pad || a0 - b1 > pad
+        })
+    }
+
     /// Fine pairs between neighbouring facets (sharing a vertex) that face
     /// each other, folded past a right angle: each one's samples off the
     /// other against the other's sub-triangles. A midsurface crease folded
@@ -571,7 +627,10 @@ impl ContactTerm {
                 let tris = &s.facet_fine_tris[b];
                 let pt_boxes: Vec<Aabb> = pts.iter().map(|&p| bx(&[p])).collect();
                 let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
-                for (i, j) in overlapping(&pt_boxes, &tri_boxes, false) {
+                // A facet's few samples against its few sub-triangles: every
+                // two boxes (a grid costs more here).
+                let near = (0..pts.len()).flat_map(|i| (0..tris.len()).map(move |j| (i, j)));
+                for (i, j) in near.filter(|&(i, j)| pt_boxes[i].overlaps(&tri_boxes[j])) {
                     let pair = Pair {
                         kind: Kind::PointTriangle {
                             p: pts[i],
@@ -696,13 +755,27 @@ impl ContactTerm {
         out
     }
 
+    /// The contact-vertex positions at slot vector `q` into `out`.
+    fn positions_at(&self, q: &[f64], out: &mut Vec<Vector3<f64>>) {
+        let mut last = self
+            .last_positions
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        if last.0 != q {
+            self.surf.positions(q, &mut last.1);
+            last.0.clear();
+            last.0.extend_from_slice(q);
+        }
+        out.clone_from(&last.1);
+    }
+
     /// Largest fraction in (0, 1] of the motion `q -> q + dq` (all DOFs)
     /// that continuous collision detection proves free of surfaces coming
     /// closer than the thickness (conservatively: ACCD's separation margin).
     pub fn safe_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
         let mut x = Vec::new();
         let mut d = Vec::new();
-        self.surf.positions(q, &mut x);
+        self.positions_at(q, &mut x);
         self.surf.positions(dq, &mut d);
         let mut t: f64 = 1.0;
         for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
@@ -1270,8 +1343,11 @@ impl ForceTerm for ContactTerm {
     ) -> Result<(), EvalError> {
         let mut x = Vec::new();
         let mut v = Vec::new();
-        self.surf.positions(st.q, &mut x);
-        self.surf.positions(st.v, &mut v);
+        self.positions_at(st.q, &mut x);
+        // Velocities only where lagged pairs (dashpots, friction) read them.
+        if !self.lagged.is_empty() {
+            self.surf.positions(st.v, &mut v);
+        }
         out.dissipative_force.zeroed(out.force.len());
         let mut batch = MatrixBatch::default();
         let active = self.active(&x)?;
