@@ -46,10 +46,8 @@ pub struct Sampled {
     pub tris: Vec<Vec<[usize; 3]>>,
 }
 
-/// Sample every facet of `mesh` at `q` with `m` subdivisions per side (the
-/// contact surface's lattice, built for `m`).
-pub fn sample_facets(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize) -> Sampled {
-    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false);
+/// Every facet of `surf` at `q`: its samples and sub-triangles.
+pub fn sample_surface(surf: &ContactSurface, q: &[f64]) -> Sampled {
     let mut points = Vec::new();
     surf.positions(q, &mut points);
     let tris = surf
@@ -64,7 +62,19 @@ pub fn sample_facets(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize) -> Sampl
 /// subdivisions); distances between facets that share no vertex are looked
 /// for up to `search` (none with 0: only crossings, which is much cheaper).
 pub fn check(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize, search: f64) -> IntersectionReport {
-    let s = sample_facets(asm, mesh, q, m);
+    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false);
+    check_surface(&surf, mesh, q, search)
+}
+
+/// [`check`] on a sampled surface already built (self-contact's own, so
+/// that what is checked is what contact keeps apart).
+pub fn check_surface(
+    surf: &ContactSurface,
+    mesh: &Mesh,
+    q: &[f64],
+    search: f64,
+) -> IntersectionReport {
+    let s = sample_surface(surf, q);
     let p = &s.points;
     let corners = |t: &[usize; 3]| [p[t[0]], p[t[1]], p[t[2]]];
     // Each facet's sub-triangles' boxes, tight (crossings) and padded
