@@ -1,10 +1,12 @@
 //! The intersection checker the tests run after every output: each curved
-//! facet sampled finely (`m` subdivisions per side, on the shell's own
-//! interpolation; samples on a shared side or corner computed once, so
+//! facet sampled on a lattice (`m` subdivisions per side, on the shell's
+//! own interpolation; samples on a shared side or corner computed once, so
 //! neighbouring facets meet exactly there), exact triangle-triangle tests
 //! between every two facets, neighbours included (sub-triangles that share
 //! samples are tested beyond what they share), and the smallest distance
-//! between facets that share no vertex.
+//! between facets that share no vertex. At contact's own sampling
+//! ([`check_surface`] on self-contact's surface) it checks the guarantee;
+//! finer, it shows where the curved facets cross between the samples.
 
 use super::broad::{Aabb, overlapping};
 use super::distance::{V3, edge_edge_distance_sq, point_triangle_distance_sq};
