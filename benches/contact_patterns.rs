@@ -5,11 +5,17 @@
 //! contact on and off. Per run: CPU s of the fold (the checks apart),
 //! internal steps, Newton iterations, the smallest `contact.min_gap` over
 //! the outputs, whether it finished (else where it failed), the longest
-//! single communication step in CPU s, the outputs at which the checker (16
-//! samples per facet side, neighbours included, creases past flat) found a
-//! crossing, and for the patterns folded flat the distance of the end
-//! state from the flat-folding map (share of the folded size, in the
-//! state's best-fit plane).
+//! single communication step in CPU s, the outputs at which the checker
+//! (neighbours included, creases past flat) found a crossing of the sampled
+//! surface contact computes with (its own subdivisions, 3 by default; the
+//! guarantee: none) and of the curved facets sampled at 16 per side
+//! (information: they may cross between contact's samples, where the chord
+//! error says so), the largest `contact.chord_error` over the outputs, and
+//! for the patterns folded flat the distance of the end state from the
+//! flat-folding map (share of the folded size, in the state's best-fit
+//! plane). Under the table, the first output at which the sampled surface
+//! crossed, with its facets, and the first at which the curved facets did,
+//! with their chord errors.
 //!
 //! (A flat stack released in one held communication step, and what
 //! reading every output costs, are parts 3 and 4 of `benches/contact.rs`.)
@@ -33,6 +39,7 @@ mod common;
 use common::cpu_seconds;
 use nalgebra::Vector3;
 use origami_fmu::benchmarks::{flat_fold_error, flat_folded_positions};
+use origami_fmu::contact::check::IntersectionReport;
 use origami_fmu::ids::{EdgeId, VertexId};
 use origami_fmu::mesh::EdgeKind;
 use origami_fmu::model::Model;
@@ -47,7 +54,15 @@ struct Row {
     min_gap: Option<f64>,
     failed: Option<String>,
     longest: (f64, f64),
+    /// Outputs at which the sampled surface crossed, and the first of them
+    /// (time, what the checker found).
     crossings: usize,
+    first_crossing: Option<(f64, IntersectionReport)>,
+    /// Outputs at which the curved facets crossed (16 samples per side),
+    /// and the first of them described.
+    curved_crossings: usize,
+    first_curved: Option<String>,
+    chord_error: Option<f64>,
     outputs: usize,
     flat_error: Option<f64>,
 }
@@ -107,6 +122,33 @@ fn ends_flat(mesh: &origami_fmu::mesh::Mesh) -> bool {
     })
 }
 
+/// The curved facets' crossing `rep` now: time, each facet pair, whether
+/// they share a vertex, and their chord errors (m) against the thickness.
+fn describe_curved(model: &Model, rep: &IntersectionReport) -> String {
+    let triangles = model.scene().mesh.triangles();
+    let (each, thickness) = model.facet_chord_errors().unwrap_or_default();
+    let of = |f: usize| each.get(f).copied().unwrap_or(0.0);
+    let pairs: Vec<String> = rep
+        .intersecting
+        .iter()
+        .map(|&(f, g)| {
+            let shared = triangles[f].iter().any(|v| triangles[g].contains(v));
+            format!(
+                "({f}, {g}{}, chord errors {:.2e}, {:.2e})",
+                if shared { ", sharing a vertex" } else { "" },
+                of(f),
+                of(g)
+            )
+        })
+        .collect();
+    format!(
+        "t = {:.2} s: facets {}, creases past flat {:?} (thickness {thickness:.2e} m)",
+        model.time(),
+        pairs.join(" "),
+        rep.past_flat
+    )
+}
+
 /// How the `fold` input is driven: 0 -> 1 over `ramp` s, then held `hold` s.
 #[derive(Clone, Copy)]
 struct Drive {
@@ -132,6 +174,10 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, dri
         failed: None,
         longest: (0.0, 0.0),
         crossings: 0,
+        first_crossing: None,
+        curved_crossings: 0,
+        first_curved: None,
+        chord_error: None,
         outputs: 0,
         flat_error: None,
     };
@@ -180,9 +226,23 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, dri
         if let Some(c) = model.contact() {
             row.min_gap = Some(row.min_gap.map_or(c.min_gap, |g| g.min(c.min_gap)));
         }
+        if let Some((e, _)) = model.chord_error() {
+            row.chord_error = Some(row.chord_error.map_or(e, |w| w.max(e)));
+        }
         let c0 = cpu_seconds();
-        if check && !model.check_intersections(16, 0.0).unwrap().is_clear() {
-            row.crossings += 1;
+        if check {
+            let sampled = model.check_sampled_surface(0.0).unwrap();
+            if !sampled.is_clear() {
+                row.crossings += 1;
+                row.first_crossing.get_or_insert((model.time(), sampled));
+            }
+            let curved = model.check_intersections(16, 0.0).unwrap();
+            if !curved.is_clear() {
+                row.curved_crossings += 1;
+                if row.first_curved.is_none() {
+                    row.first_curved = Some(describe_curved(&model, &curved));
+                }
+            }
         }
         checking += cpu_seconds() - c0;
     }
@@ -305,15 +365,38 @@ fn main() {
         drive.ramp, drive.hold
     );
     println!(
-        "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing (16/side) | flat-fold error |"
+        "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing: sampled surface | curved facets (16/side) | largest chord error (m) | flat-fold error |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut notes = Vec::new();
     for (name, scene, flat) in &scenes {
         for &contact in &modes {
             let facets = scene.mesh.triangles().len();
             let r = run(scene.clone(), contact, check, *flat, cpu_limit, drive);
+            let outputs = |n: usize| {
+                if check {
+                    format!("{n} of {}", r.outputs)
+                } else {
+                    "-".into()
+                }
+            };
+            if let Some(text) = &r.first_curved {
+                notes.push(format!(
+                    "- {name}, contact {}: the curved facets (16/side) first crossed at {text}",
+                    if contact { "on" } else { "off" },
+                ));
+            }
+            if let Some((t, rep)) = &r.first_crossing {
+                notes.push(format!(
+                    "- {name}, contact {}: the sampled surface first crossed at t = {t:.2} s: \
+                     facets {:?}, creases past flat {:?}",
+                    if contact { "on" } else { "off" },
+                    rep.intersecting,
+                    rep.past_flat,
+                ));
+            }
             println!(
-                "| {name} | {facets} | {} | {:.2} | {} | {} | {} | {} | {:.2} (at {:.2} s) | {} | {} |",
+                "| {name} | {facets} | {} | {:.2} | {} | {} | {} | {} | {:.2} (at {:.2} s) | {} | {} | {} | {} |",
                 if contact { "on" } else { "off" },
                 r.cpu,
                 r.steps,
@@ -322,14 +405,15 @@ fn main() {
                 r.failed.as_deref().unwrap_or("yes"),
                 r.longest.0,
                 r.longest.1,
-                if check {
-                    format!("{} of {}", r.crossings, r.outputs)
-                } else {
-                    "-".into()
-                },
+                outputs(r.crossings),
+                outputs(r.curved_crossings),
+                r.chord_error.map_or("-".into(), |e| format!("{e:.2e}")),
                 r.flat_error
                     .map_or("-".into(), |e| format!("{:.2} %", 100.0 * e)),
             );
         }
+    }
+    for n in notes {
+        println!("{n}");
     }
 }

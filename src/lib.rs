@@ -85,6 +85,8 @@ pub mod rigid;
 #[doc(hidden)]
 pub mod rng;
 #[doc(hidden)]
+pub mod sampled;
+#[doc(hidden)]
 pub mod solver;
 #[doc(hidden)]
 pub mod text;

@@ -2,23 +2,29 @@
 //! (`.vtu`, ASCII) per output time and a `.pvd` collection that lists them
 //! with their times, so ParaView opens the whole run as one animated dataset.
 //!
-//! Each `.vtu` holds the model's mesh: every mesh vertex (FOLD vertices
-//! first, then vertices added by refinement) at its current position, every
-//! mesh triangle as a VTK triangle, and every crease edge of the mesh as a
-//! VTK line. Cell data: `cell_kind` (0 facet, 1 crease line), `fold_edge`
-//! (the FOLD edge of a crease line, -1 on facets), `strain_energy` (J) and
+//! Each `.vtu` holds the sampled surface that self-contact keeps apart
+//! ([`crate::sampled`]; without contact, the curved facets sampled at the
+//! default subdivisions): its points at their current positions (the mesh
+//! vertices first, FOLD vertices before those added by refinement, then
+//! the other samples), each facet's sub-triangles as VTK triangles, and
+//! every crease edge of the mesh as VTK lines along its sampled side. Cell
+//! data: `cell_kind` (0 facet, 1 crease line), `facet` (the mesh triangle
+//! of a sub-triangle, -1 on lines), `fold_edge` (the FOLD edge of a crease
+//! line, -1 on facets), `strain_energy` (J: the facet's, shared evenly by
+//! its sub-triangles, which have equal reference areas) and
 //! `strain_energy_density` (J/m^2 of reference area) on facets and
 //! `fold_angle_deg` (valley positive; the `crease[e].angle` outputs, 0 when
 //! the scene outputs no fold angles) on crease lines, 0 on the other kind.
-//! Point data: `fold_vertex` (FOLD index, -1 for refined vertices) and
-//! `displacement` from the flat reference state (m).
+//! Point data: `fold_vertex` (FOLD index, -1 for refined vertices and the
+//! other samples) and `displacement` from the flat reference state (m).
 //!
 //! The format is small enough to write directly; the writer is tested by
 //! reading files back (tests/paraview.rs and the fmpy suite with meshio).
 
-use crate::ids::VertexId;
+use crate::ids::FacetId;
 use crate::mesh::EdgeKind;
 use crate::model::Model;
+use crate::sampled::SampledSheet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -38,6 +44,8 @@ pub struct Frame<'a> {
     pub fold_vertex_count: usize,
     /// Triangles (vertex indices).
     pub triangles: &'a [[usize; 3]],
+    /// The facet (mesh triangle) of each triangle.
+    pub facets: &'a [usize],
     /// Strain energy of each triangle (J).
     pub facet_energy: &'a [f64],
     /// Reference area of each triangle (m^2).
@@ -146,6 +154,7 @@ fn check_frame(fr: &Frame) -> Result<(), FrameError> {
     let nl = fr.lines.len();
     if fr.reference.len() != np
         || fr.facet_energy.len() != nt
+        || fr.facets.len() != nt
         || fr.facet_area.len() != nt
         || fr.line_angle.len() != nl
         || fr.fold_vertex_count > np
@@ -209,6 +218,16 @@ fn cell_data(s: &mut String, fr: &Frame) {
     s.push_str("      <CellData>\n");
     let kinds = || std::iter::repeat_n(0u8, nt).chain(std::iter::repeat_n(1u8, nl));
     data_array(s, "UInt8", "cell_kind", 1, kinds());
+    data_array(
+        s,
+        "Int64",
+        "facet",
+        1,
+        fr.facets
+            .iter()
+            .map(|&f| f as i64)
+            .chain(std::iter::repeat_n(-1i64, nl)),
+    );
     data_array(
         s,
         "Int64",
@@ -320,11 +339,15 @@ pub struct Series {
     dir: PathBuf,
     stem: String,
     entries: Vec<(f64, String)>,
+    /// The sampled surface drawn.
+    surface: SampledSheet,
     reference: Vec<[f64; 3]>,
+    /// Reference area of each sub-triangle.
     areas: Vec<f64>,
-    /// The mesh's triangles (vertex indices).
+    /// The sub-triangles (points) and their facets.
     triangles: Vec<[usize; 3]>,
-    /// Crease lines of the mesh with their FOLD edge.
+    facets: Vec<usize>,
+    /// Crease lines along the sampled sides, with their FOLD edge.
     lines: Vec<([usize; 2], usize)>,
     /// For each line, the index of its `crease[e].angle` output (None when
     /// the scene does not output fold angles).
@@ -384,13 +407,15 @@ impl Series {
     pub fn new(dir: &Path, stem: &str, model: &Model) -> Result<Series, SeriesError> {
         std::fs::create_dir_all(dir).map_err(io_error("create", dir))?;
         let mesh = &model.scene().mesh;
-        let reference = mesh.coords().iter().map(|x| [x.x, x.y, 0.0]).collect();
-        let areas = mesh.facet_ids().map(|t| mesh.area(t)).collect();
-        let triangles = mesh
-            .triangles()
+        let surface = SampledSheet::new(model);
+        // Sub-triangles of a facet's lattice have equal reference areas.
+        let share = 1.0 / (surface.subdivisions() * surface.subdivisions()) as f64;
+        let areas = surface
+            .triangles
             .iter()
-            .map(|t| t.map(VertexId::index))
+            .map(|&(_, f)| share * mesh.area(FacetId(f)))
             .collect();
+        let (triangles, facets) = surface.triangles.iter().copied().unzip();
         let outputs: std::collections::HashMap<&str, usize> = model
             .outputs()
             .iter()
@@ -399,19 +424,24 @@ impl Series {
             .collect();
         let mut lines = Vec::new();
         let mut line_output = Vec::new();
-        for edge in mesh.edges() {
+        for (e, edge) in mesh.edges().iter().enumerate() {
             if let (EdgeKind::Crease, Some(f)) = (edge.kind, edge.fold_edge) {
-                lines.push((edge.v.map(VertexId::index), f.index()));
-                line_output.push(outputs.get(format!("crease[{f}].angle").as_str()).copied());
+                let output = outputs.get(format!("crease[{f}].angle").as_str()).copied();
+                for pair in surface.edges[e].windows(2) {
+                    lines.push(([pair[0], pair[1]], f.index()));
+                    line_output.push(output);
+                }
             }
         }
         Ok(Series {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
             entries: Vec::new(),
-            reference,
+            reference: surface.reference(),
+            surface,
             areas,
             triangles,
+            facets,
             lines,
             line_output,
         })
@@ -419,12 +449,14 @@ impl Series {
 
     /// Write the model's current state as the next frame at its time.
     pub fn write(&mut self, model: &Model) -> Result<(), SeriesError> {
-        let mesh = &model.scene().mesh;
-        let points: Vec<[f64; 3]> = mesh
-            .vertex_ids()
-            .map(|v| model.vertex_position(v))
+        let points = self.surface.points(model);
+        let facet_energy = model.facet_strain_energies();
+        let share = 1.0 / (self.surface.subdivisions() * self.surface.subdivisions()) as f64;
+        let energy: Vec<f64> = self
+            .facets
+            .iter()
+            .map(|&f| share * facet_energy[f])
             .collect();
-        let energy = model.facet_strain_energies();
         let values = model.output_values();
         let angles: Vec<f64> = self
             .line_output
@@ -436,6 +468,7 @@ impl Series {
             reference: &self.reference,
             fold_vertex_count: model.scene().fold_vertex_count,
             triangles: &self.triangles,
+            facets: &self.facets,
             facet_energy: &energy,
             facet_area: &self.areas,
             lines: &self.lines,

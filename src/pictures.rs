@@ -3,18 +3,21 @@
 //! and a PNG plot of every fold angle and the energies against time.
 //!
 //! The sheet is drawn in 3D with one fixed view (elevation 28 deg, azimuth
-//! -60 deg, orthographic) on one scale for the whole run (equal axes), the
-//! facets back to front (painter's order), each coloured by the mean
-//! |fold angle| of the creases around its face (facets joined across smooth
-//! edges, such as triangulation diagonals, are one face) and lightly shaded
-//! by its normal; creases and the sheet's outline are drawn as lines.
+//! -60 deg, orthographic) on one scale for the whole run (equal axes) as
+//! the sampled surface that self-contact keeps apart ([`crate::sampled`]:
+//! each facet's sub-triangles), back to front (painter's order), each
+//! sub-triangle coloured by the mean |fold angle| of the creases around its
+//! facet's face (facets joined across smooth edges, such as triangulation
+//! diagonals, are one face) and lightly shaded by its own normal; creases
+//! and the sheet's outline are drawn as lines along the facets' sampled
+//! sides.
 //! Drawing and encoding are plotters' (bitmap backend: PNG through `image`,
 //! GIF through `gif`), text in the DejaVu Sans subset shipped in
 //! `assets/fonts` (no system fonts needed).
 
-use crate::ids::VertexId;
 use crate::mesh::EdgeKind;
 use crate::model::Model;
+use crate::sampled::SampledSheet;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
@@ -34,16 +37,21 @@ fn register_font() {
     });
 }
 
-/// The mesh of a model as the pictures draw it.
+/// The sheet of a model as the pictures draw it.
 #[derive(Clone, Debug)]
 pub struct Sheet {
-    triangles: Vec<[usize; 3]>,
-    /// Lines drawn over the facets: creases and the outline (end vertices).
-    lines: Vec<[usize; 2]>,
-    /// For each line that is a crease, its `crease[e].angle` output.
+    /// The sampled surface: sub-triangles with their facet, and the points
+    /// along each mesh edge.
+    surface: SampledSheet,
+    /// Line segments drawn over the sub-triangles (points), along the
+    /// sampled sides of the creases and the outline.
+    segments: Vec<[usize; 2]>,
+    /// The sub-triangles of its line's facets that touch each segment (a
+    /// segment is drawn right after them).
+    segment_tris: Vec<Vec<usize>>,
+    /// For each crease or outline line (mesh edge), its `crease[e].angle`
+    /// output where it is a crease.
     line_output: Vec<Option<usize>>,
-    /// The facets on each line (a line is drawn right after them).
-    line_facets: Vec<Vec<usize>>,
     /// The face (group of facets joined across smooth edges) of each facet.
     face: Vec<usize>,
     /// For each face, the lines (crease lines) around it.
@@ -59,7 +67,8 @@ pub struct Sheet {
 pub struct Frame {
     /// Simulated time, s.
     pub time: f64,
-    /// Position of every mesh vertex, m.
+    /// Position of every point of the sampled surface (the mesh vertices
+    /// first), m.
     pub points: Vec<[f64; 3]>,
     /// Colour value of every face: mean |fold angle| of its creases, deg.
     pub face_values: Vec<f64>,
@@ -87,14 +96,10 @@ impl Sheet {
             .enumerate()
             .map(|(i, v)| (v.name.as_str(), i))
             .collect();
-        let triangles: Vec<[usize; 3]> = mesh
-            .triangles()
-            .iter()
-            .map(|t| t.map(VertexId::index))
-            .collect();
-        let nt = triangles.len();
+        let surface = SampledSheet::new(model);
+        let nt = mesh.triangles().len();
         let mut parent: Vec<usize> = (0..nt).collect();
-        let mut lines = Vec::new();
+        let mut line_edges = Vec::new();
         let mut line_output = Vec::new();
         let mut line_faces = Vec::new();
         for (e, edge) in mesh.edges().iter().enumerate() {
@@ -113,10 +118,32 @@ impl Sheet {
                         }
                         _ => None,
                     };
-                    lines.push(edge.v.map(VertexId::index));
+                    line_edges.push(e);
                     line_output.push(output);
                     line_faces.push(facets.iter().map(|f| f.index()).collect::<Vec<_>>());
                 }
+            }
+        }
+        // Each line's segments along its sampled side, with the
+        // sub-triangles of the line's facets that touch the segment (drawn
+        // before it: their outlines would cover its ends).
+        let mut point_tris = vec![Vec::new(); surface.n_points()];
+        for (k, (t, _)) in surface.triangles.iter().enumerate() {
+            for &p in t {
+                point_tris[p].push(k);
+            }
+        }
+        let mut segments = Vec::new();
+        let mut segment_tris = Vec::new();
+        for (&e, facets) in line_edges.iter().zip(&line_faces) {
+            for pair in surface.edges[e].windows(2) {
+                let (a, b) = (pair[0], pair[1]);
+                let mut touching = [&point_tris[a][..], &point_tris[b][..]].concat();
+                touching.retain(|&k| facets.contains(&surface.triangles[k].1));
+                touching.sort_unstable();
+                touching.dedup();
+                segments.push([a, b]);
+                segment_tris.push(touching);
             }
         }
         let face: Vec<usize> = (0..nt).map(|t| root(&mut parent, t)).collect();
@@ -141,10 +168,10 @@ impl Sheet {
             .map(|i| (i, outputs[i].name.clone()))
             .collect();
         Sheet {
-            triangles,
-            lines,
+            surface,
+            segments,
+            segment_tris,
             line_output,
-            line_facets: line_faces,
             face,
             face_lines,
             angle_outputs,
@@ -154,11 +181,7 @@ impl Sheet {
 
     /// The sheet of `model` now, with its output values `values`.
     pub fn frame(&self, model: &Model, values: &[f64]) -> Frame {
-        let mesh = &model.scene().mesh;
-        let points = mesh
-            .vertex_ids()
-            .map(|v| model.vertex_position(v))
-            .collect();
+        let points = self.surface.points(model);
         let face_values = self
             .face_lines
             .iter()
@@ -364,37 +387,36 @@ fn draw_sheet(
         let n = dot(l, l).sqrt();
         [l[0] / n, l[1] / n, l[2] / n]
     };
-    // Facets and lines in one painter's list: (depth, item); a line comes
-    // right after the nearest of its own facets, so it shows on them and
-    // hides behind the facets in front of it.
+    // Sub-triangles and line segments in one painter's list: (depth, item);
+    // a segment comes right after the nearest of its own sub-triangles, so
+    // it shows on them and hides behind the surface in front of it.
     enum Item {
-        Facet(usize),
-        Line(usize),
+        Tri(usize),
+        Segment(usize),
     }
     let depth = |p: [f64; 3]| fit.view.project(p).2;
     let x = &frame.points;
-    let mut items: Vec<(f64, u8, Item)> =
-        Vec::with_capacity(sheet.triangles.len() + sheet.lines.len());
-    let facet_depth: Vec<f64> = sheet
-        .triangles
+    let tris = &sheet.surface.triangles;
+    let mut items: Vec<(f64, u8, Item)> = Vec::with_capacity(tris.len() + sheet.segments.len());
+    let tri_depth: Vec<f64> = tris
         .iter()
-        .map(|tri| tri.iter().map(|&v| depth(x[v])).sum::<f64>() / 3.0)
+        .map(|(tri, _)| tri.iter().map(|&v| depth(x[v])).sum::<f64>() / 3.0)
         .collect();
-    for (t, &d) in facet_depth.iter().enumerate() {
-        items.push((d, 0, Item::Facet(t)));
+    for (k, &d) in tri_depth.iter().enumerate() {
+        items.push((d, 0, Item::Tri(k)));
     }
-    for (l, line) in sheet.lines.iter().enumerate() {
-        let d = sheet.line_facets[l]
+    for (l, seg) in sheet.segments.iter().enumerate() {
+        let d = sheet.segment_tris[l]
             .iter()
-            .map(|&t| facet_depth[t])
-            .fold(0.5 * (depth(x[line[0]]) + depth(x[line[1]])), f64::max);
-        items.push((d, 1, Item::Line(l)));
+            .map(|&k| tri_depth[k])
+            .fold(0.5 * (depth(x[seg[0]]) + depth(x[seg[1]])), f64::max);
+        items.push((d, 1, Item::Segment(l)));
     }
     items.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     for (_, _, item) in &items {
         match *item {
-            Item::Facet(t) => {
-                let tri = sheet.triangles[t];
+            Item::Tri(k) => {
+                let (tri, facet) = tris[k];
                 let n = cross(sub(x[tri[1]], x[tri[0]]), sub(x[tri[2]], x[tri[0]]));
                 let len = dot(n, n).sqrt();
                 let shade = if len > 0.0 {
@@ -402,21 +424,22 @@ fn draw_sheet(
                 } else {
                     1.0
                 };
-                let v = frame.face_values[sheet.face[t]];
+                let v = frame.face_values[sheet.face[facet]];
                 let c = ViridisRGB::get_color_normalized(v, 0.0, vmax);
                 let s = |k: u8| (k as f64 * shade).round() as u8;
                 let color = RGBColor(s(c.0), s(c.1), s(c.2));
                 let pts: Vec<(i32, i32)> = tri.iter().map(|&v| fit.pixel(x[v])).collect();
                 area.draw(&Polygon::new(pts.clone(), color.filled()))
                     .map_err(PictureError::Drawing)?;
-                // An outline in the facet's colour closes the hairline gaps.
+                // An outline in the sub-triangle's colour closes the
+                // hairline gaps.
                 let mut closed = pts;
                 closed.push(closed[0]);
                 area.draw(&PathElement::new(closed, color.stroke_width(1)))
                     .map_err(PictureError::Drawing)?;
             }
-            Item::Line(l) => {
-                let [a, b] = sheet.lines[l];
+            Item::Segment(l) => {
+                let [a, b] = sheet.segments[l];
                 area.draw(&PathElement::new(
                     vec![fit.pixel(x[a]), fit.pixel(x[b])],
                     RGBColor(38, 38, 38).stroke_width(1),

@@ -1,8 +1,8 @@
 //! The ParaView writer: a written frame reads back with the points, cells
 //! and fields that went in; a series of a folding model lists every output
-//! time, and its per-facet strain energies add up to the model's
-//! `energy.strain` output and its line angles equal the `crease[e].angle`
-//! outputs.
+//! time, draws the sampled surface (the mesh vertices first), and its
+//! per-sub-triangle strain energies add up to the model's `energy.strain`
+//! output and its line angles equal the `crease[e].angle` outputs.
 
 use origami_fmu::ids::VertexId;
 use origami_fmu::mesh::builders::grid;
@@ -57,6 +57,7 @@ fn a_frame_reads_back() {
         reference: &reference,
         fold_vertex_count: 3,
         triangles: &[[0, 1, 2], [0, 2, 3]],
+        facets: &[0, 1],
         facet_energy: &[1.5e-7, 2.0],
         facet_area: &[0.5, 0.5],
         lines: &[([0, 2], 4)],
@@ -74,6 +75,7 @@ fn a_frame_reads_back() {
     assert_eq!(array(&xml, "offsets"), [3., 6., 8.]);
     assert_eq!(array(&xml, "types"), [5., 5., 3.]);
     assert_eq!(array(&xml, "cell_kind"), [0., 0., 1.]);
+    assert_eq!(array(&xml, "facet"), [0., 1., -1.]);
     assert_eq!(array(&xml, "fold_edge"), [-1., -1., 4.]);
     assert_eq!(array(&xml, "strain_energy"), [1.5e-7, 2.0, 0.0]);
     assert_eq!(array(&xml, "strain_energy_density"), [3e-7, 4.0, 0.0]);
@@ -93,6 +95,7 @@ fn bad_frames_are_refused_with_a_message() {
         reference: &[[0.0; 3]; 3],
         fold_vertex_count: 3,
         triangles: tri,
+        facets: &[0],
         facet_energy: e,
         facet_area: &[0.5],
         lines: &[],
@@ -172,12 +175,20 @@ fn a_folding_series_has_every_time_and_consistent_fields() {
         .map(|l| (attr(l, "timestep").parse().unwrap(), attr(l, "file")))
         .collect();
     assert_eq!(entries.len(), 13);
-    let n_vertices = m.scene().mesh.n_vertices();
+    let mesh = &m.scene().mesh;
+    let n_vertices = mesh.n_vertices();
     assert!(n_vertices > m.scene().fold_vertex_count);
+    // The sampled surface (no contact: the default 3 subdivisions per
+    // side): the mesh vertices, n - 1 samples inside each edge and
+    // (n - 1)(n - 2) / 2 inside each facet; n^2 sub-triangles a facet.
+    let n = m.surface_subdivisions();
+    assert_eq!(n, 3);
+    let (n_edges, n_facets) = (mesh.edges().len(), mesh.triangles().len());
+    let n_points = n_vertices + n_edges * (n - 1) + n_facets * (n - 1) * (n - 2) / 2;
     for (k, (t, file)) in entries.iter().enumerate() {
         assert!((t - 0.01 * k as f64).abs() < 1e-12, "time {t} of frame {k}");
         let xml = std::fs::read_to_string(dir.join(file)).unwrap();
-        assert_eq!(attr(&xml, "NumberOfPoints"), n_vertices.to_string());
+        assert_eq!(attr(&xml, "NumberOfPoints"), n_points.to_string());
     }
     // The last frame against the model now.
     let xml = std::fs::read_to_string(dir.join(&entries[12].1)).unwrap();
@@ -196,8 +207,23 @@ fn a_folding_series_has_every_time_and_consistent_fields() {
         .filter(|(k, _)| **k == 1.0)
         .map(|(_, a)| *a)
         .collect();
-    // The crease was split in two by the refinement: two lines, one FOLD edge.
-    assert_eq!(line_angles.len(), 2);
+    // The crease was split in two by the refinement, each half drawn along
+    // its n samples: 2 n lines, one FOLD edge.
+    assert_eq!(line_angles.len(), 2 * n);
+    // Each facet's n^2 sub-triangles name it.
+    let facets = array(&xml, "facet");
+    for f in 0..n_facets {
+        let count = facets.iter().filter(|&&g| g == f as f64).count();
+        assert_eq!(count, n * n, "sub-triangles of facet {f}");
+    }
+    assert_eq!(facets.len(), n_facets * n * n + 2 * n);
+    // The FOLD vertices first, then the refined vertices and the samples.
+    let fold_vertex = array(&xml, "fold_vertex");
+    let fold_count = m.scene().fold_vertex_count;
+    for (p, &v) in fold_vertex.iter().enumerate() {
+        let want = if p < fold_count { p as f64 } else { -1.0 };
+        assert_eq!(v, want, "fold_vertex of point {p}");
+    }
     let want = m.output_values()[crease].to_degrees();
     assert!(want > 10.0, "folded {want} deg");
     for a in line_angles {

@@ -1,10 +1,12 @@
 //! The intersection checker the tests run after every output: each curved
-//! facet sampled finely (`m` subdivisions per side, on the shell's own
-//! interpolation; samples on a shared side or corner computed once, so
+//! facet sampled on a lattice (`m` subdivisions per side, on the shell's
+//! own interpolation; samples on a shared side or corner computed once, so
 //! neighbouring facets meet exactly there), exact triangle-triangle tests
 //! between every two facets, neighbours included (sub-triangles that share
 //! samples are tested beyond what they share), and the smallest distance
-//! between facets that share no vertex.
+//! between facets that share no vertex. At contact's own sampling
+//! ([`check_surface`] on self-contact's surface) it checks the guarantee;
+//! finer, it shows where the curved facets cross between the samples.
 
 use super::broad::{Aabb, overlapping};
 use super::distance::{V3, edge_edge_distance_sq, point_triangle_distance_sq};
@@ -46,10 +48,8 @@ pub struct Sampled {
     pub tris: Vec<Vec<[usize; 3]>>,
 }
 
-/// Sample every facet of `mesh` at `q` with `m` subdivisions per side (the
-/// contact surface's lattice, built for `m`).
-pub fn sample_facets(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize) -> Sampled {
-    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false);
+/// Every facet of `surf` at `q`: its samples and sub-triangles.
+pub fn sample_surface(surf: &ContactSurface, q: &[f64]) -> Sampled {
     let mut points = Vec::new();
     surf.positions(q, &mut points);
     let tris = surf
@@ -64,7 +64,19 @@ pub fn sample_facets(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize) -> Sampl
 /// subdivisions); distances between facets that share no vertex are looked
 /// for up to `search` (none with 0: only crossings, which is much cheaper).
 pub fn check(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize, search: f64) -> IntersectionReport {
-    let s = sample_facets(asm, mesh, q, m);
+    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false);
+    check_surface(&surf, mesh, q, search)
+}
+
+/// [`check`] on a sampled surface already built (self-contact's own, so
+/// that what is checked is what contact keeps apart).
+pub fn check_surface(
+    surf: &ContactSurface,
+    mesh: &Mesh,
+    q: &[f64],
+    search: f64,
+) -> IntersectionReport {
+    let s = sample_surface(surf, q);
     let p = &s.points;
     let corners = |t: &[usize; 3]| [p[t[0]], p[t[1]], p[t[2]]];
     // Each facet's sub-triangles' boxes, tight (crossings) and padded

@@ -48,6 +48,9 @@ pub struct ContactSurface {
     pub facet_vertices: Vec<Vec<usize>>,
     /// Fine triangles of each facet (indices into `fine_tris`).
     pub facet_fine_tris: Vec<Vec<usize>>,
+    /// Contact vertices along each mesh edge, from its first vertex to its
+    /// second (`n + 1` of them).
+    pub edge_samples: Vec<Vec<usize>>,
     /// Chord probes: at the centroid and the side midpoints of each fine
     /// triangle, the curved surface's point there minus the sampled
     /// surface's (a linear map of the slots, zero where the facet is flat),
@@ -232,6 +235,25 @@ impl ContactSurface {
                 ([corner[e.v[0].index()], corner[e.v[1].index()]], fs)
             })
             .collect();
+        let edge_samples = mesh
+            .edges()
+            .iter()
+            .map(|e| {
+                let [a, b] = e.v;
+                let (lo, hi) = (a.min(b), a.max(b));
+                let mut along: Vec<usize> = (0..=n)
+                    .map(|k| match k {
+                        0 => corner[lo.index()],
+                        k if k == n => corner[hi.index()],
+                        k => index[&Site::Side(lo, hi, k)],
+                    })
+                    .collect();
+                if a != lo {
+                    along.reverse();
+                }
+                along
+            })
+            .collect();
         let neighbours = facet_neighbours(mesh);
         let mut facet_fine_tris = vec![Vec::new(); mesh.triangles().len()];
         for (k, &(_, f)) in fine_tris.iter().enumerate() {
@@ -240,6 +262,7 @@ impl ContactSurface {
         ContactSurface {
             n,
             facet_fine_tris,
+            edge_samples,
             chord_probes,
             maps,
             rest,
@@ -257,17 +280,20 @@ impl ContactSurface {
     /// surface at slot vector `q` (over [`ContactSurface::chord_probes`]),
     /// and the facets where it passes `limit`, in order.
     pub fn chord_error(&self, q: &[f64], limit: f64) -> (f64, Vec<usize>) {
-        let mut worst = 0.0f64;
-        let mut over = Vec::new();
-        for (m, f) in &self.chord_probes {
-            let d = eval_map(m, q).norm();
-            worst = worst.max(d);
-            // Probes come facet by facet.
-            if d > limit && over.last() != Some(f) {
-                over.push(*f);
-            }
-        }
+        let each = self.facet_chord_errors(q);
+        let worst = each.iter().fold(0.0f64, |a, &b| a.max(b));
+        let over = (0..each.len()).filter(|&f| each[f] > limit).collect();
         (worst, over)
+    }
+
+    /// The chord error (m) of each facet at slot vector `q`: the largest of
+    /// its [`ContactSurface::chord_probes`] (0 without probes).
+    pub fn facet_chord_errors(&self, q: &[f64]) -> Vec<f64> {
+        let mut each = vec![0.0f64; self.facet_fine_tris.len()];
+        for (m, f) in &self.chord_probes {
+            each[*f] = each[*f].max(eval_map(m, q).norm());
+        }
+        each
     }
 
     /// Number of contact vertices.

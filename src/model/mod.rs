@@ -352,6 +352,21 @@ impl Model {
     }
 
     #[doc(hidden)]
+    /// Each facet's chord error now (m; see [`Model::chord_error`]), and
+    /// the contact thickness. None without self-contact or before
+    /// [`Model::initialize`].
+    pub fn facet_chord_errors(&self) -> Option<(Vec<f64>, f64)> {
+        if self.state.phase != Phase::Running {
+            return None;
+        }
+        let c = self.sys.as_ref()?.asm.contact()?;
+        Some((
+            c.surface().facet_chord_errors(&self.state.dynamics.q),
+            c.thickness(),
+        ))
+    }
+
+    #[doc(hidden)]
     /// The gaps (m) of the sheet's contact samples now, each to its
     /// nearest rigid obstacle beyond the clearance it keeps (half the
     /// contact thickness): the smallest, the largest, and that clearance;
@@ -373,6 +388,47 @@ impl Model {
     }
 
     #[doc(hidden)]
+    /// Subdivisions per facet side of the sampled surface: self-contact's,
+    /// else the default contact settings' (what the pictures draw).
+    pub fn surface_subdivisions(&self) -> usize {
+        self.sys.as_ref().and_then(|s| s.asm.contact()).map_or(
+            crate::contact::ContactSettings::default().subdivisions,
+            |c| c.surface().n,
+        )
+    }
+
+    #[doc(hidden)]
+    /// The sampled surface at [`Model::surface_subdivisions`], built anew
+    /// (without chord probes): the same samples and sub-triangles as the
+    /// surface self-contact keeps apart. None before the system is built.
+    pub fn sampled_surface(&self) -> Option<crate::contact::surface::ContactSurface> {
+        let sys = self.sys.as_ref()?;
+        Some(crate::contact::surface::ContactSurface::new(
+            &self.scene.mesh,
+            &sys.asm.layout,
+            &sys.asm.elements,
+            self.surface_subdivisions(),
+            false,
+        ))
+    }
+
+    #[doc(hidden)]
+    /// Positions of `surf`'s samples now (its flat reference before
+    /// [`Model::initialize`]).
+    pub fn sampled_positions(
+        &self,
+        surf: &crate::contact::surface::ContactSurface,
+        out: &mut Vec<nalgebra::Vector3<f64>>,
+    ) {
+        if self.state.phase == Phase::Running {
+            surf.positions(&self.state.dynamics.q, out);
+        } else {
+            out.clear();
+            out.extend_from_slice(&surf.rest);
+        }
+    }
+
+    #[doc(hidden)]
     /// Run the intersection checker on the current state: facets sampled
     /// with `m` subdivisions, distances searched up to `search` (m), and
     /// the creases whose fold angle is past +-180 degrees.
@@ -382,13 +438,46 @@ impl Model {
         search: f64,
     ) -> Option<crate::contact::check::IntersectionReport> {
         let sys = self.sys.as_ref()?;
-        let mut rep = crate::contact::check::check(
+        let rep = crate::contact::check::check(
             &sys.asm,
             &self.scene.mesh,
             &self.state.dynamics.q,
             m,
             search,
         );
+        Some(self.with_past_flat(rep))
+    }
+
+    #[doc(hidden)]
+    /// [`Model::check_intersections`] on the sampled surface self-contact
+    /// computes with (its own samples; without contact, the curved facets
+    /// at the default subdivisions): the surface the model guarantees
+    /// apart, and the one the pictures draw.
+    pub fn check_sampled_surface(
+        &self,
+        search: f64,
+    ) -> Option<crate::contact::check::IntersectionReport> {
+        let sys = self.sys.as_ref()?;
+        let Some(c) = sys.asm.contact() else {
+            return self.check_intersections(self.surface_subdivisions(), search);
+        };
+        let rep = crate::contact::check::check_surface(
+            c.surface(),
+            &self.scene.mesh,
+            &self.state.dynamics.q,
+            search,
+        );
+        Some(self.with_past_flat(rep))
+    }
+
+    /// `rep` with the creases whose fold angle is past +-180 degrees.
+    fn with_past_flat(
+        &self,
+        mut rep: crate::contact::check::IntersectionReport,
+    ) -> crate::contact::check::IntersectionReport {
+        let Some(sys) = self.sys.as_ref() else {
+            return rep;
+        };
         let tau = std::f64::consts::TAU;
         rep.past_flat = sys
             .asm
@@ -399,6 +488,6 @@ impl Model {
             .map(|(c, _)| c.edge)
             .collect();
         rep.past_flat.dedup();
-        Some(rep)
+        rep
     }
 }

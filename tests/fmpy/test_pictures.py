@@ -116,11 +116,20 @@ def test_cli_paraview_series_reads_back(miura):
     strain = names.index("energy.strain")
     for k, f in enumerate(files):
         m = meshio.read(f)
-        # An unrefined FOLD scene: the model's mesh vertices are the FOLD vertices.
-        assert m.points.shape == (n, 3)
-        x0 = [rows[k, names.index(f"vertex[{i}].x")] for i in range(n)]
-        np.testing.assert_allclose(m.points[:, 0], x0, rtol=1e-12, atol=1e-15)
         kinds = np.concatenate(m.cell_data["cell_kind"])
+        # The sampled surface at 3 subdivisions per side (no contact: the
+        # default): an unrefined FOLD scene's mesh vertices are the FOLD
+        # vertices, the first n points, then 2 samples inside each mesh edge
+        # (E = n + F - 1 on a sheet without holes) and 1 inside each facet
+        # (F facets of 9 sub-triangles).
+        facets = (kinds == 0).sum() // 9
+        assert (kinds == 0).sum() == 9 * facets
+        assert m.points.shape == (n + 2 * (n + facets - 1) + facets, 3)
+        fold_vertex = m.point_data["fold_vertex"]
+        np.testing.assert_array_equal(fold_vertex[:n], np.arange(n))
+        assert (fold_vertex[n:] == -1).all()
+        x0 = [rows[k, names.index(f"vertex[{i}].x")] for i in range(n)]
+        np.testing.assert_allclose(m.points[:n, 0], x0, rtol=1e-12, atol=1e-15)
         energy = np.concatenate(m.cell_data["strain_energy"])[kinds == 0]
         assert energy.sum() == pytest.approx(rows[k, strain], rel=1e-9, abs=1e-30)
     assert rows[-1, strain] > 0
