@@ -61,6 +61,15 @@ impl Aabb {
     }
 }
 
+/// [`overlapping`] for two short lists (a facet's few samples or edges
+/// against another's): every two boxes, in order, with no grid to build.
+pub fn overlapping_few(a: &[Aabb], b: &[Aabb]) -> Vec<(usize, usize)> {
+    (0..a.len())
+        .flat_map(|i| (0..b.len()).map(move |j| (i, j)))
+        .filter(|&(i, j)| a[i].overlaps(&b[j]))
+        .collect()
+}
+
 /// Pairs `(i, j)` with box `a[i]` overlapping box `b[j]`, sorted and
 /// without repeats. With `same` (the two lists are one), only `i < j`.
 pub fn overlapping(a: &[Aabb], b: &[Aabb], same: bool) -> Vec<(usize, usize)> {

@@ -6,8 +6,10 @@
 //! side traces of neighbouring facets coincide, creases included).
 //!
 //! Two families of primitives: the fine ones (sub-triangles and their
-//! edges) between facets that share no vertex, and the coarse ones (each
-//! facet's corner triangle and the mesh edges) between facets that do.
+//! edges) between facets that share no side (samples against sub-triangles
+//! across a crease too, once folded past a right angle), and the coarse
+//! ones (each facet's corner triangle and the mesh edges) between facets
+//! that share a vertex.
 //! A midsurface model has no hinge radius: two panels that meet at a crease
 //! folded flat close to a wedge, and between neighbours only the corners
 //! keep the thickness apart (the open end of the wedge is one thickness).
@@ -51,6 +53,8 @@ pub struct ContactSurface {
     /// Contact vertices along each mesh edge, from its first vertex to its
     /// second (`n + 1` of them).
     pub edge_samples: Vec<Vec<usize>>,
+    /// Fine edges of each facet (indices into `fine_edges`).
+    pub facet_fine_edges: Vec<Vec<usize>>,
     /// Chord probes: at the centroid and the side midpoints of each fine
     /// triangle, the curved surface's point there minus the sampled
     /// surface's (a linear map of the slots, zero where the facet is flat),
@@ -259,10 +263,17 @@ impl ContactSurface {
         for (k, &(_, f)) in fine_tris.iter().enumerate() {
             facet_fine_tris[f].push(k);
         }
+        let mut facet_fine_edges = vec![Vec::new(); mesh.triangles().len()];
+        for (k, (_, fs)) in fine_edges.iter().enumerate() {
+            for &f in fs {
+                facet_fine_edges[f].push(k);
+            }
+        }
         ContactSurface {
             n,
             facet_fine_tris,
             edge_samples,
+            facet_fine_edges,
             chord_probes,
             maps,
             rest,

@@ -25,7 +25,7 @@
 //! changes no energy); the pairs' stiffnesses are the term's memory in a
 //! saved state.
 
-use super::broad::{Aabb, overlapping};
+use super::broad::{Aabb, overlapping, overlapping_few};
 use super::ccd;
 use super::distance::{self, V3};
 use super::distance_derivatives::{
@@ -532,6 +532,7 @@ impl ContactTerm {
             out.push(self.edge_pair(s.coarse_edges[i].0, s.coarse_edges[j].0, self.mass_coarse));
         }
         self.neighbour_pairs(x, &bx, &near_neighbours, &mut out);
+        self.corner_pairs(&bx, &near_neighbours, &mut out);
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
         out.retain(|p| self.rest_distance(p) >= p.xi + self.s_hat_of(p));
@@ -591,8 +592,9 @@ impl ContactTerm {
         })
     }
 
-    /// Fine pairs between neighbouring facets (sharing a vertex) that face
-    /// each other, folded past a right angle: each one's samples off the
+    /// Fine pairs between neighbouring facets sharing a side (a crease) that
+    /// face each other, folded past a right angle (facets sharing only a
+    /// corner: [`ContactTerm::corner_pairs`]): each one's samples off the
     /// other against the other's sub-triangles. A midsurface crease folded
     /// flat closes to a wedge (its facets meet at the crease, their far
     /// corners a thickness apart), so such a pair keeps a thickness that
@@ -615,39 +617,107 @@ impl ContactTerm {
             (c[1] - c[0]).cross(&(c[2] - c[0]))
         };
         for &(f, g) in near {
-            if normal(f).dot(&normal(g)) >= 0.0 {
+            if self.share_a_corner_only(f, g) || normal(f).dot(&normal(g)) >= 0.0 {
                 continue;
             }
             for (a, b) in [(f, g), (g, f)] {
-                let pts: Vec<usize> = s.facet_vertices[a]
-                    .iter()
-                    .copied()
-                    .filter(|&p| s.vertex_facets[p].binary_search(&b).is_err())
-                    .collect();
-                let tris = &s.facet_fine_tris[b];
-                let pt_boxes: Vec<Aabb> = pts.iter().map(|&p| bx(&[p])).collect();
-                let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
-                // A facet's few samples against its few sub-triangles: every
-                // two boxes (a grid costs more here).
-                let near = (0..pts.len()).flat_map(|i| (0..tris.len()).map(move |j| (i, j)));
-                for (i, j) in near.filter(|&(i, j)| pt_boxes[i].overlaps(&tri_boxes[j])) {
-                    let pair = Pair {
-                        kind: Kind::PointTriangle {
-                            p: pts[i],
-                            t: s.fine_tris[tris[j]].0,
-                        },
-                        mass: self.mass_fine,
-                        xi: self.xi,
-                    };
-                    let xi = NEIGHBOUR_SHARE
-                        * self.xi
-                        * (self.rest_distance(&pair) / (2.0 * self.mean_side)).min(1.0);
+                for pair in self.samples_against(a, b, bx) {
+                    let xi = self.wedge_share(&pair);
                     if xi >= NEIGHBOUR_MIN * self.xi {
                         out.push(Pair { xi, ..pair });
                     }
                 }
             }
         }
+    }
+
+    /// Point-triangle pairs (at the full thickness) of facet `a`'s samples
+    /// off facet `b` against `b`'s sub-triangles, their boxes overlapping.
+    fn samples_against(&self, a: usize, b: usize, bx: &dyn Fn(&[usize]) -> Aabb) -> Vec<Pair> {
+        let s = &self.surf;
+        let pts: Vec<usize> = s.facet_vertices[a]
+            .iter()
+            .copied()
+            .filter(|&p| s.vertex_facets[p].binary_search(&b).is_err())
+            .collect();
+        let tris = &s.facet_fine_tris[b];
+        let pt_boxes: Vec<Aabb> = pts.iter().map(|&p| bx(&[p])).collect();
+        let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
+        overlapping_few(&pt_boxes, &tri_boxes)
+            .into_iter()
+            .map(|(i, j)| Pair {
+                kind: Kind::PointTriangle {
+                    p: pts[i],
+                    t: s.fine_tris[tris[j]].0,
+                },
+                mass: self.mass_fine,
+                xi: self.xi,
+            })
+            .collect()
+    }
+
+    /// The share of the thickness a pair between neighbouring facets keeps:
+    /// [`NEIGHBOUR_SHARE`] of the wedge's opening at its distance `d` in the
+    /// flat pattern, `xi min(1, d / (2 w))`.
+    fn wedge_share(&self, pair: &Pair) -> f64 {
+        NEIGHBOUR_SHARE * self.xi * (self.rest_distance(pair) / (2.0 * self.mean_side)).min(1.0)
+    }
+
+    /// Whether facets `f` and `g` share one mesh vertex and no side.
+    fn share_a_corner_only(&self, f: usize, g: usize) -> bool {
+        let (tf, tg) = (self.mesh.triangles()[f], self.mesh.triangles()[g]);
+        tf.iter().filter(|v| tg.contains(v)).count() == 1
+    }
+
+    /// Fine pairs between facets that share one vertex and no side,
+    /// whichever way they face: each one's samples against the other's
+    /// sub-triangles, and their fine edges against each other's (sharing no
+    /// sample). No crease stop acts between such facets, and their coarse
+    /// pairs (corners against the corner triangle, mesh edges) do not see
+    /// the sampled interiors: the Kresling folded flat crossed its sampled
+    /// surface in a scissor about a shared vertex, no corner passing
+    /// through the other facet. A crossing of two sampled surfaces starts
+    /// with a sample through a sub-triangle or a fine edge through a fine
+    /// edge, so these pairs and the collision check on them keep the
+    /// sampled facets apart. Thickness as across a crease (the layers
+    /// between them close to the shared vertex), tapered towards the
+    /// vertex but never below [`NEIGHBOUR_MIN`] of the thickness: near the
+    /// vertex nothing else keeps them apart. Pairs another family already
+    /// holds keep its thickness.
+    fn corner_pairs(
+        &self,
+        bx: &dyn Fn(&[usize]) -> Aabb,
+        near: &[(usize, usize)],
+        out: &mut Vec<Pair>,
+    ) {
+        let s = &self.surf;
+        let mut mine = Vec::new();
+        let thin = |pair: Pair| {
+            let xi = self.wedge_share(&pair).max(NEIGHBOUR_MIN * self.xi);
+            Pair { xi, ..pair }
+        };
+        for &(f, g) in near
+            .iter()
+            .filter(|&&(f, g)| self.share_a_corner_only(f, g))
+        {
+            for (a, b) in [(f, g), (g, f)] {
+                mine.extend(self.samples_against(a, b, bx).into_iter().map(thin));
+            }
+            let (ef, eg) = (&s.facet_fine_edges[f], &s.facet_fine_edges[g]);
+            let boxes = |es: &[usize]| -> Vec<Aabb> {
+                es.iter().map(|&k| bx(&s.fine_edges[k].0)).collect()
+            };
+            for (i, j) in overlapping_few(&boxes(ef), &boxes(eg)) {
+                let (a, b) = (s.fine_edges[ef[i]].0, s.fine_edges[eg[j]].0);
+                if !a.iter().any(|v| b.contains(v)) {
+                    mine.push(thin(self.edge_pair(a, b, self.mass_fine)));
+                }
+            }
+        }
+        mine.sort_unstable_by_key(key);
+        mine.dedup_by_key(|p| key(p));
+        let held: std::collections::HashSet<PairKey> = out.iter().map(key).collect();
+        out.extend(mine.into_iter().filter(|p| !held.contains(&key(p))));
     }
 
     /// The candidate pairs at `x` (swept by `dx`) with pad `pad`, or a
