@@ -158,6 +158,36 @@ def test_after_a_discard_setreal_and_dostep_are_refused_until_a_restore(unzipped
         inst.close()
 
 
+def test_a_step_past_its_cpu_limit_is_discarded_with_the_state_before_it(unzipped):
+    """Issue 52: solver.max_step_cpu caps the CPU of one fmi2DoStep. Past it
+    the step is fmi2Discard (fmi2Terminated true), time and outputs are the
+    ones from before the step, and the log names the limit; the same step
+    under the default limit goes through from that same state."""
+    held = {"torque": 1e-4}
+    # (One instance at a time: fmpy's logger proxy is process-wide.)
+    capped = Instance(unzipped("case_c_nocut"), "capped", logging_on=True).initialize(
+        {"solver.max_step_cpu": 1e-6})
+    try:
+        before = capped.get()
+        with pytest.raises(FMICallException) as e:
+            capped.step(1e-2, held)
+        assert e.value.status == FMI2_DISCARD
+        from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+        assert capped.slave.getBooleanStatus(fmi2Terminated)
+        assert capped.slave.getRealStatus(fmi2LastSuccessfulTime) == 0.0
+        assert np.array_equal(capped.get(), before), "the state from before the step"
+        assert any("solver.max_step_cpu" in m for m in capped.log.reasons()), capped.log.lines
+    finally:
+        capped.close()
+    free = Instance(unzipped("case_c_nocut"), "free").initialize()
+    try:
+        assert np.array_equal(free.get(), before)
+        free.step(1e-2, held)
+        assert not np.array_equal(free.get(), before), "the same step moves the sheet"
+    finally:
+        free.close()
+
+
 def test_a_step_past_the_stop_time_is_an_error(unzipped):
     """FMI 2.0 section 2.1.6: with stopTimeDefined, doStep past stopTime
     returns fmi2Error and changes nothing."""
