@@ -22,7 +22,7 @@
 //!
 //! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird]
 //! [--fold PATH ...] [--scene PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]
-//! [--ramp S] [--hold S]` (the suite runs unless `--fold` or `--scene` alone are given)
+//! [--ramp S] [--hold S] [--back S] [--held]` (the suite runs unless `--fold` or `--scene` alone are given)
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
 //! targets, not flat and not in the default list; `--cpu-limit S` stops a
 //! run once its fold and its checks together have taken S CPU s, reported
@@ -32,8 +32,12 @@
 //! or folding sequence (`ancf:sequence`, keyframes), the flat-fold error
 //! against the flat-folding map of its final fold angles where they are all
 //! 0 or +-180 degrees. `--ramp S` and `--hold S` set the drive: the `fold`
-//! input from 0 to 1 over S s, then held for S s (defaults 1 and 0.5).
-//! `--help` prints this.)
+//! input from 0 to 1 over S s, then held for S s (defaults 1 and 0.5);
+//! `--back S` then returns it to 0 over S s and holds it the same time
+//! again (issue 52's deployment: the last column is the largest |fold
+//! angle| at the end; the flat-fold error is taken where the fold's hold
+//! ends); `--held` gives the input's values alone, no slopes, as a master
+//! without input derivatives holds its samples. `--help` prints this.)
 
 mod common;
 use common::cpu_seconds;
@@ -65,6 +69,8 @@ struct Row {
     chord_error: Option<f64>,
     outputs: usize,
     flat_error: Option<f64>,
+    /// Largest |fold angle| at the end of a drive that returns to 0 (deg).
+    deployed: Option<f64>,
 }
 
 /// Every crease to +-180 degrees by the sign of its target.
@@ -149,11 +155,45 @@ fn describe_curved(model: &Model, rep: &IntersectionReport) -> String {
     )
 }
 
-/// How the `fold` input is driven: 0 -> 1 over `ramp` s, then held `hold` s.
+/// How the `fold` input is driven: 0 -> 1 over `ramp` s, then held `hold`
+/// s; with `back` > 0 then back to 0 over `back` s and held `hold` s more.
+/// With its slopes (a master with input derivatives), or `held` (the
+/// values alone, as a master without them holds its samples).
 #[derive(Clone, Copy)]
 struct Drive {
     ramp: f64,
     hold: f64,
+    back: f64,
+    held: bool,
+}
+
+impl Drive {
+    /// The input and its slope over the step from `t`.
+    fn at(&self, t: f64) -> (f64, f64) {
+        let (u, slope) = if t < self.ramp {
+            (t / self.ramp, 1.0 / self.ramp)
+        } else if self.back <= 0.0 || t < self.ramp + self.hold {
+            (1.0, 0.0)
+        } else if t < self.ramp + self.hold + self.back {
+            (
+                1.0 - (t - self.ramp - self.hold) / self.back,
+                -1.0 / self.back,
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        (u, if self.held { 0.0 } else { slope })
+    }
+
+    /// The whole drive's length (s).
+    fn length(&self) -> f64 {
+        let out = if self.back > 0.0 {
+            self.back + self.hold
+        } else {
+            0.0
+        };
+        self.ramp + self.hold + out
+    }
 }
 
 fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, drive: Drive) -> Row {
@@ -180,24 +220,17 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, dri
         chord_error: None,
         outputs: 0,
         flat_error: None,
+        deployed: None,
     };
     // The checks' CPU: with the fold's, against the limit.
     let mut checking = 0.0;
-    let n = ((drive.ramp + drive.hold) / dt).round() as usize;
+    let n = (drive.length() / dt).round() as usize;
+    let folded_at = ((drive.ramp + drive.hold) / dt).round() as usize;
     for k in 0..n {
         let t = k as f64 * dt;
-        model.set_input(fold, (t / drive.ramp).min(1.0)).unwrap();
-        model
-            .set_input_derivative(
-                fold,
-                1,
-                if t < drive.ramp {
-                    1.0 / drive.ramp
-                } else {
-                    0.0
-                },
-            )
-            .unwrap();
+        let (u, slope) = drive.at(t);
+        model.set_input(fold, u).unwrap();
+        model.set_input_derivative(fold, 1, slope).unwrap();
         let c0 = cpu_seconds();
         let r = model.advance(dt);
         let c = cpu_seconds() - c0;
@@ -245,12 +278,21 @@ fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, dri
             }
         }
         checking += cpu_seconds() - c0;
+        if let (Some(map), true) = (&map, k + 1 == folded_at) {
+            let x: Vec<Vector3<f64>> = (0..model.scene().mesh.n_vertices())
+                .map(|v| Vector3::from(model.vertex_position(VertexId(v))))
+                .collect();
+            row.flat_error = Some(flat_fold_error(map, &x));
+        }
     }
-    if let (Some(map), None) = (&map, &row.failed) {
-        let x: Vec<Vector3<f64>> = (0..model.scene().mesh.n_vertices())
-            .map(|v| Vector3::from(model.vertex_position(VertexId(v))))
-            .collect();
-        row.flat_error = Some(flat_fold_error(map, &x));
+    if drive.back > 0.0 && row.failed.is_none() {
+        let largest = model
+            .outputs()
+            .iter()
+            .zip(model.output_values())
+            .filter(|(v, _)| v.name.starts_with("crease[") && v.name.ends_with(".angle"))
+            .fold(0.0, |m: f64, (_, a)| m.max(a.abs()));
+        row.deployed = Some(largest.to_degrees());
     }
     row
 }
@@ -282,6 +324,8 @@ fn main() {
     let drive = Drive {
         ramp: number("--ramp", 1.0),
         hold: number("--hold", 0.5),
+        back: number("--back", 0.0),
+        held: args.iter().any(|a| a == "--held"),
     };
     let value = origami_fmu::benchmarks::arg_text;
     let folds = list("--fold");
@@ -361,13 +405,27 @@ fn main() {
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, flat));
     }
     println!(
-        "## Patterns folded over {} s and held {} s more (default settings, 10 ms steps; CPU of the folds, the checks apart)",
-        drive.ramp, drive.hold
+        "## Patterns folded over {} s and held {} s more{}, {} (default settings, 10 ms steps; CPU of the folds, the checks apart)",
+        drive.ramp,
+        drive.hold,
+        if drive.back > 0.0 {
+            format!(
+                ", back to flat over {} s and held {} s",
+                drive.back, drive.hold
+            )
+        } else {
+            String::new()
+        },
+        if drive.held {
+            "held samples (no slopes)"
+        } else {
+            "with slopes"
+        }
     );
     println!(
-        "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing: sampled surface | curved facets (16/side) | largest chord error (m) | flat-fold error |"
+        "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing: sampled surface | curved facets (16/side) | largest chord error (m) | flat-fold error | largest angle at the end (deg) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut notes = Vec::new();
     for (name, scene, flat) in &scenes {
         for &contact in &modes {
@@ -396,7 +454,7 @@ fn main() {
                 ));
             }
             println!(
-                "| {name} | {facets} | {} | {:.2} | {} | {} | {} | {} | {:.2} (at {:.2} s) | {} | {} | {} | {} |",
+                "| {name} | {facets} | {} | {:.2} | {} | {} | {} | {} | {:.2} (at {:.2} s) | {} | {} | {} | {} | {} |",
                 if contact { "on" } else { "off" },
                 r.cpu,
                 r.steps,
@@ -410,6 +468,7 @@ fn main() {
                 r.chord_error.map_or("-".into(), |e| format!("{e:.2e}")),
                 r.flat_error
                     .map_or("-".into(), |e| format!("{:.2} %", 100.0 * e)),
+                r.deployed.map_or("-".into(), |a| format!("{a:.2}")),
             );
         }
     }
