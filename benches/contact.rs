@@ -58,16 +58,7 @@ fn main() {
             &[],
         )
         .unwrap();
-        let m = &scene.material;
-        let term = ContactTerm::new(
-            &scene.mesh,
-            &asm.layout,
-            &asm.elements,
-            scene.contact.as_ref().unwrap(),
-            m.density * m.thickness,
-            m.youngs_modulus * m.thickness,
-        )
-        .unwrap();
+        let term = ContactTerm::on(&asm, &scene.mesh, scene.contact.as_ref().unwrap()).unwrap();
         let search = 0.01;
         let us = best_us(repeats, || {
             std::hint::black_box(term.report(&q, search));

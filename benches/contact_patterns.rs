@@ -42,7 +42,7 @@
 mod common;
 use common::cpu_seconds;
 use nalgebra::Vector3;
-use origami_fmu::benchmarks::{flat_fold_error, flat_folded_positions};
+use origami_fmu::benchmarks::{flat_fold_error, flat_folded_positions, fold_flat_by_sign};
 use origami_fmu::contact::check::IntersectionReport;
 use origami_fmu::ids::{EdgeId, VertexId};
 use origami_fmu::mesh::EdgeKind;
@@ -71,17 +71,6 @@ struct Row {
     flat_error: Option<f64>,
     /// Largest |fold angle| at the end of a drive that returns to 0 (deg).
     deployed: Option<f64>,
-}
-
-/// Every crease to +-180 degrees by the sign of its target.
-fn fold_flat(scene: &mut Scene) {
-    for e in 0..scene.mesh.edges().len() {
-        let edge = &scene.mesh.edges()[e];
-        if edge.kind == EdgeKind::Crease && edge.fold_target != 0.0 {
-            let t = PI * edge.fold_target.signum();
-            scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
-        }
-    }
 }
 
 /// The waterbomb base collapsed: diagonals valley, the x midline mountain,
@@ -357,17 +346,17 @@ fn main() {
         let (name, scene, flat) = match p.as_str() {
             "miura" => {
                 let mut s = load("scenes/miura_4x4.fold");
-                fold_flat(&mut s);
+                fold_flat_by_sign(&mut s);
                 ("Miura 4x4 folded flat", s, true)
             }
             "yoshimura" => {
                 let mut s = load("scenes/yoshimura.fold");
-                fold_flat(&mut s);
+                fold_flat_by_sign(&mut s);
                 ("Yoshimura folded flat", s, true)
             }
             "kresling" => {
                 let mut s = load("scenes/kresling.fold");
-                fold_flat(&mut s);
+                fold_flat_by_sign(&mut s);
                 ("Kresling folded flat", s, true)
             }
             "waterbomb" => {
@@ -377,12 +366,12 @@ fn main() {
             }
             "smallbird" => {
                 let mut s = load("tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold");
-                fold_flat(&mut s);
+                fold_flat_by_sign(&mut s);
                 ("small bird base (flat-folder)", s, true)
             }
             "bird" => {
                 let mut s = load("tests/data/flat-folder/089_traditionaloripa_9_Birdbase.fold");
-                fold_flat(&mut s);
+                fold_flat_by_sign(&mut s);
                 ("9 bird bases (flat-folder)", s, true)
             }
             "pyramid" => {
@@ -396,7 +385,7 @@ fn main() {
     }
     for f in &folds {
         let (mut s, _) = origami_fmu::scene::load(f).unwrap();
-        fold_flat(&mut s);
+        fold_flat_by_sign(&mut s);
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, true));
     }
     for f in &own {

@@ -790,6 +790,22 @@ pub fn unit_grid_fold(n: usize) -> crate::scene::FoldFile {
     }
 }
 
+/// Every crease of `scene` with a target driven to +-180 degrees by the
+/// sign of its target (a pattern folded flat along its own M/V
+/// assignment).
+pub fn fold_flat_by_sign(scene: &mut crate::scene::Scene) {
+    for e in 0..scene.mesh.edges().len() {
+        let edge = &scene.mesh.edges()[e];
+        if edge.kind == crate::mesh::EdgeKind::Crease && edge.fold_target != 0.0 {
+            let t = std::f64::consts::PI * edge.fold_target.signum();
+            scene
+                .mesh
+                .set_fold_target(crate::ids::EdgeId(e), t)
+                .expect("a crease edge of the mesh takes a target of +-pi");
+        }
+    }
+}
+
 /// The target (rad) of mesh edge `e` in the waterbomb base collapsed flat
 /// (`scenes/waterbomb.fold`'s own targets are a 3D waterbomb): the
 /// diagonals valley, the midline along x mountain, the midline along y

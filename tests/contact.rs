@@ -747,13 +747,7 @@ fn bird_base_folds_flat(change: impl Fn(&mut Scene)) {
 /// largest |fold angle| of any crease then (rad).
 fn fold_flat_and_deploy(path: &str) -> (Model, f64) {
     let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
-    for e in 0..scene.mesh.edges().len() {
-        let edge = &scene.mesh.edges()[e];
-        if edge.kind == origami_fmu::mesh::EdgeKind::Crease && edge.fold_target != 0.0 {
-            let t = PI * edge.fold_target.signum();
-            scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
-        }
-    }
+    origami_fmu::benchmarks::fold_flat_by_sign(&mut scene);
     scene.contact = Some(scene.default_contact());
     let mut model = Model::new(scene).unwrap();
     model.initialize().unwrap();
@@ -1087,20 +1081,11 @@ fn contact_asks_for_matrix_blocks_only_where_pairs_are() {
     let mesh = &scene.mesh;
     let physics = origami_fmu::model::physics(&scene);
     let mut asm = Assembler::new(mesh, physics, ElementOptions::default(), &[]).unwrap();
-    let m = scene.material;
     let settings = ContactSettings {
-        thickness: m.thickness,
+        thickness: scene.material.thickness,
         ..Default::default()
     };
-    let term = ContactTerm::new(
-        mesh,
-        &asm.layout,
-        &asm.elements,
-        &settings,
-        m.density * m.thickness,
-        m.youngs_modulus * m.thickness,
-    )
-    .unwrap();
+    let term = ContactTerm::on(&asm, mesh, &settings).unwrap();
     asm.add_barrier(Box::new(term));
     let q = asm.layout.reference_state(mesh);
     let v = vec![0.0; q.len()];
@@ -1206,13 +1191,7 @@ fn the_chord_error_of_the_sampled_surface_is_the_sagitta() {
 #[test]
 fn the_kresling_sampled_surface_stays_clear_with_corner_pairs() {
     let (mut scene, _) = origami_fmu::scene::load("scenes/kresling.fold").unwrap();
-    for e in 0..scene.mesh.edges().len() {
-        let edge = &scene.mesh.edges()[e];
-        if edge.kind == origami_fmu::mesh::EdgeKind::Crease && edge.fold_target != 0.0 {
-            let t = PI * edge.fold_target.signum();
-            scene.mesh.set_fold_target(EdgeId(e), t).unwrap();
-        }
-    }
+    origami_fmu::benchmarks::fold_flat_by_sign(&mut scene);
     scene.contact = Some(scene.default_contact());
     let m = scene.contact.unwrap().subdivisions;
     let mut model = Model::new(scene).unwrap();
@@ -1253,17 +1232,9 @@ fn exact_contact_assembler(scene: &Scene, q: &[f64]) -> Assembler {
         ..origami_fmu::model::physics(scene)
     };
     let mut asm = Assembler::new(&scene.mesh, physics, ElementOptions::default(), &[]).unwrap();
-    let m = scene.material;
-    let term = ContactTerm::new(
-        &scene.mesh,
-        &asm.layout,
-        &asm.elements,
-        scene.contact.as_ref().unwrap(),
-        m.density * m.thickness,
-        m.youngs_modulus * m.thickness,
-    )
-    .unwrap()
-    .with_exact_hessian();
+    let term = ContactTerm::on(&asm, &scene.mesh, scene.contact.as_ref().unwrap())
+        .unwrap()
+        .with_exact_hessian();
     asm.add_barrier(Box::new(term));
     asm.before_step(q, &vec![0.0; q.len()]);
     asm

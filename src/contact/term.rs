@@ -291,6 +291,25 @@ const NEIGHBOUR_MIN: f64 = 0.02;
 type PairKey = (bool, [usize; 4]);
 
 impl ContactTerm {
+    /// Contact of `mesh` on the assembler `asm` built for it, with
+    /// `settings`: its sample masses and default barrier stiffness from the
+    /// assembler's material.
+    pub fn on(
+        asm: &Assembler,
+        mesh: &Mesh,
+        settings: &ContactSettings,
+    ) -> Result<ContactTerm, SettingsError> {
+        let m = &asm.physics.material;
+        ContactTerm::new(
+            mesh,
+            &asm.layout,
+            &asm.elements,
+            settings,
+            m.density * m.thickness,
+            m.youngs_modulus * m.thickness,
+        )
+    }
+
     /// Contact of `mesh` (facets `elements`) with `settings`; `areal_mass`
     /// is density times thickness (kg/m^2), `membrane` the membrane
     /// stiffness E h (N/m) that sets the default barrier stiffness.

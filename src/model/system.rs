@@ -259,16 +259,7 @@ fn add_contact(
 ) -> Result<(), Error> {
     let mesh = &sc.mesh;
     needs_implicit(sc, "ancf:contact")?;
-    let m = &asm.physics.material;
-    let term = ContactTerm::new(
-        mesh,
-        &asm.layout,
-        &asm.elements,
-        c,
-        m.density * m.thickness,
-        m.youngs_modulus * m.thickness,
-    )
-    .map_err(Error::Contact)?;
+    let term = ContactTerm::on(asm, mesh, c).map_err(Error::Contact)?;
     asm.add_barrier(Box::new(term));
     Ok(())
 }
