@@ -52,7 +52,7 @@ use super::potentials::{
 };
 use batch::{BlockPositions, MatrixBatch};
 use psd::project_psd;
-use stops::{StopPoint, stop_points};
+use stops::{Stops, stop_points};
 
 /// Contact settings (scene keys under `ancf:contact`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -274,7 +274,7 @@ pub struct ContactTerm {
     /// Width of the crease stops (rad): see [`ContactTerm::crease_stops`].
     flat_width: f64,
     /// The points along every crease where a stop acts.
-    stops: Vec<StopPoint>,
+    stops: Stops,
     /// Whether a crease end was within its stop at the step start.
     creases_near_flat: bool,
 }
@@ -367,7 +367,7 @@ impl ContactTerm {
             x_start: Vec::new(),
             v_start: Vec::new(),
             flat_width: settings.thickness / edge,
-            stops: stop_points(mesh, layout, elements),
+            stops: Stops::new(stop_points(mesh, layout, elements)),
             creases_near_flat: false,
         })
     }
