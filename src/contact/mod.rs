@@ -10,6 +10,7 @@ pub mod check;
 pub mod distance;
 pub mod distance_derivatives;
 pub mod intersect;
+mod lagged;
 pub mod obstacles;
 pub mod potentials;
 pub mod scalar;

@@ -33,6 +33,7 @@
 //! ([`stops`]), and the matrix's contact part ([`batch`], [`psd`]).
 
 use super::ccd;
+use super::lagged::StepStart;
 use super::surface::ContactSurface;
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
@@ -58,7 +59,7 @@ pub use settings::{ContactSettings, SettingsError};
 
 use batch::{BlockPositions, MatrixBatch};
 use candidates::CandidateCache;
-use friction::Lagged;
+use friction::Stencil;
 use pairs::{Kind, Pair, PairKey, distance_sq, key, lift};
 use psd::project_psd;
 use stops::{StopPoint, stop_points};
@@ -76,7 +77,9 @@ pub struct ContactTerm {
     /// Sample masses: fine and coarse primitives (kg).
     mass_fine: f64,
     mass_coarse: f64,
-    lagged: Vec<Lagged>,
+    /// The contact-vertex positions and velocities at the last step start,
+    /// and the pairs lagged there.
+    at_start: StepStart<Stencil>,
     /// Mean facet side (m): the default search of [`ContactTerm::report`].
     mean_side: f64,
     /// How far contact vertices may move from where candidates were last
@@ -109,9 +112,6 @@ pub struct ContactTerm {
     /// The slot pairs `cache.pairs`' matrices need (see
     /// [`ContactTerm::pattern_pairs`]), found once per search.
     blocks: Vec<(usize, usize)>,
-    /// Contact-vertex positions and velocities at the last step start.
-    x_start: Vec<Vector3<f64>>,
-    v_start: Vec<Vector3<f64>>,
     /// Width of the crease stops (rad): see [`ContactTerm::crease_stops`].
     flat_width: f64,
     /// The points along every crease where a stop acts.
@@ -182,7 +182,7 @@ impl ContactTerm {
             zeta: settings.damping_ratio,
             mass_fine: areal_mass * area / (n * n),
             mass_coarse: areal_mass * area / 3.0,
-            lagged: Vec::new(),
+            at_start: StepStart::default(),
             mean_side: edge,
             cache_margin,
             project: true,
@@ -194,8 +194,6 @@ impl ContactTerm {
             kappas: Vec::new(),
             restored: None,
             blocks: Vec::new(),
-            x_start: Vec::new(),
-            v_start: Vec::new(),
             flat_width: settings.thickness / edge,
             stops: stop_points(mesh, layout, elements),
             creases_near_flat: false,
@@ -397,7 +395,7 @@ impl ForceTerm for ContactTerm {
         let mut v = Vec::new();
         self.positions_at(st.q, &mut x);
         // Velocities only where lagged pairs (dashpots, friction) read them.
-        if !self.lagged.is_empty() {
+        if !self.at_start.lagged.is_empty() {
             self.surf.positions(st.v, &mut v);
         }
         out.dissipative_force.zeroed(out.force.len());
@@ -416,11 +414,11 @@ impl ForceTerm for ContactTerm {
             self.scatter_force(&ids, &e.g, &mut out.force);
             if let Some((_, co)) = matrix.as_ref() {
                 let kp = key(&p);
-                let lagged = &self.lagged;
-                while next_lagged < lagged.len() && lagged[next_lagged].key() < kp {
+                let lagged = &self.at_start.lagged;
+                while next_lagged < lagged.len() && lagged[next_lagged].pair.key() < kp {
                     let lg = &lagged[next_lagged];
                     if let Some(h) = self.lagged_matrix(lg, &v, co) {
-                        self.scatter_matrix(&lg.ids, &h, &mut batch);
+                        self.scatter_matrix(&lg.pair.ids, &h, &mut batch);
                     }
                     next_lagged += 1;
                 }
@@ -429,7 +427,7 @@ impl ForceTerm for ContactTerm {
                     (false, true) => Some(co.k * project_psd(&e.h, points)),
                     (false, false) => Some(co.k * e.h),
                 };
-                while next_lagged < lagged.len() && lagged[next_lagged].key() == kp {
+                while next_lagged < lagged.len() && lagged[next_lagged].pair.key() == kp {
                     if let Some(hl) = self.lagged_matrix(&lagged[next_lagged], &v, co) {
                         h = Some(h.map_or(hl, |h| h + hl));
                     }
@@ -441,9 +439,9 @@ impl ForceTerm for ContactTerm {
             }
         }
         if let Some((_, co)) = matrix.as_ref() {
-            for lg in &self.lagged[next_lagged..] {
+            for lg in &self.at_start.lagged[next_lagged..] {
                 if let Some(h) = self.lagged_matrix(lg, &v, co) {
-                    self.scatter_matrix(&lg.ids, &h, &mut batch);
+                    self.scatter_matrix(&lg.pair.ids, &h, &mut batch);
                 }
             }
         }

@@ -111,7 +111,7 @@ impl ContactTerm {
             Some(map) => map.get(&key(p)).copied(),
             None => find_key(&self.cache.pairs, p).and_then(|i| self.kappas.get(i).copied()),
         };
-        set.unwrap_or_else(|| self.pair_stiffness(p, &self.x_start, &self.v_start))
+        set.unwrap_or_else(|| self.pair_stiffness(p, &self.at_start.x, &self.at_start.v))
     }
 
     /// The stiffness of the `i`th pair of `pairs`, which are the cache's
