@@ -11,6 +11,7 @@ pub mod distance;
 pub mod distance_derivatives;
 pub mod intersect;
 mod lagged;
+mod memory;
 pub mod obstacles;
 pub mod potentials;
 pub mod scalar;

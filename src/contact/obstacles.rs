@@ -28,6 +28,7 @@
 
 use super::ccd;
 use super::lagged::{Lagged, StepStart, dashpot};
+use super::memory::{kept_stiffness, list_index, list_pairs, parse_pairs};
 use super::potentials::{barrier, db, ddb, friction_matrix, speed_stiffness};
 use super::shapes::{Closest, Obstacle, Shape, ShapeError};
 use super::surface::{ContactSurface, VertexMap, eval_map, scatter_map};
@@ -306,12 +307,12 @@ impl ObstacleTerm {
                 if gap >= self.s_hat + self.margin {
                     continue;
                 }
-                // Kept inside the barrier (its energy is not zero), set
-                // anew outside.
-                let kap = match self.pair_kappa.get(&(k, i)) {
-                    Some(&kap) if gap < self.s_hat => kap,
-                    _ => self.pair_stiffness(k, i, x, v),
-                };
+                let last = self.pair_kappa.get(&(k, i)).copied();
+                let kap = kept_stiffness(
+                    last,
+                    || gap < self.s_hat,
+                    || self.pair_stiffness(k, i, x, v),
+                );
                 kappa.insert((k, i), kap);
             }
         }
@@ -640,12 +641,12 @@ impl ObstacleTerm {
     /// (obstacle, sample, stiffness) in key order.
     fn memory_list(&self) -> Vec<f64> {
         let mut out: Vec<f64> = self.end.iter().flatten().flat_map(|m| m.values()).collect();
-        let mut pairs: Vec<(&(usize, usize), &f64)> = self.pair_kappa.iter().collect();
-        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
-        out.reserve(3 * pairs.len());
-        for (&(k, i), &kap) in pairs {
-            out.extend([k as f64, i as f64, kap]);
-        }
+        let pairs = self
+            .pair_kappa
+            .iter()
+            .map(|(&key, &kap)| (key, kap))
+            .collect();
+        list_pairs(pairs, |&(k, i)| [k as f64, i as f64], &mut out);
         out
     }
 
@@ -667,7 +668,7 @@ impl ObstacleTerm {
                 motions: head,
             });
         }
-        let (motions, memory) = memory.split_at(head);
+        let (motions, pairs) = memory.split_at(head);
         if let Some(k) = motions.iter().position(|x| x.is_nan() || x.abs() > max) {
             return Err(MemoryError::ObstacleMotion {
                 index: k,
@@ -675,29 +676,19 @@ impl ObstacleTerm {
                 max,
             });
         }
-        let index = |x: f64, n: usize, what: &'static str, k: usize| {
-            (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
-                .then_some(x as usize)
-                .ok_or(MemoryError::ObstaclePairIndex {
-                    pair: k,
-                    what,
-                    value: x,
-                    count: n,
-                })
+        let index = |x: f64, n: usize, what: &'static str, pair: usize| {
+            list_index(x, n).ok_or(MemoryError::ObstaclePairIndex {
+                pair,
+                what,
+                value: x,
+                count: n,
+            })
         };
-        let mut map = HashMap::with_capacity(memory.len() / 3);
-        for (k, m) in memory.chunks_exact(3).enumerate() {
-            let o = index(m[0], self.obstacles.len(), "obstacle", k)?;
-            let i = index(m[1], self.surf.n_vertices(), "contact sample", k)?;
-            if !(m[2] > 0.0 && m[2] <= max) {
-                return Err(MemoryError::PairStiffness {
-                    pair: k,
-                    stiffness: m[2],
-                    max,
-                });
-            }
-            map.insert((o, i), m[2]);
-        }
+        let map = parse_pairs(pairs, 3, |pair, m| {
+            let o = index(m[0], self.obstacles.len(), "obstacle", pair)?;
+            let i = index(m[1], self.surf.n_vertices(), "contact sample", pair)?;
+            Ok((o, i))
+        })?;
         let motions = motions
             .chunks_exact(Motion::VALUES)
             .map(Motion::from_values)

@@ -3,6 +3,7 @@
 use super::ContactTerm;
 use super::pairs::{PairKey, key};
 use crate::assembly::MemoryError;
+use crate::contact::memory::{list_index, list_pairs, parse_pairs};
 use std::collections::HashMap;
 
 impl ContactTerm {
@@ -10,7 +11,7 @@ impl ContactTerm {
     /// term's memory): six numbers a pair (edge-edge or not, its four
     /// contact vertices, the stiffness), in key order.
     pub(super) fn memory_list(&self) -> Vec<f64> {
-        let mut pairs: Vec<(PairKey, f64)> = match &self.restored {
+        let pairs: Vec<(PairKey, f64)> = match &self.restored {
             Some(map) => map.iter().map(|(k, &v)| (*k, v)).collect(),
             None => self
                 .cache
@@ -20,14 +21,15 @@ impl ContactTerm {
                 .zip(self.kappas.iter().copied())
                 .collect(),
         };
-        pairs.sort_unstable_by_key(|a| a.0);
-        pairs.dedup_by(|a, b| a.0 == b.0);
-        let mut out = Vec::with_capacity(6 * pairs.len());
-        for ((edge, ids), k) in pairs {
-            out.push(if edge { 1.0 } else { 0.0 });
-            out.extend(ids.iter().map(|&i| i as f64));
-            out.push(k);
-        }
+        let mut out = Vec::new();
+        list_pairs(
+            pairs,
+            |&(edge, ids)| {
+                let [a, b, c, d] = ids.map(|i| i as f64);
+                [if edge { 1.0 } else { 0.0 }, a, b, c, d]
+            },
+            &mut out,
+        );
         out
     }
 
@@ -45,34 +47,18 @@ impl ContactTerm {
             });
         }
         let n = self.surf.n_vertices();
-        let max = crate::scene::limits::MAX_MAGNITUDE;
-        let mut map = HashMap::with_capacity(memory.len() / 6);
-        for (k, m) in memory.chunks_exact(6).enumerate() {
+        parse_pairs(memory, 6, |pair, m| {
             let id = |x: f64| {
-                (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
-                    .then_some(x as usize)
-                    .ok_or(MemoryError::PairVertex {
-                        pair: k,
-                        vertex: x,
-                        vertices: n,
-                    })
+                list_index(x, n).ok_or(MemoryError::PairVertex {
+                    pair,
+                    vertex: x,
+                    vertices: n,
+                })
             };
             if m[0] != 0.0 && m[0] != 1.0 {
-                return Err(MemoryError::PairKind {
-                    pair: k,
-                    kind: m[0],
-                });
+                return Err(MemoryError::PairKind { pair, kind: m[0] });
             }
-            let ids = [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?];
-            if !(m[5] > 0.0 && m[5] <= max) {
-                return Err(MemoryError::PairStiffness {
-                    pair: k,
-                    stiffness: m[5],
-                    max,
-                });
-            }
-            map.insert((m[0] == 1.0, ids), m[5]);
-        }
-        Ok(map)
+            Ok((m[0] == 1.0, [id(m[1])?, id(m[2])?, id(m[3])?, id(m[4])?]))
+        })
     }
 }

@@ -3,6 +3,7 @@
 use super::ContactTerm;
 use super::candidates::CandidateCache;
 use super::pairs::{Kind, Pair, distance_sq, find_key, key, lift};
+use crate::contact::memory::kept_stiffness;
 use crate::contact::potentials::speed_stiffness;
 use nalgebra::Vector3;
 
@@ -36,11 +37,9 @@ impl ContactTerm {
                 !p.apart(&xs, p.xi + s_hat)
                     && distance_sq::<f64>(&p.kind, &lift(&xs)).sqrt() - p.xi < s_hat
             };
-            let k = match last(i, p) {
-                Some(k) if inside() => k,
-                _ => self.pair_stiffness(p, x, v),
-            };
-            kappas.push(k);
+            kappas.push(kept_stiffness(last(i, p), inside, || {
+                self.pair_stiffness(p, x, v)
+            }));
         }
         // Pairs with one key (adjacent in the canonical order) take the
         // last one's value, as a map by key keeps it.
