@@ -30,6 +30,7 @@ use super::ccd;
 use super::lagged::{Lagged, StepStart, dashpot};
 use super::memory::{kept_stiffness, list_index, list_pairs, parse_pairs};
 use super::potentials::{barrier, db, ddb, friction_matrix, speed_stiffness};
+use super::scale::SheetScale;
 use super::shapes::{Closest, Obstacle, Shape, ShapeError};
 use super::surface::{ContactSurface, VertexMap, eval_map, scatter_map};
 use super::term::{ContactSettings, SettingsError};
@@ -148,11 +149,7 @@ impl ObstacleTerm {
         areal_mass: f64,
         membrane: f64,
     ) -> Result<ObstacleTerm, ObstacleError> {
-        if settings.thickness.is_nan() || settings.thickness <= 0.0 {
-            return Err(ObstacleError::Settings(SettingsError::Thickness(
-                settings.thickness,
-            )));
-        }
+        settings.check().map_err(ObstacleError::Settings)?;
         for o in obstacles {
             o.shape.check().map_err(|error| ObstacleError::Shape {
                 obstacle: o.name.clone(),
@@ -160,11 +157,7 @@ impl ObstacleTerm {
             })?;
         }
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, false);
-        let nf = mesh.triangles().len().max(1);
-        let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
-        let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
-            / mesh.edges().len().max(1) as f64;
-        let n = surf.n as f64;
+        let scale = SheetScale::new(mesh, elements, surf.n, settings, areal_mass, membrane);
         let xi = 0.5 * settings.thickness;
         let s_hat = settings.width * xi;
         Ok(ObstacleTerm {
@@ -172,14 +165,11 @@ impl ObstacleTerm {
             obstacles: obstacles.to_vec(),
             xi,
             s_hat,
-            // Self-contact's default: E h xi / l.
-            kappa: settings
-                .stiffness
-                .unwrap_or(membrane * settings.thickness / edge),
+            kappa: scale.kappa,
             eps_v: settings.stick_velocity,
             zeta: settings.damping_ratio,
-            mass: areal_mass * area / (n * n),
-            margin: (xi + s_hat).max(0.1 * edge),
+            mass: scale.sample_mass,
+            margin: (xi + s_hat).max(0.1 * scale.side),
             project: true,
             at_start: StepStart::default(),
             pair_kappa: HashMap::new(),

@@ -34,6 +34,7 @@
 
 use super::ccd;
 use super::lagged::StepStart;
+use super::scale::SheetScale;
 use super::surface::ContactSurface;
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError, State,
@@ -151,21 +152,10 @@ impl ContactTerm {
         areal_mass: f64,
         membrane: f64,
     ) -> Result<ContactTerm, SettingsError> {
-        if settings.thickness.is_nan() || settings.thickness <= 0.0 {
-            return Err(SettingsError::Thickness(settings.thickness));
-        }
+        settings.check()?;
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, true);
-        let nf = mesh.triangles().len().max(1);
-        let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
-        let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
-            / mesh.edges().len().max(1) as f64;
-        let n = surf.n as f64;
-        // The barrier must absorb impacts: kappa s_hat^2 is its energy scale.
-        // D / l^2 (bending) leaves 1e-11 J against the 1e-6 J of a 4 cm
-        // paper panel falling 5 mm; E h xi / l stops it within the width.
-        let kappa = settings
-            .stiffness
-            .unwrap_or(membrane * settings.thickness / edge);
+        let scale = SheetScale::new(mesh, elements, surf.n, settings, areal_mass, membrane);
+        let edge = scale.side;
         // The barrier's reach, and the candidate cache's margin: a tenth of
         // a side (a step rarely moves a vertex that far, and a sheet has few
         // pairs that near), at least the reach.
@@ -176,12 +166,12 @@ impl ContactTerm {
             mesh: mesh.clone(),
             xi: settings.thickness,
             s_hat: settings.width * settings.thickness,
-            kappa,
+            kappa: scale.kappa,
             mu: settings.friction,
             eps_v: settings.stick_velocity,
             zeta: settings.damping_ratio,
-            mass_fine: areal_mass * area / (n * n),
-            mass_coarse: areal_mass * area / 3.0,
+            mass_fine: scale.sample_mass,
+            mass_coarse: scale.corner_mass,
             at_start: StepStart::default(),
             mean_side: edge,
             cache_margin,

@@ -35,6 +35,17 @@ impl Default for ContactSettings {
     }
 }
 
+impl ContactSettings {
+    /// Whether a contact term can be made with these settings: a positive
+    /// thickness.
+    pub(crate) fn check(&self) -> Result<(), SettingsError> {
+        if self.thickness.is_nan() || self.thickness <= 0.0 {
+            return Err(SettingsError::Thickness(self.thickness));
+        }
+        Ok(())
+    }
+}
+
 /// Why [`ContactTerm::new`](super::ContactTerm::new) refused its settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SettingsError {
