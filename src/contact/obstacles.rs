@@ -27,10 +27,10 @@
 //! taken at the closest points of its surface.
 
 use super::ccd;
-use super::potentials::{
-    barrier, db, ddb, friction_matrix, reversal_fraction, slip_factor, speed_stiffness,
-    tangent_basis,
-};
+use super::lagged::{Lagged, StepStart, dashpot};
+use super::memory::{kept_stiffness, list_index, list_pairs, parse_pairs};
+use super::potentials::{barrier, db, ddb, friction_matrix, speed_stiffness};
+use super::scale::SheetScale;
 use super::shapes::{Closest, Obstacle, Shape, ShapeError};
 use super::surface::{ContactSurface, VertexMap, eval_map, scatter_map};
 use super::term::{ContactSettings, SettingsError};
@@ -40,7 +40,7 @@ use crate::assembly::{
 };
 use crate::frame::Motion;
 use crate::mesh::Mesh;
-use nalgebra::{Matrix3, Vector2, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
 
 /// Why [`ObstacleTerm::new`] refused its obstacles or settings.
@@ -75,21 +75,11 @@ impl std::error::Error for ObstacleError {
     }
 }
 
-/// Dashpot and friction data of one pair, from the step start.
-#[derive(Clone, Debug)]
-struct Lagged {
+/// An obstacle pair: an obstacle and a contact sample of the sheet.
+#[derive(Clone, Copy, Debug)]
+struct SamplePair {
     obstacle: usize,
     sample: usize,
-    /// Normal dashpot coefficient (N s/m).
-    c: f64,
-    /// Unit outward normal of the shape at the closest point.
-    normal: Vector3<f64>,
-    /// Orthonormal tangent basis.
-    basis: [Vector3<f64>; 2],
-    /// Normal force (N).
-    lambda: f64,
-    /// Tangential velocity at the step start (in `basis`).
-    slide: Vector2<f64>,
 }
 
 /// Where the obstacles are for a computation: at the step start or at the
@@ -128,12 +118,12 @@ pub struct ObstacleTerm {
     margin: f64,
     /// Project each pair's Hessian to positive semi-definite (Newton).
     project: bool,
-    lagged: Vec<Lagged>,
+    /// The sample positions and velocities at the last step start, and the
+    /// pairs lagged there.
+    at_start: StepStart<SamplePair>,
     /// Barrier stiffness of the pairs near at the last step start (N/m),
     /// keyed by (obstacle, sample).
     pair_kappa: HashMap<(usize, usize), f64>,
-    x_start: Vec<Vector3<f64>>,
-    v_start: Vec<Vector3<f64>>,
     /// Whether a pair was within `margin` of the barrier at the step start.
     near: bool,
     /// Each obstacle's origin in the scene (where its pose inputs start).
@@ -159,11 +149,7 @@ impl ObstacleTerm {
         areal_mass: f64,
         membrane: f64,
     ) -> Result<ObstacleTerm, ObstacleError> {
-        if settings.thickness.is_nan() || settings.thickness <= 0.0 {
-            return Err(ObstacleError::Settings(SettingsError::Thickness(
-                settings.thickness,
-            )));
-        }
+        settings.check().map_err(ObstacleError::Settings)?;
         for o in obstacles {
             o.shape.check().map_err(|error| ObstacleError::Shape {
                 obstacle: o.name.clone(),
@@ -171,11 +157,7 @@ impl ObstacleTerm {
             })?;
         }
         let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, false);
-        let nf = mesh.triangles().len().max(1);
-        let area: f64 = elements.iter().map(|e| e.area()).sum::<f64>() / nf as f64;
-        let edge = mesh.edge_ids().map(|e| mesh.edge_length(e)).sum::<f64>()
-            / mesh.edges().len().max(1) as f64;
-        let n = surf.n as f64;
+        let scale = SheetScale::new(mesh, elements, surf.n, settings, areal_mass, membrane);
         let xi = 0.5 * settings.thickness;
         let s_hat = settings.width * xi;
         Ok(ObstacleTerm {
@@ -183,19 +165,14 @@ impl ObstacleTerm {
             obstacles: obstacles.to_vec(),
             xi,
             s_hat,
-            // Self-contact's default: E h xi / l.
-            kappa: settings
-                .stiffness
-                .unwrap_or(membrane * settings.thickness / edge),
+            kappa: scale.kappa,
             eps_v: settings.stick_velocity,
             zeta: settings.damping_ratio,
-            mass: areal_mass * area / (n * n),
-            margin: (xi + s_hat).max(0.1 * edge),
+            mass: scale.sample_mass,
+            margin: (xi + s_hat).max(0.1 * scale.side),
             project: true,
-            lagged: Vec::new(),
+            at_start: StepStart::default(),
             pair_kappa: HashMap::new(),
-            x_start: Vec::new(),
-            v_start: Vec::new(),
             near: false,
             origins: obstacles.iter().map(|o| o.shape.origin()).collect(),
             start: at_rest(obstacles),
@@ -305,7 +282,7 @@ impl ObstacleTerm {
     fn kappa_of(&self, k: usize, i: usize) -> f64 {
         match self.pair_kappa.get(&(k, i)) {
             Some(&kap) => kap,
-            None => self.pair_stiffness(k, i, &self.x_start, &self.v_start),
+            None => self.pair_stiffness(k, i, &self.at_start.x, &self.at_start.v),
         }
     }
 
@@ -320,39 +297,30 @@ impl ObstacleTerm {
                 if gap >= self.s_hat + self.margin {
                     continue;
                 }
-                // Kept inside the barrier (its energy is not zero), set
-                // anew outside.
-                let kap = match self.pair_kappa.get(&(k, i)) {
-                    Some(&kap) if gap < self.s_hat => kap,
-                    _ => self.pair_stiffness(k, i, x, v),
-                };
+                let last = self.pair_kappa.get(&(k, i)).copied();
+                let kap = kept_stiffness(
+                    last,
+                    || gap < self.s_hat,
+                    || self.pair_stiffness(k, i, x, v),
+                );
                 kappa.insert((k, i), kap);
             }
         }
         self.near = !kappa.is_empty();
         self.pair_kappa = kappa;
-        self.x_start.clear();
-        self.x_start.extend_from_slice(x);
-        self.v_start.clear();
-        self.v_start.extend_from_slice(v);
-        self.lagged.clear();
+        self.at_start.begin(x, v);
         for a in self.active(x, When::Start).unwrap_or_default() {
             let kap = self.kappa_of(a.obstacle, a.sample);
-            let n = a.closest.normal;
-            let basis = tangent_basis(&n);
             let vi = v.get(a.sample).copied().unwrap_or_default()
                 - self.surface_velocity(a.obstacle, &x[a.sample], &a.closest, When::Start);
-            // Critical for zeta = 1 at the pair's barrier stiffness.
-            let k = kap * ddb(a.gap, self.s_hat).max(0.0);
-            self.lagged.push(Lagged {
+            let pair = SamplePair {
                 obstacle: a.obstacle,
                 sample: a.sample,
-                c: 2.0 * self.zeta * (k * self.mass).sqrt(),
-                normal: n,
-                basis,
-                lambda: -kap * db(a.gap, self.s_hat),
-                slide: Vector2::new(basis[0].dot(&vi), basis[1].dot(&vi)),
-            });
+            };
+            let c = dashpot(self.zeta, kap, self.mass, a.gap, self.s_hat);
+            let lambda = -kap * db(a.gap, self.s_hat);
+            let lagged = Lagged::new(pair, c, a.closest.normal, lambda, &vi);
+            self.at_start.lagged.push(lagged);
         }
     }
 
@@ -495,25 +463,22 @@ impl ObstacleTerm {
     /// would carry through sticking comes closest to rest (as
     /// [`super::ContactTerm::friction_fraction`]); 1 if none.
     pub fn friction_fraction(&self, q: &[f64], v: &[f64], dq: &[f64], dv_dq: f64) -> f64 {
-        let mut t: f64 = 1.0;
-        for lg in &self.lagged {
-            if self.obstacles[lg.obstacle].friction <= 0.0 || lg.lambda <= 0.0 {
-                continue;
+        self.at_start.friction_fraction(self.eps_v, |lg| {
+            let SamplePair {
+                obstacle: k,
+                sample,
+            } = lg.pair;
+            if self.obstacles[k].friction <= 0.0 {
+                return None;
             }
-            let (k, m) = (lg.obstacle, &self.surf.maps[lg.sample]);
+            let m = &self.surf.maps[sample];
             let mut vr = eval_map(m, v);
             if self.obstacles[k].moving {
                 let x = eval_map(m, q);
                 vr = self.relative_velocity(k, &x, &self.closest(k, &x, When::End), vr);
             }
-            let dr = eval_map(m, dq) * dv_dq;
-            let u = Vector2::new(lg.basis[0].dot(&vr), lg.basis[1].dot(&vr));
-            let du = Vector2::new(lg.basis[0].dot(&dr), lg.basis[1].dot(&dr));
-            if let Some(stop) = reversal_fraction(u, du, lg.slide, self.eps_v) {
-                t = t.min(stop);
-            }
-        }
-        t
+            Some((vr, eval_map(m, dq) * dv_dq))
+        })
     }
 
     /// The velocity `v` of a sample at `x` relative to obstacle `k`'s
@@ -560,14 +525,15 @@ impl ObstacleTerm {
     /// of the force; gives its power on the obstacle.
     fn apply_lagged(
         &self,
-        lg: &Lagged,
+        lg: &Lagged<SamplePair>,
         at: (&Vector3<f64>, &Closest),
         f: &Vector3<f64>,
         (force, part): (&mut [f64], &mut [f64]),
         wrenches: &mut [[f64; 6]],
     ) -> f64 {
-        scatter_map(&self.surf.maps[lg.sample], f, part);
-        self.apply(lg.obstacle, lg.sample, at, f, force, wrenches)
+        let SamplePair { obstacle, sample } = lg.pair;
+        scatter_map(&self.surf.maps[sample], f, part);
+        self.apply(obstacle, sample, at, f, force, wrenches)
     }
 
     /// The barrier's, dashpots' and friction's forces, energy and matrix
@@ -610,19 +576,22 @@ impl ObstacleTerm {
         }
         // Each lagged sample's distance data at the step end, for both loops.
         let closest: Vec<Closest> = self
+            .at_start
             .lagged
             .iter()
-            .map(|lg| self.closest(lg.obstacle, &x[lg.sample], When::End))
+            .map(|lg| self.closest(lg.pair.obstacle, &x[lg.pair.sample], When::End))
             .collect();
         // Dashpots on the normal velocity along the lagged normals.
         for (lg, c) in self
+            .at_start
             .lagged
             .iter()
             .zip(&closest)
             .filter(|(lg, _)| lg.c > 0.0)
         {
-            let at = (&x[lg.sample], c);
-            let vi = self.relative_velocity(lg.obstacle, at.0, c, v[lg.sample]);
+            let SamplePair { obstacle, sample } = lg.pair;
+            let at = (&x[sample], c);
+            let vi = self.relative_velocity(obstacle, at.0, c, v[sample]);
             let rate = lg.normal.dot(&vi);
             out.contact_damping_power += lg.c * rate * rate;
             let f = (lg.c * rate) * lg.normal;
@@ -630,28 +599,25 @@ impl ObstacleTerm {
             power.damping += self.apply_lagged(lg, at, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
                 let h = (co.c * lg.c) * lg.normal * lg.normal.transpose();
-                add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
+                add_matrix(asm, &self.surf.maps[sample], &h, vals);
             }
         }
         // Friction with the lagged normal forces and bases.
-        for (lg, c) in self.lagged.iter().zip(&closest) {
-            let mu = self.obstacles[lg.obstacle].friction;
+        for (lg, c) in self.at_start.lagged.iter().zip(&closest) {
+            let SamplePair { obstacle, sample } = lg.pair;
+            let mu = self.obstacles[obstacle].friction;
             if mu <= 0.0 {
                 continue;
             }
-            let at = (&x[lg.sample], c);
-            let vi = self.relative_velocity(lg.obstacle, at.0, c, v[lg.sample]);
-            let u = Vector2::new(lg.basis[0].dot(&vi), lg.basis[1].dot(&vi));
-            let slip = slip_factor(u.norm(), self.eps_v);
-            let ml = mu * lg.lambda;
-            let ut = lg.basis[0] * u.x + lg.basis[1] * u.y;
-            let f = (ml * slip.0) * ut;
+            let at = (&x[sample], c);
+            let vi = self.relative_velocity(obstacle, at.0, c, v[sample]);
+            let (f, u, slip) = lg.friction(mu, self.eps_v, &vi);
             out.friction_power += f.dot(&vi);
             let part = &mut out.dissipative_force.friction;
             power.friction += self.apply_lagged(lg, at, &f, (&mut out.force, part), &mut wrenches);
             if let Some((vals, co)) = matrix.as_mut() {
-                let h = friction_matrix(co.c * ml, &lg.basis, u, slip);
-                add_matrix(asm, &self.surf.maps[lg.sample], &h, vals);
+                let h = friction_matrix(co.c * (mu * lg.lambda), &lg.basis, u, slip);
+                add_matrix(asm, &self.surf.maps[sample], &h, vals);
             }
         }
         power.total += power.damping + power.friction;
@@ -665,12 +631,12 @@ impl ObstacleTerm {
     /// (obstacle, sample, stiffness) in key order.
     fn memory_list(&self) -> Vec<f64> {
         let mut out: Vec<f64> = self.end.iter().flatten().flat_map(|m| m.values()).collect();
-        let mut pairs: Vec<(&(usize, usize), &f64)> = self.pair_kappa.iter().collect();
-        pairs.sort_unstable_by(|a, b| a.0.cmp(b.0));
-        out.reserve(3 * pairs.len());
-        for (&(k, i), &kap) in pairs {
-            out.extend([k as f64, i as f64, kap]);
-        }
+        let pairs = self
+            .pair_kappa
+            .iter()
+            .map(|(&key, &kap)| (key, kap))
+            .collect();
+        list_pairs(pairs, |&(k, i)| [k as f64, i as f64], &mut out);
         out
     }
 
@@ -692,7 +658,7 @@ impl ObstacleTerm {
                 motions: head,
             });
         }
-        let (motions, memory) = memory.split_at(head);
+        let (motions, pairs) = memory.split_at(head);
         if let Some(k) = motions.iter().position(|x| x.is_nan() || x.abs() > max) {
             return Err(MemoryError::ObstacleMotion {
                 index: k,
@@ -700,29 +666,19 @@ impl ObstacleTerm {
                 max,
             });
         }
-        let index = |x: f64, n: usize, what: &'static str, k: usize| {
-            (x >= 0.0 && x < n as f64 && x.fract() == 0.0)
-                .then_some(x as usize)
-                .ok_or(MemoryError::ObstaclePairIndex {
-                    pair: k,
-                    what,
-                    value: x,
-                    count: n,
-                })
+        let index = |x: f64, n: usize, what: &'static str, pair: usize| {
+            list_index(x, n).ok_or(MemoryError::ObstaclePairIndex {
+                pair,
+                what,
+                value: x,
+                count: n,
+            })
         };
-        let mut map = HashMap::with_capacity(memory.len() / 3);
-        for (k, m) in memory.chunks_exact(3).enumerate() {
-            let o = index(m[0], self.obstacles.len(), "obstacle", k)?;
-            let i = index(m[1], self.surf.n_vertices(), "contact sample", k)?;
-            if !(m[2] > 0.0 && m[2] <= max) {
-                return Err(MemoryError::PairStiffness {
-                    pair: k,
-                    stiffness: m[2],
-                    max,
-                });
-            }
-            map.insert((o, i), m[2]);
-        }
+        let map = parse_pairs(pairs, 3, |pair, m| {
+            let o = index(m[0], self.obstacles.len(), "obstacle", pair)?;
+            let i = index(m[1], self.surf.n_vertices(), "contact sample", pair)?;
+            Ok((o, i))
+        })?;
         let motions = motions
             .chunks_exact(Motion::VALUES)
             .map(Motion::from_values)

@@ -1,7 +1,14 @@
 //! Crease stops: a crease cannot fold past flat (see
 //! [`ContactTerm::crease_stops`]).
 
-use super::*;
+use super::ContactTerm;
+use super::batch::MatrixBatch;
+use crate::assembly::{Assembler, EvalError, Evaluation, MatrixCoeffs, State};
+use crate::contact::potentials::{barrier, db, ddb};
+use crate::dofs::DofLayout;
+use crate::mesh::Mesh;
+use nalgebra::{SMatrix, Vector3};
+use std::collections::HashMap;
 
 /// A point of a crease where its stop acts: the crease's `[a, b, t]` there
 /// (into the facet on the right of `t`, into the left one, along the
