@@ -286,6 +286,93 @@ fn crease_stop_and_neighbour_force_and_tangent_match_finite_differences() {
     force_and_tangent_match_finite_differences(&asm, &q);
 }
 
+/// The crease stops skip a crease while no point of it can be within the
+/// stop's width (bounded from where its points were last evaluated): the
+/// force, energy, iteration matrix and collision-check fraction of a term
+/// evaluated along the small bird base's fold to flat, forth and back, are
+/// those of a term that evaluates every point afresh, bit for bit.
+#[test]
+fn skipping_creases_far_from_flat_changes_no_force_and_no_fraction() {
+    let path = "tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold";
+    let mut scene = origami_fmu::scene::load(path).unwrap().0;
+    scene.contact = Some(scene.default_contact());
+    let mut model = Model::new(scene.clone()).unwrap();
+    model.initialize().unwrap();
+    let mut states = Vec::new();
+    origami_fmu::benchmarks::fold_by_ramp_with(&mut model, 110, 0.01, 1.0, true, |m, _| {
+        states.push(m.save_state().dynamics.q)
+    });
+    let build = || {
+        let physics = origami_fmu::model::physics(&scene);
+        let mut asm = Assembler::new(&scene.mesh, physics, ElementOptions::default(), &[]).unwrap();
+        let term = ContactTerm::on(&asm, &scene.mesh, scene.contact.as_ref().unwrap()).unwrap();
+        asm.add_barrier(Box::new(term));
+        asm
+    };
+    let mut kept = build();
+    let zeros = vec![0.0; states[0].len()];
+    let co = MatrixCoeffs {
+        k: 1.0,
+        m: 0.0,
+        c: 0.0,
+    };
+    let (mut stopped, mut cut) = (0, 0);
+    let order: Vec<usize> = (0..states.len() - 1)
+        .chain((0..states.len() - 1).rev())
+        .collect();
+    for k in order {
+        let (q, next) = (&states[k], &states[k + 1]);
+        let mut fresh = build();
+        kept.before_step(q, &zeros);
+        fresh.before_step(q, &zeros);
+        let mut mk = vec![0.0; kept.nnz()];
+        let mut mf = vec![0.0; fresh.nnz()];
+        let ek = eval_at(&kept, q, &zeros, Some((&mut mk, co)));
+        let ef = eval_at(&fresh, q, &zeros, Some((&mut mf, co)));
+        assert_eq!(ek.force, ef.force, "force at output {k}");
+        assert_eq!(ek.term_energy.to_bits(), ef.term_energy.to_bits());
+        assert_eq!(ek.barrier_pairs, ef.barrier_pairs);
+        // Patterns differ (the kept one grew with the pairs it has seen):
+        // the same entries where either is nonzero.
+        let entries = |asm: &Assembler, vals: &[f64]| {
+            let mut out = std::collections::BTreeMap::new();
+            for (col, ends) in asm.col_ptr.windows(2).enumerate() {
+                for (row, v) in asm.row_idx[ends[0]..ends[1]]
+                    .iter()
+                    .zip(&vals[ends[0]..ends[1]])
+                {
+                    if *v != 0.0 {
+                        out.insert((*row, col), v.to_bits());
+                    }
+                }
+            }
+            out
+        };
+        assert!(
+            entries(&kept, &mk) == entries(&fresh, &mf),
+            "matrix at output {k}"
+        );
+        stopped += usize::from(ek.term_energy > 0.0);
+        for scale in [1.0, 4.0, 16.0] {
+            let dq: Vec<f64> = next.iter().zip(q).map(|(b, a)| scale * (b - a)).collect();
+            let (fk, ff) = (
+                kept.max_step_fraction(q, &dq),
+                fresh.max_step_fraction(q, &dq),
+            );
+            assert_eq!(
+                fk.to_bits(),
+                ff.to_bits(),
+                "fraction at output {k}, x{scale}"
+            );
+            cut += usize::from(fk < 1.0);
+        }
+    }
+    assert!(
+        stopped > 0 && cut > 0,
+        "the stops acted ({stopped}) and cut moves ({cut})"
+    );
+}
+
 /// The contact's damping matrix (normal dashpot and friction, both lagged
 /// from the step start) is the derivative of its force in the velocities,
 /// with panel B sliding (friction slipping) and approaching.

@@ -61,7 +61,7 @@ use candidates::CandidateCache;
 use friction::Lagged;
 use pairs::{Kind, Pair, PairKey, distance_sq, key, lift};
 use psd::project_psd;
-use stops::{StopPoint, stop_points};
+use stops::{Stops, stop_points};
 
 /// The contact force term of one mesh.
 pub struct ContactTerm {
@@ -115,7 +115,7 @@ pub struct ContactTerm {
     /// Width of the crease stops (rad): see [`ContactTerm::crease_stops`].
     flat_width: f64,
     /// The points along every crease where a stop acts.
-    stops: Vec<StopPoint>,
+    stops: Stops,
     /// Whether a crease end was within its stop at the step start.
     creases_near_flat: bool,
 }
@@ -197,7 +197,7 @@ impl ContactTerm {
             x_start: Vec::new(),
             v_start: Vec::new(),
             flat_width: settings.thickness / edge,
-            stops: stop_points(mesh, layout, elements),
+            stops: Stops::new(stop_points(mesh, layout, elements)),
             creases_near_flat: false,
         })
     }

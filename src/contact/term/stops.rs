@@ -19,6 +19,64 @@ pub(super) struct StopPoint {
     /// Share of the crease's length (m) the point stands for.
     length: f64,
     maps: [crate::contact::surface::VertexMap; 3],
+    /// Each map's sum of |coefficient|: `|x(q) - x(r)| <= l1 max_s |q_s - r_s|`.
+    l1: [f64; 3],
+}
+
+/// The crease stops' points, by crease edge, and for each edge the state
+/// where its points were last evaluated with how far its slots may move
+/// from there before one of them can come within the stop's width or turn
+/// by a radian: edges within that are skipped (their points would act on
+/// nothing), the same result for a fraction of the work.
+pub(super) struct Stops {
+    pub(super) points: Vec<StopPoint>,
+    edges: Vec<StopEdge>,
+    refs: std::sync::Mutex<Vec<EdgeRef>>,
+}
+
+/// One crease edge's points and the slots their maps read.
+struct StopEdge {
+    points: std::ops::Range<usize>,
+    slots: Vec<usize>,
+}
+
+/// An edge's reference: its slots' values where its points were last
+/// evaluated, and the largest move of any slot (m) that keeps every point
+/// clear; negative where none does.
+#[derive(Clone, Default)]
+struct EdgeRef {
+    q: Vec<Vector3<f64>>,
+    allow: f64,
+}
+
+impl EdgeRef {
+    /// Whether every slot of `edge` at `q` (and along `q + alpha dq`,
+    /// alpha in [0, 1]) is within the reference's allowance.
+    /// Take `q` as the reference of `edge`, with its allowance.
+    fn set(&mut self, edge: &StopEdge, q: &[f64], allow: f64) {
+        self.q.clear();
+        self.q.extend(
+            edge.slots
+                .iter()
+                .map(|&s| Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2])),
+        );
+        self.allow = allow;
+    }
+
+    fn covers(&self, edge: &StopEdge, q: &[f64], dq: Option<&[f64]>) -> bool {
+        if self.allow <= 0.0 || self.q.len() != edge.slots.len() {
+            return false;
+        }
+        let at = |x: &[f64], s: usize| Vector3::new(x[3 * s], x[3 * s + 1], x[3 * s + 2]);
+        let (mut moved, mut step) = (0.0f64, 0.0f64);
+        for (&s, r) in edge.slots.iter().zip(&self.q) {
+            moved = moved.max((at(q, s) - r).norm_squared());
+            if let Some(d) = dq {
+                step = step.max(at(d, s).norm_squared());
+            }
+        }
+        moved.sqrt() + step.sqrt() < self.allow
+    }
 }
 
 /// Points per crease edge where the crease stops act, ends included: a
@@ -86,9 +144,13 @@ pub(super) fn stop_points(
                 tangent.get_or_insert_with(|| map(along));
             }
             if let (Some(a), Some(b), Some(t)) = (right, left, tangent) {
+                let l1 = |m: &crate::contact::surface::VertexMap| {
+                    m.iter().map(|&(_, c)| c.abs()).sum::<f64>()
+                };
                 out.push(StopPoint {
                     edge: e,
                     length,
+                    l1: [l1(&a), l1(&b), l1(&t)],
                     maps: [a, b, t],
                 });
             }
@@ -97,8 +159,58 @@ pub(super) fn stop_points(
     out
 }
 
-/// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
-/// theta` on the valley side (-1), `theta` on the mountain side (+1).
+impl Stops {
+    /// The stops at `points`, grouped by crease edge (each edge's points
+    /// are consecutive), none with a reference yet.
+    pub(super) fn new(points: Vec<StopPoint>) -> Stops {
+        let mut edges: Vec<StopEdge> = Vec::new();
+        for (i, sp) in points.iter().enumerate() {
+            match edges.last_mut() {
+                Some(last) if points[last.points.start].edge == sp.edge => last.points.end = i + 1,
+                _ => edges.push(StopEdge {
+                    points: i..i + 1,
+                    slots: Vec::new(),
+                }),
+            }
+        }
+        for edge in &mut edges {
+            let mut slots: Vec<usize> = points[edge.points.clone()]
+                .iter()
+                .flat_map(|sp| sp.maps.iter().flatten().map(|&(s, _)| s))
+                .collect();
+            slots.sort_unstable();
+            slots.dedup();
+            edge.slots = slots;
+        }
+        let refs = std::sync::Mutex::new(vec![EdgeRef::default(); edges.len()]);
+        Stops {
+            points,
+            edges,
+            refs,
+        }
+    }
+}
+
+/// How far (m) every slot of a stop point's maps may move from where its
+/// vectors are `[a, b, t]` (gap to flat `gap`) while the point stays at
+/// least `width` from flat and turns by less than a radian (so the
+/// collision check's wrap test holds too): with `|dx| <= l1 d`, [`stop_turn_bound`]
+/// is at most `pi/2 d (K_a / |a x t| + K_b / |b x t|)`, `K = 2 l1_x |t| + |x|
+/// l1_t`, for `d <= |t| / l1_t`. Negative where no move is allowed.
+fn allowance([a, b, t]: &[Vector3<f64>; 3], l1: &[f64; 3], gap: f64, width: f64) -> f64 {
+    let room = (gap - width).min(1.0) - 1e-9;
+    let nt = t.norm();
+    let (na, nb) = (a.cross(t).norm(), b.cross(t).norm());
+    if room <= 0.0 || na <= 0.0 || nb <= 0.0 || l1[2] <= 0.0 {
+        return -1.0;
+    }
+    let ka = 2.0 * l1[0] * nt + a.norm() * l1[2];
+    let kb = 2.0 * l1[1] * nt + b.norm() * l1[2];
+    let d = room / (std::f64::consts::FRAC_PI_2 * (ka / na + kb / nb));
+    // A margin for rounding: the skip must never drop a point that acts.
+    0.999 * d.min(nt / l1[2])
+}
+
 /// A bound on how far the angle between the crease normals `a x t` and
 /// `b x t` (the gap to flat of [`flat_gap`]) can change along the move
 /// `(a, b, t) + alpha (da, db, dt)`, `alpha` in [0, 1]: each normal turns by
@@ -117,6 +229,8 @@ fn stop_turn_bound([a, b, t]: [Vector3<f64>; 3], [da, db, dt]: [Vector3<f64>; 3]
     turn(&a, &da) + turn(&b, &db)
 }
 
+/// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
+/// theta` on the valley side (-1), `theta` on the mountain side (+1).
 fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
     let theta = crate::crease::theta(a, b, t);
     if theta > std::f64::consts::PI {
@@ -152,36 +266,47 @@ impl ContactTerm {
         batch: &mut MatrixBatch,
     ) -> Result<(), EvalError> {
         let w = self.flat_width;
-        for sp in &self.stops {
-            let [a, b, t] = sp
-                .maps
-                .each_ref()
-                .map(|m| crate::contact::surface::eval_map(m, st.q));
-            let (g, sign) = flat_gap(&a, &b, &t);
-            if g >= w {
+        let stops = &self.stops;
+        let mut refs = stops.refs.lock().unwrap_or_else(|e| e.into_inner());
+        for (edge, r) in stops.edges.iter().zip(refs.iter_mut()) {
+            if r.covers(edge, st.q, None) {
                 continue;
             }
-            if g <= 0.0 {
-                return Err(EvalError::PastFlat { edge: sp.edge });
-            }
-            let k = asm.physics.crease_k_per_length * sp.length;
-            let d = crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
-            out.term_energy += k * barrier(g, w);
-            out.barrier_pairs += 1;
-            let grad = d.grad9() * sign;
-            let f = grad * (k * db(g, w));
-            crate::contact::surface::scatter_points(
-                sp.maps.each_ref(),
-                f.as_slice(),
-                &mut out.force,
-            );
-            if let Some(co) = matrix.filter(|co| co.k != 0.0) {
-                let mut h = grad * grad.transpose() * (k * ddb(g, w));
-                if let Some(hess) = d.hess9() {
-                    h += hess * (sign * k * db(g, w));
+            let mut allow = f64::INFINITY;
+            for sp in &stops.points[edge.points.clone()] {
+                let [a, b, t] = sp
+                    .maps
+                    .each_ref()
+                    .map(|m| crate::contact::surface::eval_map(m, st.q));
+                let (g, sign) = flat_gap(&a, &b, &t);
+                allow = allow.min(allowance(&[a, b, t], &sp.l1, g, w));
+                if g >= w {
+                    continue;
                 }
-                self.scatter_maps_matrix(&sp.maps, &(co.k * h), batch);
+                if g <= 0.0 {
+                    return Err(EvalError::PastFlat { edge: sp.edge });
+                }
+                let k = asm.physics.crease_k_per_length * sp.length;
+                let d =
+                    crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
+                out.term_energy += k * barrier(g, w);
+                out.barrier_pairs += 1;
+                let grad = d.grad9() * sign;
+                let f = grad * (k * db(g, w));
+                crate::contact::surface::scatter_points(
+                    sp.maps.each_ref(),
+                    f.as_slice(),
+                    &mut out.force,
+                );
+                if let Some(co) = matrix.filter(|co| co.k != 0.0) {
+                    let mut h = grad * grad.transpose() * (k * ddb(g, w));
+                    if let Some(hess) = d.hess9() {
+                        h += hess * (sign * k * db(g, w));
+                    }
+                    self.scatter_maps_matrix(&sp.maps, &(co.k * h), batch);
+                }
             }
+            r.set(edge, st.q, allow);
         }
         Ok(())
     }
@@ -192,38 +317,48 @@ impl ContactTerm {
     /// (halving the fraction until it holds).
     pub(super) fn crease_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
         let mut fraction: f64 = 1.0;
-        for sp in &self.stops {
-            let vecs = |x: &[f64]| {
-                sp.maps
-                    .each_ref()
-                    .map(|m| crate::contact::surface::eval_map(m, x))
-            };
-            let [a, b, t] = vecs(q);
-            let [da, db_, dt] = vecs(dq);
-            let raw0 = crate::crease::theta(&a, &b, &t);
-            let gap = if raw0 > std::f64::consts::PI {
-                std::f64::consts::TAU - raw0
-            } else {
-                raw0
-            };
-            let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
-            if stop_turn_bound([a, b, t], [da, db_, dt]) < (gap - keep).min(1.0) {
+        let stops = &self.stops;
+        let mut refs = stops.refs.lock().unwrap_or_else(|e| e.into_inner());
+        for (edge, r) in stops.edges.iter().zip(refs.iter_mut()) {
+            if r.covers(edge, q, Some(dq)) {
                 continue;
             }
-            // Passing flat wraps the raw angle across 0 = 2 pi.
-            let clear = |alpha: f64| {
-                let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
-                (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
-                    && flat_gap(&a, &b, &t).0 >= keep
-            };
-            let mut halvings = 0;
-            while !clear(fraction) && halvings < 60 {
-                fraction *= 0.5;
-                halvings += 1;
+            let mut allow = f64::INFINITY;
+            for sp in &stops.points[edge.points.clone()] {
+                let vecs = |x: &[f64]| {
+                    sp.maps
+                        .each_ref()
+                        .map(|m| crate::contact::surface::eval_map(m, x))
+                };
+                let [a, b, t] = vecs(q);
+                let [da, db_, dt] = vecs(dq);
+                let raw0 = crate::crease::theta(&a, &b, &t);
+                let gap = if raw0 > std::f64::consts::PI {
+                    std::f64::consts::TAU - raw0
+                } else {
+                    raw0
+                };
+                allow = allow.min(allowance(&[a, b, t], &sp.l1, gap, self.flat_width));
+                let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
+                if stop_turn_bound([a, b, t], [da, db_, dt]) < (gap - keep).min(1.0) {
+                    continue;
+                }
+                // Passing flat wraps the raw angle across 0 = 2 pi.
+                let clear = |alpha: f64| {
+                    let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
+                    (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
+                        && flat_gap(&a, &b, &t).0 >= keep
+                };
+                let mut halvings = 0;
+                while !clear(fraction) && halvings < 60 {
+                    fraction *= 0.5;
+                    halvings += 1;
+                }
+                if halvings == 60 {
+                    return 0.0;
+                }
             }
-            if halvings == 60 {
-                return 0.0;
-            }
+            r.set(edge, q, allow);
         }
         fraction
     }
@@ -231,7 +366,7 @@ impl ContactTerm {
     /// Whether a crease stop's point at `q` is within twice the stop's
     /// width of flat.
     pub(super) fn near_flat(&self, q: &[f64]) -> bool {
-        self.stops.iter().any(|sp| {
+        self.stops.points.iter().any(|sp| {
             let [a, b, t] = sp
                 .maps
                 .each_ref()
