@@ -55,19 +55,20 @@ impl Aabb {
         }
     }
 
+    /// The smallest box holding every box of `boxes` (at least one): the
+    /// same box as [`Aabb::around`] of all their points with the same pad.
+    pub fn around_boxes<'a>(mut boxes: impl Iterator<Item = &'a Aabb>) -> Aabb {
+        let first = *boxes.next().expect("at least one box");
+        boxes.fold(first, |a, b| Aabb {
+            lo: a.lo.inf(&b.lo),
+            hi: a.hi.sup(&b.hi),
+        })
+    }
+
     /// Whether two boxes overlap.
     pub fn overlaps(&self, o: &Aabb) -> bool {
         (0..3).all(|c| self.lo[c] <= o.hi[c] && o.lo[c] <= self.hi[c])
     }
-}
-
-/// [`overlapping`] for two short lists (a facet's few samples or edges
-/// against another's): every two boxes, in order, with no grid to build.
-pub fn overlapping_few(a: &[Aabb], b: &[Aabb]) -> Vec<(usize, usize)> {
-    (0..a.len())
-        .flat_map(|i| (0..b.len()).map(move |j| (i, j)))
-        .filter(|&(i, j)| a[i].overlaps(&b[j]))
-        .collect()
 }
 
 /// Pairs `(i, j)` with box `a[i]` overlapping box `b[j]`, sorted and

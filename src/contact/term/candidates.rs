@@ -3,7 +3,7 @@
 use super::ContactTerm;
 use super::pairs::{Kind, Pair, PairKey, distance_sq, key, lift};
 use crate::assembly::Assembler;
-use crate::contact::broad::{Aabb, overlapping, overlapping_few};
+use crate::contact::broad::{Aabb, overlapping};
 use nalgebra::Vector3;
 
 /// The candidate pairs of the step start, found with boxes padded by
@@ -47,6 +47,78 @@ const NEIGHBOUR_SHARE: f64 = 0.5;
 /// out (near the shared vertex or crease, where the crease stops act).
 const NEIGHBOUR_MIN: f64 = 0.02;
 
+/// One search's boxes and slabs, each computed once: every sample's box
+/// (swept over its move), every fine triangle's and fine edge's (the union
+/// of its samples', the box around all their points), every facet's
+/// [`Slab`].
+struct Search<'a> {
+    x: &'a [Vector3<f64>],
+    dx: Option<&'a [Vector3<f64>]>,
+    pad: f64,
+    samples: Vec<Aabb>,
+    tris: Vec<Aabb>,
+    edges: Vec<Aabb>,
+    slabs: Vec<Option<Slab>>,
+}
+
+impl Search<'_> {
+    /// The box of the primitive with samples `ids`.
+    fn bx(&self, ids: &[usize]) -> Aabb {
+        Aabb::around_boxes(ids.iter().map(|&i| &self.samples[i]))
+    }
+
+    /// Whether the primitive with samples `ids` may come within the pad of
+    /// facet `h`.
+    fn near(&self, h: usize, ids: &[usize]) -> bool {
+        self.slabs[h].is_none_or(|sl| sl.near(ids, self.x, self.dx, self.pad))
+    }
+}
+
+/// A facet's slab: the unit normal of its corner triangle and the span of
+/// its samples (with their swept ends) along it. Every primitive of the
+/// facet lies in the hull of its samples, so points whose span along the
+/// normal stays more than `pad` outside the slab are farther than `pad`
+/// from every primitive of the facet.
+#[derive(Clone, Copy)]
+struct Slab {
+    axis: Vector3<f64>,
+    lo: f64,
+    hi: f64,
+}
+
+impl Slab {
+    /// Whether points `ids` (and their swept ends) may come within `pad` of
+    /// the facet.
+    fn near(
+        &self,
+        ids: &[usize],
+        x: &[Vector3<f64>],
+        dx: Option<&[Vector3<f64>]>,
+        pad: f64,
+    ) -> bool {
+        let (lo, hi) = span(&self.axis, ids, x, dx);
+        !(lo - self.hi > pad || self.lo - hi > pad)
+    }
+}
+
+/// The span of points `ids` at `x` (and at `x + dx`) along `axis`.
+fn span(
+    axis: &Vector3<f64>,
+    ids: &[usize],
+    x: &[Vector3<f64>],
+    dx: Option<&[Vector3<f64>]>,
+) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for &i in ids {
+        let a = axis.dot(&x[i]);
+        let b = dx.map_or(a, |d| axis.dot(&(x[i] + d[i])));
+        lo = lo.min(a.min(b));
+        hi = hi.max(a.max(b));
+    }
+    (lo, hi)
+}
+
 impl ContactTerm {
     /// Candidate pairs with boxes padded by `pad` at positions `x` (and,
     /// with `dx`, swept over the motion `x -> x + dx`).
@@ -57,13 +129,27 @@ impl ContactTerm {
         pad: f64,
     ) -> Vec<Pair> {
         let s = &self.surf;
-        let bx = |ids: &[usize]| {
-            let mut pts: Vec<Vector3<f64>> = ids.iter().map(|&i| x[i]).collect();
-            if let Some(d) = dx {
-                pts.extend(ids.iter().map(|&i| x[i] + d[i]));
-            }
-            Aabb::around(&pts, 0.5 * pad)
+        let samples: Vec<Aabb> = (0..s.n_vertices())
+            .map(|i| match dx {
+                Some(d) => Aabb::around(&[x[i], x[i] + d[i]], 0.5 * pad),
+                None => Aabb::around(&[x[i]], 0.5 * pad),
+            })
+            .collect();
+        let mut search = Search {
+            x,
+            dx,
+            pad,
+            samples,
+            tris: Vec::new(),
+            edges: Vec::new(),
+            slabs: (0..s.facet_vertices.len())
+                .map(|h| self.slab(x, dx, h))
+                .collect(),
         };
+        search.tris = s.fine_tris.iter().map(|(t, _)| search.bx(t)).collect();
+        search.edges = s.fine_edges.iter().map(|(e, _)| search.bx(e)).collect();
+        let search = search;
+        let bx = |ids: &[usize]| search.bx(ids);
         let mut out = Vec::new();
         // Facets first: only facets near a facet they share no vertex with
         // take part in the fine search (most of a sheet, most of the time,
@@ -71,11 +157,10 @@ impl ContactTerm {
         let facet_boxes_all: Vec<Aabb> = s.facet_vertices.iter().map(|vs| bx(vs)).collect();
         let mut fine_active = vec![false; facet_boxes_all.len()];
         let mut near_neighbours = Vec::new();
-        let mut normals: Vec<Option<Vector3<f64>>> = vec![None; facet_boxes_all.len()];
         for (f, g) in overlapping(&facet_boxes_all, &facet_boxes_all, true) {
             if s.are_neighbours(f, g) {
                 near_neighbours.push((f, g));
-            } else if !self.facets_apart(x, dx, pad, (f, g), &mut normals) {
+            } else if !self.facets_apart(&search, (f, g)) {
                 fine_active[f] = true;
                 fine_active[g] = true;
             }
@@ -89,8 +174,8 @@ impl ContactTerm {
         let tris: Vec<usize> = (0..s.fine_tris.len())
             .filter(|&k| fine_active[s.fine_tris[k].1])
             .collect();
-        let pt_boxes: Vec<Aabb> = pts.iter().map(|&i| bx(&[i])).collect();
-        let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
+        let pt_boxes: Vec<Aabb> = pts.iter().map(|&i| search.samples[i]).collect();
+        let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| search.tris[k]).collect();
         for (pi, ti) in overlapping(&pt_boxes, &tri_boxes, false) {
             let p = pts[pi];
             let (t, g) = s.fine_tris[tris[ti]];
@@ -107,7 +192,7 @@ impl ContactTerm {
         let edges: Vec<usize> = (0..s.fine_edges.len())
             .filter(|&k| active(&s.fine_edges[k].1))
             .collect();
-        let edge_boxes: Vec<Aabb> = edges.iter().map(|&k| bx(&s.fine_edges[k].0)).collect();
+        let edge_boxes: Vec<Aabb> = edges.iter().map(|&k| search.edges[k]).collect();
         for (i, j) in overlapping(&edge_boxes, &edge_boxes, true) {
             let (a, fa) = &s.fine_edges[edges[i]];
             let (b, fb) = &s.fine_edges[edges[j]];
@@ -122,7 +207,7 @@ impl ContactTerm {
         let mut corner_pairs: Vec<(usize, usize)> = Vec::new();
         let mut edge_pairs: Vec<(usize, usize)> = Vec::new();
         // Each corner's, corner triangle's and mesh edge's box once.
-        let corner_boxes: Vec<Aabb> = s.corner.iter().map(|&c| bx(&[c])).collect();
+        let corner_boxes: Vec<Aabb> = s.corner.iter().map(|&c| search.samples[c]).collect();
         let tri_boxes: Vec<Aabb> = (0..facet_boxes_all.len())
             .map(|f| bx(&s.coarse_tri(&self.mesh, f)))
             .collect();
@@ -166,8 +251,8 @@ impl ContactTerm {
         for (i, j) in edge_pairs {
             out.push(self.edge_pair(s.coarse_edges[i].0, s.coarse_edges[j].0, self.mass_coarse));
         }
-        self.neighbour_pairs(x, &bx, &near_neighbours, &mut out);
-        self.corner_pairs(&bx, &near_neighbours, &mut out);
+        self.neighbour_pairs(&search, &near_neighbours, &mut out);
+        self.corner_pairs(&search, &near_neighbours, &mut out);
         // Pairs that are (nearly) in contact in the flat sheet are the
         // sheet itself, not contact.
         out.retain(|p| self.rest_distance(p) >= p.xi + self.s_hat_of(p));
@@ -185,46 +270,24 @@ impl ContactTerm {
         out
     }
 
-    /// Whether facets `f` and `g` are more than `pad` apart along the
-    /// normal of either one's corner triangle at `x`: the samples of each
-    /// (and their ends swept by `dx`) projected on it, every primitive of a
-    /// facet being in their hull. Tilted facets' boxes overlap far more
-    /// often than the facets come near. `normals` caches the axes.
-    fn facets_apart(
-        &self,
-        x: &[Vector3<f64>],
-        dx: Option<&[Vector3<f64>]>,
-        pad: f64,
-        (f, g): (usize, usize),
-        normals: &mut [Option<Vector3<f64>>],
-    ) -> bool {
+    /// Facet `h`'s [`Slab`] at `x` (swept by `dx`); None where its corner
+    /// triangle has no normal.
+    fn slab(&self, x: &[Vector3<f64>], dx: Option<&[Vector3<f64>]>, h: usize) -> Option<Slab> {
         let s = &self.surf;
-        let span = |h: usize, axis: &Vector3<f64>| {
-            let mut lo = f64::INFINITY;
-            let mut hi = f64::NEG_INFINITY;
-            for &i in &s.facet_vertices[h] {
-                let a = axis.dot(&x[i]);
-                let b = dx.map_or(a, |d| axis.dot(&(x[i] + d[i])));
-                lo = lo.min(a.min(b));
-                hi = hi.max(a.max(b));
-            }
-            (lo, hi)
-        };
-        [f, g].into_iter().any(|h| {
-            let axis = *normals[h].get_or_insert_with(|| {
-                let c = s.coarse_tri(&self.mesh, h).map(|i| x[i]);
-                (c[1] - c[0])
-                    .cross(&(c[2] - c[0]))
-                    .try_normalize(0.0)
-                    .unwrap_or_else(Vector3::zeros)
-            });
-            if axis == Vector3::zeros() {
-                return false;
-            }
-            let (a0, a1) = span(f, &axis);
-            let (b0, b1) = span(g, &axis);
-            b0 - a1 > pad || a0 - b1 > pad
-        })
+        let c = s.coarse_tri(&self.mesh, h).map(|i| x[i]);
+        let axis = (c[1] - c[0]).cross(&(c[2] - c[0])).try_normalize(0.0)?;
+        let (lo, hi) = span(&axis, &s.facet_vertices[h], x, dx);
+        Some(Slab { axis, lo, hi })
+    }
+
+    /// Whether facets `f` and `g` are more than `pad` apart along the
+    /// normal of either one's corner triangle: the samples of each (and
+    /// their swept ends) projected on it, every primitive of a facet being
+    /// in their hull. Tilted facets' boxes overlap far more often than the
+    /// facets come near.
+    fn facets_apart(&self, search: &Search, (f, g): (usize, usize)) -> bool {
+        let s = &self.surf;
+        !search.near(f, &s.facet_vertices[g]) || !search.near(g, &s.facet_vertices[f])
     }
 
     /// Fine pairs between neighbouring facets sharing a side (a crease) that
@@ -239,14 +302,8 @@ impl ContactTerm {
     /// closer than [`NEIGHBOUR_MIN`] of the thickness are left to the crease
     /// stops. Without them the facets beside a crease folded flat, bent
     /// towards each other, crossed within a sixteenth of a facet of it.
-    fn neighbour_pairs(
-        &self,
-        x: &[Vector3<f64>],
-        bx: &dyn Fn(&[usize]) -> Aabb,
-        near: &[(usize, usize)],
-        out: &mut Vec<Pair>,
-    ) {
-        let s = &self.surf;
+    fn neighbour_pairs(&self, search: &Search, near: &[(usize, usize)], out: &mut Vec<Pair>) {
+        let (s, x) = (&self.surf, search.x);
         let normal = |f: usize| {
             let c = s.coarse_tri(&self.mesh, f).map(|i| x[i]);
             (c[1] - c[0]).cross(&(c[2] - c[0]))
@@ -256,39 +313,46 @@ impl ContactTerm {
                 continue;
             }
             for (a, b) in [(f, g), (g, f)] {
-                for pair in self.samples_against(a, b, bx) {
+                self.samples_against(a, b, search, &mut |pair| {
                     let xi = self.wedge_share(&pair);
                     if xi >= NEIGHBOUR_MIN * self.xi {
                         out.push(Pair { xi, ..pair });
                     }
-                }
+                });
             }
         }
     }
 
     /// Point-triangle pairs (at the full thickness) of facet `a`'s samples
-    /// off facet `b` against `b`'s sub-triangles, their boxes overlapping.
-    fn samples_against(&self, a: usize, b: usize, bx: &dyn Fn(&[usize]) -> Aabb) -> Vec<Pair> {
+    /// off facet `b` against `b`'s sub-triangles, each near the other's
+    /// facet and their boxes overlapping, into `sink`.
+    fn samples_against(&self, a: usize, b: usize, search: &Search, sink: &mut dyn FnMut(Pair)) {
         let s = &self.surf;
-        let pts: Vec<usize> = s.facet_vertices[a]
+        let tris: Vec<usize> = s.facet_fine_tris[b]
             .iter()
             .copied()
-            .filter(|&p| s.vertex_facets[p].binary_search(&b).is_err())
+            .filter(|&k| search.near(a, &s.fine_tris[k].0))
             .collect();
-        let tris = &s.facet_fine_tris[b];
-        let pt_boxes: Vec<Aabb> = pts.iter().map(|&p| bx(&[p])).collect();
-        let tri_boxes: Vec<Aabb> = tris.iter().map(|&k| bx(&s.fine_tris[k].0)).collect();
-        overlapping_few(&pt_boxes, &tri_boxes)
-            .into_iter()
-            .map(|(i, j)| Pair {
-                kind: Kind::PointTriangle {
-                    p: pts[i],
-                    t: s.fine_tris[tris[j]].0,
-                },
-                mass: self.mass_fine,
-                xi: self.xi,
-            })
-            .collect()
+        if tris.is_empty() {
+            return;
+        }
+        for &p in &s.facet_vertices[a] {
+            if s.vertex_facets[p].binary_search(&b).is_ok() || !search.near(b, &[p]) {
+                continue;
+            }
+            for &k in &tris {
+                if search.samples[p].overlaps(&search.tris[k]) {
+                    sink(Pair {
+                        kind: Kind::PointTriangle {
+                            p,
+                            t: s.fine_tris[k].0,
+                        },
+                        mass: self.mass_fine,
+                        xi: self.xi,
+                    });
+                }
+            }
+        }
     }
 
     /// The share of the thickness a pair between neighbouring facets keeps:
@@ -319,12 +383,7 @@ impl ContactTerm {
     /// vertex but never below [`NEIGHBOUR_MIN`] of the thickness: near the
     /// vertex nothing else keeps them apart. Pairs another family already
     /// holds keep its thickness.
-    fn corner_pairs(
-        &self,
-        bx: &dyn Fn(&[usize]) -> Aabb,
-        near: &[(usize, usize)],
-        out: &mut Vec<Pair>,
-    ) {
+    fn corner_pairs(&self, search: &Search, near: &[(usize, usize)], out: &mut Vec<Pair>) {
         let s = &self.surf;
         let mut mine = Vec::new();
         let thin = |pair: Pair| {
@@ -336,16 +395,29 @@ impl ContactTerm {
             .filter(|&&(f, g)| self.share_a_corner_only(f, g))
         {
             for (a, b) in [(f, g), (g, f)] {
-                mine.extend(self.samples_against(a, b, bx).into_iter().map(thin));
+                self.samples_against(a, b, search, &mut |pair| mine.push(thin(pair)));
             }
-            let (ef, eg) = (&s.facet_fine_edges[f], &s.facet_fine_edges[g]);
-            let boxes = |es: &[usize]| -> Vec<Aabb> {
-                es.iter().map(|&k| bx(&s.fine_edges[k].0)).collect()
+            // Each facet's fine edges near the other facet.
+            let edges_near = |h: usize, other: usize| -> Vec<usize> {
+                s.facet_fine_edges[h]
+                    .iter()
+                    .copied()
+                    .filter(|&k| search.near(other, &s.fine_edges[k].0))
+                    .collect()
             };
-            for (i, j) in overlapping_few(&boxes(ef), &boxes(eg)) {
-                let (a, b) = (s.fine_edges[ef[i]].0, s.fine_edges[eg[j]].0);
-                if !a.iter().any(|v| b.contains(v)) {
-                    mine.push(thin(self.edge_pair(a, b, self.mass_fine)));
+            let ef = edges_near(f, g);
+            if ef.is_empty() {
+                continue;
+            }
+            let eg = edges_near(g, f);
+            for &i in &ef {
+                for &j in &eg {
+                    let (a, b) = (s.fine_edges[i].0, s.fine_edges[j].0);
+                    if search.edges[i].overlaps(&search.edges[j])
+                        && !a.iter().any(|v| b.contains(v))
+                    {
+                        mine.push(thin(self.edge_pair(a, b, self.mass_fine)));
+                    }
                 }
             }
         }
