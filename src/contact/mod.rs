@@ -19,10 +19,12 @@ pub mod obstacles;
 pub mod potentials;
 pub mod scalar;
 mod scale;
+mod settings;
 pub mod shapes;
 pub mod surface;
 pub mod term;
 
 pub use obstacles::{ObstacleError, ObstacleTerm};
+pub use settings::{ContactSettings, SettingsError};
 pub use shapes::{Obstacle, Shape, ShapeError};
-pub use term::{ContactReport, ContactSettings, ContactTerm, SettingsError};
+pub use term::{ContactReport, ContactTerm};

@@ -31,9 +31,9 @@ use super::lagged::{Lagged, StepStart, dashpot};
 use super::memory::{kept_stiffness, list_index, list_pairs, parse_pairs};
 use super::potentials::{barrier, db, ddb, friction_matrix, speed_stiffness};
 use super::scale::SheetScale;
+use super::settings::{ContactSettings, SettingsError};
 use super::shapes::{Closest, Obstacle, Shape, ShapeError};
 use super::surface::{ContactSurface, VertexMap, eval_map, scatter_map};
-use super::term::{ContactSettings, SettingsError};
 use crate::assembly::{
     Assembler, BarrierTerm, EvalError, Evaluation, ForceTerm, MatrixCoeffs, MemoryError,
     ObstaclePower, State,

@@ -1,6 +1,6 @@
 //! The sheet's scales both barrier terms take: mean facet side, default stiffness, lumped masses.
 
-use super::term::ContactSettings;
+use super::settings::ContactSettings;
 use crate::element::ShellElement;
 use crate::mesh::Mesh;
 

@@ -51,12 +51,11 @@ mod memory;
 mod pairs;
 mod psd;
 mod report;
-mod settings;
 mod stiffness;
 mod stops;
 
+use super::settings::{ContactSettings, SettingsError};
 pub use report::ContactReport;
-pub use settings::{ContactSettings, SettingsError};
 
 use batch::{BlockPositions, MatrixBatch};
 use candidates::CandidateCache;

@@ -1,4 +1,5 @@
-//! The contact settings (the scene's `ancf:contact` keys) and why a term refuses them.
+//! The contact settings (the scene's `ancf:contact` keys), which self-contact
+//! and the obstacles both read, and why a term refuses them.
 
 /// Contact settings (scene keys under `ancf:contact`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
