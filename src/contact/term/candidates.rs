@@ -4,6 +4,7 @@ use super::ContactTerm;
 use super::pairs::{Kind, Pair, PairKey, distance_sq, key, lift};
 use crate::assembly::Assembler;
 use crate::contact::broad::{Aabb, overlapping};
+use crate::contact::surface::ContactSurface;
 use nalgebra::Vector3;
 
 /// The candidate pairs of the step start, found with boxes padded by
@@ -61,10 +62,46 @@ struct Search<'a> {
     slabs: Vec<Option<Slab>>,
 }
 
-impl Search<'_> {
+impl<'a> Search<'a> {
+    /// The boxes at `x` (swept by `dx`) padded by `pad`, with the facets'
+    /// `slabs`.
+    fn new(
+        surf: &ContactSurface,
+        x: &'a [Vector3<f64>],
+        dx: Option<&'a [Vector3<f64>]>,
+        pad: f64,
+        slabs: Vec<Option<Slab>>,
+    ) -> Search<'a> {
+        let samples: Vec<Aabb> = (0..surf.n_vertices())
+            .map(|i| match dx {
+                Some(d) => Aabb::around(&[x[i], x[i] + d[i]], 0.5 * pad),
+                None => Aabb::around(&[x[i]], 0.5 * pad),
+            })
+            .collect();
+        let tris = surf
+            .fine_tris
+            .iter()
+            .map(|(t, _)| union(&samples, t))
+            .collect();
+        let edges = surf
+            .fine_edges
+            .iter()
+            .map(|(e, _)| union(&samples, e))
+            .collect();
+        Search {
+            x,
+            dx,
+            pad,
+            samples,
+            tris,
+            edges,
+            slabs,
+        }
+    }
+
     /// The box of the primitive with samples `ids`.
     fn bx(&self, ids: &[usize]) -> Aabb {
-        Aabb::around_boxes(ids.iter().map(|&i| &self.samples[i]))
+        union(&self.samples, ids)
     }
 
     /// Whether the primitive with samples `ids` may come within the pad of
@@ -72,6 +109,12 @@ impl Search<'_> {
     fn near(&self, h: usize, ids: &[usize]) -> bool {
         self.slabs[h].is_none_or(|sl| sl.near(ids, self.x, self.dx, self.pad))
     }
+}
+
+/// The box of the primitive with samples `ids`: the union of their boxes
+/// (the box around all their points).
+fn union(samples: &[Aabb], ids: &[usize]) -> Aabb {
+    Aabb::around_boxes(ids.iter().map(|&i| &samples[i]))
 }
 
 /// A facet's slab: the unit normal of its corner triangle and the span of
@@ -129,26 +172,10 @@ impl ContactTerm {
         pad: f64,
     ) -> Vec<Pair> {
         let s = &self.surf;
-        let samples: Vec<Aabb> = (0..s.n_vertices())
-            .map(|i| match dx {
-                Some(d) => Aabb::around(&[x[i], x[i] + d[i]], 0.5 * pad),
-                None => Aabb::around(&[x[i]], 0.5 * pad),
-            })
+        let slabs = (0..s.facet_vertices.len())
+            .map(|h| self.slab(x, dx, h))
             .collect();
-        let mut search = Search {
-            x,
-            dx,
-            pad,
-            samples,
-            tris: Vec::new(),
-            edges: Vec::new(),
-            slabs: (0..s.facet_vertices.len())
-                .map(|h| self.slab(x, dx, h))
-                .collect(),
-        };
-        search.tris = s.fine_tris.iter().map(|(t, _)| search.bx(t)).collect();
-        search.edges = s.fine_edges.iter().map(|(e, _)| search.bx(e)).collect();
-        let search = search;
+        let search = Search::new(s, x, dx, pad, slabs);
         let bx = |ids: &[usize]| search.bx(ids);
         let mut out = Vec::new();
         // Facets first: only facets near a facet they share no vertex with

@@ -49,30 +49,30 @@ struct EdgeRef {
     allow: f64,
 }
 
+/// Slot `s`'s vector in `q`.
+fn slot(q: &[f64], s: usize) -> Vector3<f64> {
+    Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2])
+}
+
 impl EdgeRef {
-    /// Whether every slot of `edge` at `q` (and along `q + alpha dq`,
-    /// alpha in [0, 1]) is within the reference's allowance.
     /// Take `q` as the reference of `edge`, with its allowance.
     fn set(&mut self, edge: &StopEdge, q: &[f64], allow: f64) {
         self.q.clear();
-        self.q.extend(
-            edge.slots
-                .iter()
-                .map(|&s| Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2])),
-        );
+        self.q.extend(edge.slots.iter().map(|&s| slot(q, s)));
         self.allow = allow;
     }
 
+    /// Whether every slot of `edge` at `q` (and along `q + alpha dq`,
+    /// alpha in [0, 1]) is within the reference's allowance.
     fn covers(&self, edge: &StopEdge, q: &[f64], dq: Option<&[f64]>) -> bool {
         if self.allow <= 0.0 || self.q.len() != edge.slots.len() {
             return false;
         }
-        let at = |x: &[f64], s: usize| Vector3::new(x[3 * s], x[3 * s + 1], x[3 * s + 2]);
         let (mut moved, mut step) = (0.0f64, 0.0f64);
         for (&s, r) in edge.slots.iter().zip(&self.q) {
-            moved = moved.max((at(q, s) - r).norm_squared());
+            moved = moved.max((slot(q, s) - r).norm_squared());
             if let Some(d) = dq {
-                step = step.max(at(d, s).norm_squared());
+                step = step.max(slot(d, s).norm_squared());
             }
         }
         moved.sqrt() + step.sqrt() < self.allow
