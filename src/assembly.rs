@@ -790,6 +790,15 @@ impl Assembler {
         self.barriers.iter().any(|t| t.reports_power())
     }
 
+    /// Whether a barrier term's dissipative forces may be nonzero in this
+    /// step ([`BarrierTerm::dissipates_this_step`]): the step's end is then
+    /// evaluated in full, else they are zero there.
+    pub fn dissipates_this_step(&self) -> bool {
+        self.barriers
+            .iter()
+            .any(|t| t.reports_power() && t.dissipates_this_step())
+    }
+
     /// Give every force term the accepted state before a time step (its
     /// per-step hook: a broad phase, caches).
     /// Returns whether the pattern grew (the solver's symbolic analysis

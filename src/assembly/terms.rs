@@ -152,6 +152,14 @@ pub trait BarrierTerm: ForceTerm {
         false
     }
 
+    /// Whether this step's dissipative forces may be nonzero (a term that
+    /// reports powers and knows at the step start that they vanish all
+    /// step says no: the stepper then skips the full evaluation at the
+    /// step's end and takes them as zero there).
+    fn dissipates_this_step(&self) -> bool {
+        self.reports_power()
+    }
+
     /// The term as self-contact, for the contact reports (typed access,
     /// no downcast).
     fn as_contact(&self) -> Option<&crate::contact::ContactTerm> {

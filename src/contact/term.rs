@@ -351,6 +351,12 @@ impl BarrierTerm for ContactTerm {
     fn reports_power(&self) -> bool {
         true
     }
+
+    /// Friction and the dashpots act on the pairs lagged at the step start
+    /// alone: none, no dissipative force all step.
+    fn dissipates_this_step(&self) -> bool {
+        !self.at_start.lagged.is_empty()
+    }
 }
 
 impl ForceTerm for ContactTerm {

@@ -498,22 +498,22 @@ impl Advance {
             (&self.next.q, angles),
         );
         std::mem::swap(&mut self.d_start, &mut self.d);
-        if sys.asm.reports_power()
-            && let Some(ev) = sys.stepper.evaluation()
-        {
-            let (wf, wd) = state.dissipative_force.work_to(
-                &ev.dissipative_force,
-                &state.dynamics.q,
-                &self.next.q,
-            );
-            // What moving obstacles take is put in, not dissipated.
-            let on = state
+        if sys.asm.reports_power() {
+            // A step whose end was not evaluated had no dissipative force.
+            let none = crate::assembly::DissipativeForce::default();
+            let end = sys
+                .stepper
+                .evaluation()
+                .map_or(&none, |ev| &ev.dissipative_force);
+            let (wf, wd) = state
                 .dissipative_force
-                .obstacle_work_to(&ev.dissipative_force, h);
+                .work_to(end, &state.dynamics.q, &self.next.q);
+            // What moving obstacles take is put in, not dissipated.
+            let on = state.dissipative_force.obstacle_work_to(end, h);
             state.work.friction += wf - on.friction;
             state.work.contact_damping += wd - on.damping;
             state.work.input -= on.total;
-            state.dissipative_force.clone_from(&ev.dissipative_force);
+            state.dissipative_force.clone_from(end);
         }
         state.work.viscous += viscous_work(
             &sys.asm,

@@ -235,8 +235,9 @@ impl Stepper for GeneralizedAlpha {
     }
 
     /// The full evaluation (forces, energies, powers) at the last accepted
-    /// state, where the step made one: only when a force term reports
-    /// powers ([`Assembler::reports_power`]); outputs evaluate otherwise.
+    /// state, where the step made one: only when a force term's powers may
+    /// be nonzero in the step ([`Assembler::dissipates_this_step`]);
+    /// outputs evaluate otherwise.
     fn evaluation(&self) -> Option<&Evaluation> {
         self.ws.evaluated.then_some(&self.ws.eval)
     }

@@ -388,10 +388,11 @@ impl Newton {
 }
 
 /// The final consistent update of a converged iterate. It is evaluated in
-/// full only where a term's powers are integrated over the step (contact's
-/// friction work); otherwise only its crease angles (the next step's
-/// unwrapping reference) are needed here, and outputs evaluate forces and
-/// energies where they are read.
+/// full only where a term's powers are integrated over the step and may be
+/// nonzero in it (contact's friction work, with pairs lagged at the step
+/// start); otherwise only its crease angles (the next step's unwrapping
+/// reference) are needed here, and outputs evaluate forces and energies
+/// where they are read.
 fn finish(
     ctx: &StepContext,
     next: &mut Dynamics,
@@ -401,7 +402,7 @@ fn finish(
     let asm = ctx.asm;
     ctx.update_rates(next);
     let t0 = PhaseTimer::start();
-    ws.evaluated = asm.reports_power();
+    ws.evaluated = asm.dissipates_this_step();
     if ws.evaluated {
         asm.evaluate(&ctx.drive.at(next), &mut ws.eval, None)
             .map_err(StepError::from)?;
