@@ -784,6 +784,19 @@ impl Assembler {
         self.terms.iter().map(|t| &**t).chain(barriers)
     }
 
+    /// The barrier terms' energy at `st` (J), evaluating them alone: the
+    /// `term_energy` of [`Assembler::evaluate`], summed in the same order.
+    pub fn barrier_energy(&self, st: &State) -> Result<f64, EvalError> {
+        let mut out = Evaluation {
+            force: vec![0.0; self.n_dofs()],
+            ..Default::default()
+        };
+        for term in &self.barriers {
+            term.add(self, st, &mut out, None)?;
+        }
+        Ok(out.term_energy)
+    }
+
     /// Whether a barrier term reports powers the stepper integrates
     /// ([`BarrierTerm::reports_power`]).
     pub fn reports_power(&self) -> bool {

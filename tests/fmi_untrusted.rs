@@ -177,6 +177,9 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
     assert_eq!(f.deserialize(&bytes).0, fmi2OK, "the untouched state");
     let p = |name: &str| format!("/model/parameters/{}", vr(&scene, name));
     let n_out = f.counts.2;
+    // A state whose outputs are read from it stores none: the forger hands
+    // in the list of outputs read now, edited.
+    let stored = f.outputs();
     type Edit = Box<dyn Fn(&mut Value)>;
     let cases: Vec<(&str, Edit, &str)> = vec![
         (
@@ -216,14 +219,24 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
         ),
         (
             "a stored output of 1e308",
-            Box::new(|v| put(v, "/model/outputs/0", json!(1e308))),
+            Box::new({
+                let stored = stored.clone();
+                move |v| {
+                    store_outputs(v, &stored);
+                    put(v, "/model/outputs/0", json!(1e308))
+                }
+            }),
             "outputs",
         ),
         (
             "an output list one short",
-            Box::new(move |v| {
-                let o = v.pointer_mut("/model/outputs").unwrap();
-                o.as_array_mut().unwrap().truncate(n_out - 1);
+            Box::new({
+                let stored = stored.clone();
+                move |v| {
+                    store_outputs(v, &stored);
+                    let o = v.pointer_mut("/model/outputs").unwrap();
+                    o.as_array_mut().unwrap().truncate(n_out - 1);
+                }
             }),
             "outputs",
         ),
@@ -401,6 +414,15 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
     // The instance goes on as if nothing happened.
     assert_eq!(f.step(0.03, 0.01), fmi2OK);
     f.free_state(s);
+}
+
+/// Store `values` as the state's outputs where it holds none (they were
+/// to be read from the state).
+fn store_outputs(v: &mut Value, values: &[f64]) {
+    let o = v.pointer_mut("/model/outputs").expect("an outputs field");
+    if o.is_null() {
+        *o = json!(values);
+    }
 }
 
 /// Replace the saved memory of the contact term (`contact`, the last

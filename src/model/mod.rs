@@ -190,6 +190,12 @@ struct ReadCache {
     energies: std::sync::OnceLock<[f64; 3]>,
     /// The contact search's outputs (smallest gap, pairs, normal force).
     contact: std::sync::OnceLock<crate::contact::ContactReport>,
+    /// The barrier terms' energy (`energy.contact`), where `state.outputs`
+    /// is None.
+    barrier_energy: std::sync::OnceLock<f64>,
+    /// Every output from a full evaluation, where `state.outputs` is None
+    /// and one is read that needs it.
+    full: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl Model {

@@ -513,7 +513,14 @@ impl Advance {
             state.work.friction += wf - on.friction;
             state.work.contact_damping += wd - on.damping;
             state.work.input -= on.total;
-            state.dissipative_force.clone_from(end);
+            match sys.stepper.evaluation() {
+                Some(ev) => state.dissipative_force.clone_from(&ev.dissipative_force),
+                // Zero, at the state's length.
+                None => {
+                    state.dissipative_force.zeroed(self.next.q.len());
+                    state.dissipative_force.obstacles = Default::default();
+                }
+            }
         }
         state.work.viscous += viscous_work(
             &sys.asm,

@@ -102,6 +102,24 @@ impl System {
         Ok(ev)
     }
 
+    /// The barrier terms' energy (J) at `d` under `drive`, from their
+    /// evaluation alone: the full evaluation's `term_energy`.
+    pub(super) fn barrier_energy(
+        &self,
+        d: &Dynamics,
+        drive: &DriveValues,
+        theta_prev: &[f64],
+    ) -> Result<f64, EvalError> {
+        let st = State {
+            q: &d.q,
+            v: &d.v,
+            theta0: &drive.theta0,
+            moment: &drive.moment,
+            theta_prev,
+        };
+        self.asm.barrier_energy(&st)
+    }
+
     /// A new sparse solver for the assembler's pattern as it is now (after
     /// the pattern grew or was restored); the iteration matrix is gone.
     pub(super) fn rebuild_solver(&mut self) -> Result<(), LinearError> {
