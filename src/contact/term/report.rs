@@ -1,7 +1,6 @@
 //! What contact looks like at a state (outputs, tests): the smallest gap, pairs, normal force.
 
 use super::ContactTerm;
-use super::candidates::CandidateCache;
 use super::pairs::{Pair, distance_sq, lift};
 use nalgebra::Vector3;
 
@@ -43,12 +42,7 @@ impl ContactTerm {
         }
         // The next step starts here and would search again: search once,
         // as it would (a wider search than the report needs), and leave it.
-        let pad = self.xi + self.s_hat;
-        let searched = CandidateCache {
-            pairs: self.candidates(&x, None, pad + 2.0 * self.cache_margin),
-            x0: x,
-            pad,
-        };
+        let searched = self.search_cache(&x);
         let r = self.report_over(&searched.x0, &searched.pairs, false, reach);
         if let Ok(mut spare) = self.spare.lock() {
             *spare = Some(searched);
