@@ -206,8 +206,6 @@ fn reads(flat_fold: bool) {
 /// held over one 0.1 s communication step (tolerance 1e-6, rho_inf = 1, no
 /// damping: the balance closes); CPU s of that step.
 fn release() {
-    use origami_fmu::ids::VertexId;
-    use origami_fmu::scene::{Fix, Support};
     println!();
     println!("## A flat stack released in one held 0.1 s communication step");
     println!(
@@ -215,19 +213,8 @@ fn release() {
     );
     println!("|---|---|---|---|---|---|---|");
     for mu in [0.0, 0.5] {
-        let mut scene = origami_fmu::Scene::with_defaults(
-            "deploy",
-            origami_fmu::mesh::builders::square_with_diagonal(0.1, true, PI),
-        );
-        scene.material.thickness = 5e-4;
-        scene.auto_damping = false;
-        scene.solver.rho_inf = 1.0;
-        scene.solver.tolerance = 1e-6;
+        let mut scene = origami_fmu::benchmarks::deployable_scene();
         scene.solver.max_internal_steps = 1_000_000;
-        scene.supports.push(Support {
-            vertices: vec![VertexId(1)],
-            fix: Fix::Clamped,
-        });
         let mut scene = with_contact(scene);
         if let Some(c) = scene.contact.as_mut() {
             c.friction = mu;

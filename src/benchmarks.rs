@@ -714,6 +714,28 @@ impl FamilyStudy {
     }
 }
 
+/// The deployable: a 0.1 m square, 0.5 mm thick, folded flat on its
+/// diagonal by the `fold` input, clamped at a corner, with no mass damping,
+/// the trapezoidal rule (rho_inf = 1) and a Newton tolerance of 1e-6, so
+/// its energy balance closes; no contact yet (the contact tests, bench and
+/// output tests add theirs).
+pub fn deployable_scene() -> crate::scene::Scene {
+    use crate::scene::{Fix, Support};
+    let mut scene = crate::scene::Scene::with_defaults(
+        "deploy",
+        crate::mesh::builders::square_with_diagonal(0.1, true, PI),
+    );
+    scene.material.thickness = 5e-4;
+    scene.auto_damping = false;
+    scene.solver.rho_inf = 1.0;
+    scene.solver.tolerance = 1e-6;
+    scene.supports.push(Support {
+        vertices: vec![VertexId(1)],
+        fix: Fix::Clamped,
+    });
+    scene
+}
+
 /// The Miura-ori scene of `n x n` unit cells with the generator's defaults
 /// (20 mm facets, 60 degree sectors): the sheet the throughput and
 /// work-precision benches fold.

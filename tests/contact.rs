@@ -948,15 +948,7 @@ fn deployable(mu: f64) -> Model {
 
 /// [`deployable`] with a change to its scene.
 fn deployable_with(mu: f64, change: impl Fn(&mut Scene)) -> Model {
-    let mut scene = Scene::with_defaults("deploy", square_with_diagonal(0.1, true, PI));
-    scene.material.thickness = 5e-4;
-    scene.auto_damping = false;
-    scene.solver.rho_inf = 1.0;
-    scene.solver.tolerance = 1e-6;
-    scene.supports.push(Support {
-        vertices: vec![VertexId(1)],
-        fix: Fix::Clamped,
-    });
+    let mut scene = origami_fmu::benchmarks::deployable_scene();
     contact_on(&mut scene, mu);
     change(&mut scene);
     let mut model = Model::new(scene).unwrap();

@@ -81,6 +81,18 @@ fn reactions(
     Reactions { groups }
 }
 
+/// The assembler's view of positions and velocities `d` under `drive`,
+/// crease angles unwrapped near `theta_prev`.
+fn state_of<'a>(d: &'a Dynamics, drive: &'a DriveValues, theta_prev: &'a [f64]) -> State<'a> {
+    State {
+        q: &d.q,
+        v: &d.v,
+        theta0: &drive.theta0,
+        moment: &drive.moment,
+        theta_prev,
+    }
+}
+
 impl System {
     /// The full evaluation (forces, energies) of positions and velocities
     /// `d` under the drive `drive`, crease angles unwrapped near `theta_prev`.
@@ -91,14 +103,8 @@ impl System {
         theta_prev: &[f64],
     ) -> Result<Evaluation, EvalError> {
         let mut ev = Evaluation::default();
-        let st = State {
-            q: &d.q,
-            v: &d.v,
-            theta0: &drive.theta0,
-            moment: &drive.moment,
-            theta_prev,
-        };
-        self.asm.evaluate(&st, &mut ev, None)?;
+        self.asm
+            .evaluate(&state_of(d, drive, theta_prev), &mut ev, None)?;
         Ok(ev)
     }
 
@@ -110,14 +116,7 @@ impl System {
         drive: &DriveValues,
         theta_prev: &[f64],
     ) -> Result<f64, EvalError> {
-        let st = State {
-            q: &d.q,
-            v: &d.v,
-            theta0: &drive.theta0,
-            moment: &drive.moment,
-            theta_prev,
-        };
-        self.asm.barrier_energy(&st)
+        self.asm.barrier_energy(&state_of(d, drive, theta_prev))
     }
 
     /// A new sparse solver for the assembler's pattern as it is now (after

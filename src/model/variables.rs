@@ -745,19 +745,7 @@ mod tests {
     /// the barrier (its energy nonzero) among them.
     #[test]
     fn contact_outputs_read_as_pairs_enter_equal_a_full_evaluation() {
-        use crate::scene::{Fix, Support};
-        let mut scene = crate::Scene::with_defaults(
-            "deploy",
-            crate::mesh::builders::square_with_diagonal(0.1, true, std::f64::consts::PI),
-        );
-        scene.material.thickness = 5e-4;
-        scene.auto_damping = false;
-        scene.solver.rho_inf = 1.0;
-        scene.solver.tolerance = 1e-6;
-        scene.supports.push(Support {
-            vertices: vec![VertexId(1)],
-            fix: Fix::Clamped,
-        });
+        let mut scene = crate::benchmarks::deployable_scene();
         scene.contact = Some(scene.default_contact());
         let mut m = Model::new(scene).unwrap();
         m.initialize().unwrap();
