@@ -18,15 +18,11 @@ pub(super) struct CandidateCache {
     pub(super) x0: Vec<Vector3<f64>>,
     pub(super) pad: f64,
     pub(super) pairs: Vec<Pair>,
-    /// The translation the last step start's cover test found.
-    pub(super) shift: Vector3<f64>,
 }
 
 impl CandidateCache {
-    /// Whether positions `x` (and `x + dx`), moved back by one common
-    /// translation, are within `margin` of `x0` (the margin the cache was
-    /// searched with, or less): distances, and so the pairs within a pad,
-    /// do not change when the whole sheet moves.
+    /// Whether positions `x` (and `x + dx`) are within `margin` of `x0`
+    /// (the margin the cache was searched with, or less).
     pub(super) fn covers(
         &self,
         x: &[Vector3<f64>],
@@ -34,53 +30,13 @@ impl CandidateCache {
         pad: f64,
         margin: f64,
     ) -> bool {
-        self.cover_shift(x, dx, pad, margin).is_some()
-    }
-
-    /// The translation by which [`CandidateCache::covers`] holds, if any:
-    /// the last one found (a step's positions move little), else the centre
-    /// of the displacements' bounding box.
-    pub(super) fn cover_shift(
-        &self,
-        x: &[Vector3<f64>],
-        dx: Option<&[Vector3<f64>]>,
-        pad: f64,
-        margin: f64,
-    ) -> Option<Vector3<f64>> {
-        if pad > self.pad || x.len() != self.x0.len() {
-            return None;
-        }
-        if self.within(x, dx, margin, &self.shift) {
-            return Some(self.shift);
-        }
-        let mut lo = Vector3::repeat(f64::INFINITY);
-        let mut hi = Vector3::repeat(f64::NEG_INFINITY);
-        for (i, (y, y0)) in x.iter().zip(&self.x0).enumerate() {
-            let u = y - y0;
-            lo = lo.inf(&u);
-            hi = hi.sup(&u);
-            if let Some(d) = dx {
-                lo = lo.inf(&(u + d[i]));
-                hi = hi.sup(&(u + d[i]));
-            }
-        }
-        let c = 0.5 * (lo + hi);
-        self.within(x, dx, margin, &c).then_some(c)
-    }
-
-    /// Whether `x - c` (and `x + dx - c`) are within `margin` of `x0`.
-    fn within(
-        &self,
-        x: &[Vector3<f64>],
-        dx: Option<&[Vector3<f64>]>,
-        margin: f64,
-        c: &Vector3<f64>,
-    ) -> bool {
         let m2 = margin * margin;
-        x.iter().zip(&self.x0).enumerate().all(|(i, (y, y0))| {
-            let u = y - y0 - c;
-            u.norm_squared() <= m2 && dx.is_none_or(|d| (u + d[i]).norm_squared() <= m2)
-        })
+        pad <= self.pad
+            && x.len() == self.x0.len()
+            && x.iter().zip(&self.x0).enumerate().all(|(i, (y, y0))| {
+                (y - y0).norm_squared() <= m2
+                    && dx.is_none_or(|d| (y + d[i] - y0).norm_squared() <= m2)
+            })
     }
 }
 
@@ -522,8 +478,7 @@ impl ContactTerm {
     pub(super) fn cache_at(&mut self, x: &[Vector3<f64>]) -> Option<CandidateCache> {
         let pad = self.xi + self.s_hat;
         let margin = self.cache_margin;
-        if let Some(c) = self.cache.cover_shift(x, None, pad, 0.5 * margin) {
-            self.cache.shift = c;
+        if self.cache.covers(x, None, pad, 0.5 * margin) {
             return None;
         }
         let spare = self.spare.get_mut().ok().and_then(Option::take);
@@ -544,7 +499,6 @@ impl ContactTerm {
             pairs: self.candidates(x, None, pad + 2.0 * self.cache_margin),
             x0: x.to_vec(),
             pad,
-            shift: Vector3::zeros(),
         }
     }
 
