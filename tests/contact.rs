@@ -1038,10 +1038,10 @@ fn deployable_closes_its_energy_balance() {
 /// its contact as the ramp with slopes does (`deployable_closes_its_energy_balance`),
 /// with no refused step and a clear sampled surface at every output.
 #[test]
-#[ignore = "fails (issue 52, open): Newton does not converge at t = 0.27 s (2026-12-07: one \
-            crease stop point of the diagonal, no contact pair within 2.5 mm, the crease's \
-            ends at 172 deg, cuts the corrections to 1e-4..1e-3 at steps of 1e-9 s); see \
-            docs/contact.md, 'A held input closing a crease onto its stop'"]
+#[ignore = "fails (issue 52, open): the step from t = 0.262 s is refused, 'the crease on edge 0 \
+            is folded past flat' (2026-12-07; a crease stop point of the diagonal, no contact \
+            pair within 2.5 mm, the crease's ends at 169-172 deg); see docs/contact.md, 'A held \
+            input closing a crease onto its stop'"]
 fn the_deployable_folds_flat_by_held_samples() {
     let mut model = deployable(0.0);
     let fold = common::input(&model, "fold");
