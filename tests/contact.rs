@@ -1040,7 +1040,7 @@ fn deployable_closes_its_energy_balance() {
 #[test]
 #[ignore = "fails (issue 52, open): the step from t = 0.262 s is refused, 'the crease on edge 0 \
             is folded past flat' (2026-12-07; a crease stop point of the diagonal, no contact \
-            pair within 2.5 mm, the crease's ends at 169-172 deg); see docs/contact.md, 'A held \
+            pair within 4 mm, the crease's ends at 169 deg); see docs/contact.md, 'A held \
             input closing a crease onto its stop'"]
 fn the_deployable_folds_flat_by_held_samples() {
     let mut model = deployable(0.0);

@@ -500,11 +500,9 @@ impl Advance {
         std::mem::swap(&mut self.d_start, &mut self.d);
         if sys.asm.reports_power() {
             // A step whose end was not evaluated had no dissipative force.
+            let ev = sys.stepper.evaluation();
             let none = crate::assembly::DissipativeForce::default();
-            let end = sys
-                .stepper
-                .evaluation()
-                .map_or(&none, |ev| &ev.dissipative_force);
+            let end = ev.map_or(&none, |ev| &ev.dissipative_force);
             let (wf, wd) = state
                 .dissipative_force
                 .work_to(end, &state.dynamics.q, &self.next.q);
@@ -513,7 +511,7 @@ impl Advance {
             state.work.friction += wf - on.friction;
             state.work.contact_damping += wd - on.damping;
             state.work.input -= on.total;
-            match sys.stepper.evaluation() {
+            match ev {
                 Some(ev) => state.dissipative_force.clone_from(&ev.dissipative_force),
                 // Zero, at the state's length.
                 None => {
