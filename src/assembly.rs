@@ -654,6 +654,13 @@ impl Assembler {
         }
     }
 
+    /// Slot `s`'s diagonal mass coefficient (kg, or kg m^2 for a gradient
+    /// slot: the coefficient of I3 in the mass matrix).
+    pub fn slot_mass(&self, s: usize) -> f64 {
+        let row = &self.mass_entries[self.mass_ptr[s]..self.mass_ptr[s + 1]];
+        row.iter().find(|&&(b, _)| b == s).map_or(0.0, |&(_, m)| m)
+    }
+
     /// The mass matrix restricted to the free DOFs, in pattern order.
     pub fn mass_values(&self) -> &[f64] {
         &self.mass_values

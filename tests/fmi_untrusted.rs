@@ -256,6 +256,21 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
             "term_memory",
         ),
         (
+            "a crease stop point 1e6",
+            Box::new(|v| forge_term_memory(v, true, json!([2.0, 1e6, 0.0, 0.0, 0.0, 1.0]))),
+            "term_memory",
+        ),
+        (
+            "a crease stop entry with a vertex after its point",
+            Box::new(|v| forge_term_memory(v, true, json!([2.0, 0.0, 3.0, 0.0, 0.0, 1.0]))),
+            "term_memory",
+        ),
+        (
+            "a crease stop stiffness of 0",
+            Box::new(|v| forge_term_memory(v, true, json!([2.0, 0.0, 0.0, 0.0, 0.0, 0.0]))),
+            "term_memory",
+        ),
+        (
             "a contact pair list of five values",
             Box::new(|v| forge_term_memory(v, true, json!([0.0, 0.0, 1.0, 2.0, 3.0]))),
             "term_memory",

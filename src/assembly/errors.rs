@@ -194,6 +194,16 @@ pub enum MemoryError {
         /// How many there are.
         count: usize,
     },
+    /// A crease stop entry (kind 2) that is not a stop point's index
+    /// followed by three zeros.
+    StopEntry {
+        /// The entry's place in the list.
+        pair: usize,
+        /// The four values after its kind.
+        values: [f64; 4],
+        /// How many crease stop points there are.
+        points: usize,
+    },
     /// A pair's stiffness is not a positive number up to `max`.
     PairStiffness {
         /// The pair's place in the list.
@@ -243,7 +253,18 @@ impl fmt::Display for MemoryError {
             } => write!(f, "pair {pair}: {value} is not a {what} (0..{count})"),
             MemoryError::PairKind { pair, kind } => write!(
                 f,
-                "pair {pair}: kind {kind} is neither 0 (point-triangle) nor 1 (edge-edge)"
+                "pair {pair}: kind {kind} is not 0 (point-triangle), 1 (edge-edge) or 2 \
+                 (crease stop point)"
+            ),
+            MemoryError::StopEntry {
+                pair,
+                values,
+                points,
+            } => write!(
+                f,
+                "pair {pair}: a crease stop entry is (2, a point in 0..{points}, 0, 0, 0, \
+                 stiffness), not (2, {}, {}, {}, {}, ...)",
+                values[0], values[1], values[2], values[3]
             ),
             MemoryError::PairVertex {
                 pair,

@@ -318,8 +318,8 @@ impl BarrierTerm for ContactTerm {
     fn max_step_fraction(&self, _asm: &Assembler, q: &[f64], dq: &[f64]) -> f64 {
         self.safe_fraction(q, dq).min(self.crease_fraction(q, dq))
     }
-    /// The pairs' barrier stiffnesses: six numbers a pair (edge-edge or
-    /// not, its four contact vertices, the stiffness), in key order.
+    /// The pairs' and crease stop points' barrier stiffnesses (see
+    /// [`ContactTerm::memory_list`]).
     fn memory(&self) -> Vec<f64> {
         self.memory_list()
     }
@@ -329,7 +329,9 @@ impl BarrierTerm for ContactTerm {
     }
 
     fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
-        self.restored = Some(self.parse_memory(memory)?);
+        let (pairs, stops) = self.parse_memory(memory)?;
+        self.restored = Some(pairs);
+        self.stops.set_kappas(stops);
         Ok(())
     }
 
@@ -369,14 +371,14 @@ impl ForceTerm for ContactTerm {
         self.pattern_pairs(asm)
     }
 
-    fn lag(&mut self, _asm: &Assembler, q: &[f64], v: &[f64]) {
+    fn lag(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) {
         let mut x = Vec::new();
         let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
         self.surf.positions(v, &mut vx);
         let old = self.cache_at(&x);
         self.lag_at(&x, &vx, old.as_ref());
-        self.creases_near_flat = self.near_flat(q);
+        self.creases_near_flat = self.stops_at_step_start(asm, q, v);
     }
 
     fn add(

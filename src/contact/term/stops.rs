@@ -4,7 +4,7 @@
 use super::ContactTerm;
 use super::batch::MatrixBatch;
 use crate::assembly::{Assembler, EvalError, Evaluation, MatrixCoeffs, State};
-use crate::contact::potentials::{barrier, db, ddb};
+use crate::contact::potentials::{barrier, db, ddb, speed_stiffness};
 use crate::dofs::DofLayout;
 use crate::mesh::Mesh;
 use nalgebra::{SMatrix, Vector3};
@@ -27,11 +27,19 @@ pub(super) struct StopPoint {
 /// where its points were last evaluated with how far its slots may move
 /// from there before one of them can come within the stop's width or turn
 /// by a radian: edges within that are skipped (their points would act on
-/// nothing), the same result for a fraction of the work.
+/// nothing), the same result for a fraction of the work. Each point's
+/// barrier stiffness is set for a step from the step start (see
+/// [`ContactTerm::stop_stiffness`]) and kept while the point is inside.
 pub(super) struct Stops {
     pub(super) points: Vec<StopPoint>,
     edges: Vec<StopEdge>,
     refs: std::sync::Mutex<Vec<EdgeRef>>,
+    /// Each point's stiffness (N m/rad), 0 where none is set: set when a
+    /// point first enters its barrier in a step, kept while it is inside.
+    kappas: std::sync::Mutex<Vec<f64>>,
+    /// The slots' positions and rates at the step start.
+    start_q: Vec<f64>,
+    start_v: Vec<f64>,
 }
 
 /// One crease edge's points and the slots their maps read.
@@ -160,6 +168,19 @@ pub(super) fn stop_points(
 }
 
 impl Stops {
+    /// The points' stiffnesses (0 where none is set).
+    pub(super) fn kappas(&self) -> Vec<f64> {
+        self.kappas
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+
+    /// Set the points' stiffnesses (a restored state's; 0 where none is set).
+    pub(super) fn set_kappas(&mut self, kappas: Vec<f64>) {
+        *self.kappas.get_mut().unwrap_or_else(|e| e.into_inner()) = kappas;
+    }
+
     /// The stops at `points`, grouped by crease edge (each edge's points
     /// are consecutive), none with a reference yet.
     pub(super) fn new(points: Vec<StopPoint>) -> Stops {
@@ -183,10 +204,14 @@ impl Stops {
             edge.slots = slots;
         }
         let refs = std::sync::Mutex::new(vec![EdgeRef::default(); edges.len()]);
+        let kappas = std::sync::Mutex::new(vec![0.0; points.len()]);
         Stops {
             points,
             edges,
             refs,
+            kappas,
+            start_q: Vec::new(),
+            start_v: Vec::new(),
         }
     }
 }
@@ -273,7 +298,8 @@ impl ContactTerm {
                 continue;
             }
             let mut allow = f64::INFINITY;
-            for sp in &stops.points[edge.points.clone()] {
+            for i in edge.points.clone() {
+                let sp = &stops.points[i];
                 let [a, b, t] = sp
                     .maps
                     .each_ref()
@@ -286,7 +312,13 @@ impl ContactTerm {
                 if g <= 0.0 {
                     return Err(EvalError::PastFlat { edge: sp.edge });
                 }
-                let k = asm.physics.crease_k_per_length * sp.length;
+                let k = {
+                    let mut kappas = stops.kappas.lock().unwrap_or_else(|e| e.into_inner());
+                    if kappas[i] <= 0.0 {
+                        kappas[i] = self.stop_stiffness(asm, sp);
+                    }
+                    kappas[i]
+                };
                 let d =
                     crate::crease::theta_derivatives(&a, &b, &t, matrix.is_some() && !self.project);
                 out.term_energy += k * barrier(g, w);
@@ -363,16 +395,96 @@ impl ContactTerm {
         fraction
     }
 
-    /// Whether a crease stop's point at `q` is within twice the stop's
-    /// width of flat.
-    pub(super) fn near_flat(&self, q: &[f64]) -> bool {
-        self.stops.points.iter().any(|sp| {
+    /// The crease stops at a step start (slots `q`, rates `v`): keep the
+    /// stiffness of each point inside its barrier (the crease spring's
+    /// where it has none), clear the others'; returns whether a point is
+    /// within twice the stop's width of flat.
+    pub(super) fn stops_at_step_start(&mut self, asm: &Assembler, q: &[f64], v: &[f64]) -> bool {
+        let w = self.flat_width;
+        let stops = &mut self.stops;
+        stops.start_q.clear();
+        stops.start_q.extend_from_slice(q);
+        stops.start_v.clear();
+        stops.start_v.extend_from_slice(v);
+        let kappas = stops.kappas.get_mut().unwrap_or_else(|e| e.into_inner());
+        kappas.resize(stops.points.len(), 0.0);
+        let mut near = false;
+        for (sp, kappa) in stops.points.iter().zip(kappas.iter_mut()) {
             let [a, b, t] = sp
                 .maps
                 .each_ref()
                 .map(|m| crate::contact::surface::eval_map(m, q));
-            flat_gap(&a, &b, &t).0 < 2.0 * self.flat_width
-        })
+            let g = flat_gap(&a, &b, &t).0;
+            near |= g < 2.0 * w;
+            if g >= w {
+                *kappa = 0.0;
+            } else if *kappa <= 0.0 {
+                *kappa = asm.physics.crease_k_per_length * sp.length;
+            }
+        }
+        near
+    }
+
+    /// The barrier stiffness (N m/rad) a stop point outside its barrier at
+    /// the step start takes for the step: the crease spring's share `k`,
+    /// or enough to stop its approach at the step start within the width
+    /// as a pair's is ([`speed_stiffness`]: the kinetic energy `I g_dot^2 /
+    /// 2` stopped at `b(g) = PAIR_SPEED_DIVISOR w^2 / 2`, about 4 % of the
+    /// width), `g_dot` its gap's rate and `I = 1 / sum_s |dg/dx_s|^2 / m_s`
+    /// its inertia with the mass matrix's diagonal `m_s` over the free
+    /// slots `s` its vectors read. A crease's facets bend and ring along it
+    /// (a held input's jump sets them ringing): a point between the crease
+    /// ends can reach flat at hundreds of radians a second, which the crease
+    /// spring's stiffness would stop only at a gap crushed to round-off.
+    /// Set while the point's barrier energy is zero and kept while it is
+    /// inside, the stiffness changes no energy.
+    fn stop_stiffness(&self, asm: &Assembler, sp: &StopPoint) -> f64 {
+        let k = asm.physics.crease_k_per_length * sp.length;
+        let (q, v) = (&self.stops.start_q, &self.stops.start_v);
+        if q.len() != asm.n_dofs() || v.len() != q.len() {
+            return k;
+        }
+        let eval = |x: &[f64]| {
+            sp.maps
+                .each_ref()
+                .map(|m| crate::contact::surface::eval_map(m, x))
+        };
+        let [a, b, t] = eval(q);
+        let (_, sign) = flat_gap(&a, &b, &t);
+        let d = crate::crease::theta_derivatives(&a, &b, &t, false);
+        let rates = eval(v);
+        let g_dot: f64 = sign * (0..3).map(|i| d.grad[i].dot(&rates[i])).sum::<f64>();
+        let approach = (-g_dot).max(0.0);
+        if approach == 0.0 {
+            return k;
+        }
+        // dg/dx_s, summed over the three maps by slot.
+        let mut by_slot: Vec<(usize, Vector3<f64>)> = sp
+            .maps
+            .iter()
+            .zip(&d.grad)
+            .flat_map(|(m, gr)| m.iter().map(move |&(s, c)| (s, gr * (sign * c))))
+            .collect();
+        by_slot.sort_by_key(|&(s, _)| s);
+        let mut inverse = 0.0;
+        let mut i = 0;
+        while i < by_slot.len() {
+            let s = by_slot[i].0;
+            let mut j = Vector3::zeros();
+            while i < by_slot.len() && by_slot[i].0 == s {
+                j += by_slot[i].1;
+                i += 1;
+            }
+            let m = asm.slot_mass(s);
+            if asm.free[3 * s] != crate::assembly::FIXED && m > 0.0 {
+                inverse += j.norm_squared() / m;
+            }
+        }
+        if inverse > 0.0 {
+            speed_stiffness(k, 1.0 / inverse, approach, self.flat_width)
+        } else {
+            k
+        }
     }
 
     /// Add a 9x9 matrix over the crease vectors `(a, b, t)` to `batch`.
