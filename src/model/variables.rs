@@ -271,6 +271,9 @@ const CONTACT_OUTPUTS: [(&str, &str, &str); 5] = [
     ("energy.friction", "J", "work dissipated by friction"),
 ];
 
+/// Self-contact's outputs: [`CONTACT_OUTPUTS`] then [`CHORD_OUTPUT`].
+const CONTACT_VALUES: usize = CONTACT_OUTPUTS.len() + 1;
+
 /// The output of a scene with self-contact after [`CONTACT_OUTPUTS`].
 const CHORD_OUTPUT: (&str, &str, &str) = (
     "contact.chord_error",
@@ -442,18 +445,17 @@ impl Model {
         if let Some(x) = self.contact_output(k) {
             return x;
         }
-        if let Some(first) = self.contact_outputs() {
-            match k.checked_sub(first) {
-                Some(3) => {
-                    return *self
-                        .read_cache
-                        .barrier_energy
-                        .get_or_init(|| self.evaluate_barrier_energy());
-                }
-                Some(4) => return self.state.work.friction,
-                Some(5) => return self.chord_error().map_or(0.0, |c| c.0),
-                _ => {}
-            }
+        if let Some(j) = self
+            .contact_outputs()
+            .and_then(|first| k.checked_sub(first))
+            .filter(|&j| j < CONTACT_VALUES)
+        {
+            return self.contact_value(j, || {
+                *self
+                    .read_cache
+                    .barrier_energy
+                    .get_or_init(|| self.evaluate_barrier_energy())
+            });
         }
         // Anything else (not reached: a scene whose outputs need more
         // evaluates each step's end in full): one full evaluation.
@@ -594,16 +596,7 @@ impl Model {
             ]);
         }
         if self.contact_outputs().is_some() {
-            // The report of this state (kept for its reads).
-            let r = self.contact().unwrap_or_default();
-            out.extend([
-                r.min_gap,
-                r.pairs as f64,
-                r.normal_force,
-                ev.term_energy,
-                self.state.work.friction,
-                self.chord_error().map_or(0.0, |c| c.0),
-            ]);
+            out.extend((0..CONTACT_VALUES).map(|j| self.contact_value(j, || ev.term_energy)));
         } else if !self.scene.obstacles.is_empty() {
             out.extend([ev.term_energy, self.state.work.friction]);
         }
@@ -700,12 +693,28 @@ impl Model {
     /// Output `k` if it is one of the contact search's (smallest gap, pairs,
     /// normal force): the search runs on the first read of the state.
     fn contact_output(&self, k: usize) -> Option<f64> {
-        let first = self.contact_outputs()?;
-        if !(first..first + 3).contains(&k) {
+        let j = k.checked_sub(self.contact_outputs()?)?;
+        if j >= 3 {
             return None;
         }
-        let r = self.contact()?;
-        Some([r.min_gap, r.pairs as f64, r.normal_force][k - first])
+        self.contact()?;
+        Some(self.contact_value(j, || 0.0))
+    }
+
+    /// Self-contact's output `j` of this state, in the order of
+    /// [`CONTACT_OUTPUTS`] then [`CHORD_OUTPUT`]: the search's report (kept
+    /// for its reads), the barrier energy `barrier_energy` gives, the
+    /// friction work, the chord error.
+    fn contact_value(&self, j: usize, barrier_energy: impl FnOnce() -> f64) -> f64 {
+        match j {
+            0..=2 => {
+                let r = self.contact().unwrap_or_default();
+                [r.min_gap, r.pairs as f64, r.normal_force][j]
+            }
+            3 => barrier_energy(),
+            4 => self.state.work.friction,
+            _ => self.chord_error().map_or(0.0, |c| c.0),
+        }
     }
 }
 
