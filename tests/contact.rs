@@ -901,10 +901,6 @@ fn a_bird_base_folded_flat_deploys_back_to_flat() {
 /// free panel swings through flat to 294 deg by 0.03 s) stops at flat: no
 /// crossing at any output, the crease never past 180 deg.
 #[test]
-#[ignore = "fails (issue 52, open): Newton does not converge at t = 0.0153 s (2026-12-07: \
-            a neighbour pair beside the crease pressed to a gap of 4e-14 m at the default \
-            barrier stiffness, every correction cut to 3e-3 by the collision check at steps of \
-            3e-9 s); see docs/contact.md, 'A crease pressed past flat'"]
 fn a_crease_pressed_past_flat_by_a_moment_stops_at_flat() {
     let (mut scene, _) = origami_fmu::scene::load("scenes/controlled_crease.fold").unwrap();
     contact_on(&mut scene, 0.0);

@@ -320,7 +320,10 @@ impl ContactTerm {
     /// Fine pairs between neighbouring facets sharing a side (a crease) that
     /// face each other, folded past a right angle (facets sharing only a
     /// corner: [`ContactTerm::corner_pairs`]): each one's samples off the
-    /// other against the other's sub-triangles. A midsurface crease folded
+    /// other against the other's sub-triangles, and their fine edges
+    /// against each other's (sharing no sample: a bent facet's sub-triangle
+    /// edges crossed the other's beside a crease pressed flat with no
+    /// sample through a sub-triangle). A midsurface crease folded
     /// flat closes to a wedge (its facets meet at the crease, their far
     /// corners a thickness apart), so such a pair keeps a thickness that
     /// grows with the two points' distance in the flat pattern `d`:
@@ -339,13 +342,42 @@ impl ContactTerm {
             if self.share_a_corner_only(f, g) || normal(f).dot(&normal(g)) >= 0.0 {
                 continue;
             }
+            let mut keep = |pair: Pair| {
+                let xi = self.wedge_share(&pair);
+                if xi >= NEIGHBOUR_MIN * self.xi {
+                    out.push(Pair { xi, ..pair });
+                }
+            };
             for (a, b) in [(f, g), (g, f)] {
-                self.samples_against(a, b, search, &mut |pair| {
-                    let xi = self.wedge_share(&pair);
-                    if xi >= NEIGHBOUR_MIN * self.xi {
-                        out.push(Pair { xi, ..pair });
-                    }
-                });
+                self.samples_against(a, b, search, &mut keep);
+            }
+            self.fine_edges_against(f, g, search, &mut keep);
+        }
+    }
+
+    /// Edge-edge pairs (at the full thickness) of facet `f`'s fine edges
+    /// near facet `g` against `g`'s near `f`, sharing no sample and with
+    /// overlapping boxes, into `sink`.
+    fn fine_edges_against(&self, f: usize, g: usize, search: &Search, sink: &mut dyn FnMut(Pair)) {
+        let s = &self.surf;
+        let edges_near = |h: usize, other: usize| -> Vec<usize> {
+            s.facet_fine_edges[h]
+                .iter()
+                .copied()
+                .filter(|&k| search.near(other, &s.fine_edges[k].0))
+                .collect()
+        };
+        let ef = edges_near(f, g);
+        if ef.is_empty() {
+            return;
+        }
+        let eg = edges_near(g, f);
+        for &i in &ef {
+            for &j in &eg {
+                let (a, b) = (s.fine_edges[i].0, s.fine_edges[j].0);
+                if search.edges[i].overlaps(&search.edges[j]) && !a.iter().any(|v| b.contains(v)) {
+                    sink(self.edge_pair(a, b, self.mass_fine));
+                }
             }
         }
     }
@@ -411,7 +443,6 @@ impl ContactTerm {
     /// vertex nothing else keeps them apart. Pairs another family already
     /// holds keep its thickness.
     fn corner_pairs(&self, search: &Search, near: &[(usize, usize)], out: &mut Vec<Pair>) {
-        let s = &self.surf;
         let mut mine = Vec::new();
         let thin = |pair: Pair| {
             let xi = self.wedge_share(&pair).max(NEIGHBOUR_MIN * self.xi);
@@ -424,29 +455,7 @@ impl ContactTerm {
             for (a, b) in [(f, g), (g, f)] {
                 self.samples_against(a, b, search, &mut |pair| mine.push(thin(pair)));
             }
-            // Each facet's fine edges near the other facet.
-            let edges_near = |h: usize, other: usize| -> Vec<usize> {
-                s.facet_fine_edges[h]
-                    .iter()
-                    .copied()
-                    .filter(|&k| search.near(other, &s.fine_edges[k].0))
-                    .collect()
-            };
-            let ef = edges_near(f, g);
-            if ef.is_empty() {
-                continue;
-            }
-            let eg = edges_near(g, f);
-            for &i in &ef {
-                for &j in &eg {
-                    let (a, b) = (s.fine_edges[i].0, s.fine_edges[j].0);
-                    if search.edges[i].overlaps(&search.edges[j])
-                        && !a.iter().any(|v| b.contains(v))
-                    {
-                        mine.push(thin(self.edge_pair(a, b, self.mass_fine)));
-                    }
-                }
-            }
+            self.fine_edges_against(f, g, search, &mut |pair| mine.push(thin(pair)));
         }
         mine.sort_unstable_by_key(key);
         mine.dedup_by_key(|p| key(p));

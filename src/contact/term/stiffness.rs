@@ -52,8 +52,8 @@ impl ContactTerm {
     }
 
     /// The barrier stiffness a pair outside the barrier takes at a step
-    /// start with contact-vertex positions `x` and velocities `v`: the
-    /// default, or more where the pair approaches so fast that the default
+    /// start with contact-vertex positions `x` and velocities `v`: its
+    /// [`ContactTerm::base_stiffness`], or more where the pair approaches so fast that the default
     /// barrier's energy scale `kappa s_hat^2` would let it come much
     /// closer than a few hundredths of the barrier width:
     /// `m v_n^2 / (PAIR_SPEED_DIVISOR s_hat^2)` for its sample mass `m` and
@@ -65,8 +65,9 @@ impl ContactTerm {
     /// step) reaches the default barrier's energy scale many times over and
     /// would be stopped at a gap of 1e-13 m, where Newton cannot move it.
     pub(super) fn pair_stiffness(&self, p: &Pair, x: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
+        let base = self.base_stiffness(p);
         if v.len() != x.len() || x.is_empty() {
-            return self.kappa;
+            return base;
         }
         let xs = self.points(x, p);
         let (w, n) = self.closest(p, &xs);
@@ -97,7 +98,19 @@ impl ContactTerm {
             None => n,
         };
         let approach = (-normal.dot(&vr)).max(0.0);
-        speed_stiffness(self.kappa, p.mass, approach, self.s_hat_of(p))
+        speed_stiffness(base, p.mass, approach, self.s_hat_of(p))
+    }
+
+    /// The stiffness a pair takes without an approach: the default `kappa`
+    /// times `(xi / xi_p)^2` for a pair whose thickness `xi_p` is tapered
+    /// (beside a crease or a shared corner), so that its barrier's energy
+    /// scale `kappa s_hat^2` is a full pair's though its width shrinks with
+    /// its thickness. Its force at a share of its width then grows as its
+    /// thickness falls, as a moment about the crease presses a point nearer
+    /// it harder: a panel held closed by a crease moment crushed a tapered
+    /// pair beside the crease to 5e-10 m with the default stiffness.
+    pub(super) fn base_stiffness(&self, p: &Pair) -> f64 {
+        self.kappa * (self.xi / p.xi).powi(2)
     }
 
     /// A pair's barrier stiffness: the one set at the last step start, or
