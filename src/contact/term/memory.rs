@@ -22,7 +22,7 @@ impl ContactTerm {
     /// The pairs' and crease stops' barrier stiffnesses as a saved state
     /// lists them (the term's memory): six numbers an entry, the pairs'
     /// (edge-edge or not, its four contact vertices, the stiffness) in key
-    /// order, then the stop points' with a stiffness set (2, the point's
+    /// order, then the stop points' with a positive stiffness (2, the point's
     /// index, three zeros, the stiffness) in point order.
     pub(super) fn memory_list(&self) -> Vec<f64> {
         let pairs: Vec<(PairKey, f64)> = match &self.restored {
@@ -56,8 +56,8 @@ impl ContactTerm {
     /// (untrusted: a restored state's): sixes of kind (0 point-triangle, 1
     /// edge-edge, 2 crease stop point), four contact-vertex ids (a stop
     /// point's index and three zeros) and a positive stiffness up to
-    /// MAX_MAGNITUDE. Returns the pairs' by key and the stop points' (0
-    /// where none is listed).
+    /// MAX_MAGNITUDE. Returns the pairs' by key and the stop points'
+    /// ([`super::stops::UNSET`] where none is listed).
     pub(super) fn parse_memory(
         &self,
         memory: &[f64],
@@ -96,7 +96,7 @@ impl ContactTerm {
             )))
         })?;
         let mut pairs = HashMap::new();
-        let mut stops = vec![0.0; points];
+        let mut stops = vec![super::stops::UNSET; points];
         for (entry, k) in entries {
             match entry {
                 Entry::Pair(key) => {

@@ -34,8 +34,8 @@ pub(super) struct Stops {
     pub(super) points: Vec<StopPoint>,
     edges: Vec<StopEdge>,
     refs: std::sync::Mutex<Vec<EdgeRef>>,
-    /// Each point's stiffness (N m/rad), 0 where none is set: set when a
-    /// point first enters its barrier in a step, kept while it is inside.
+    /// Each point's stiffness (N m/rad), [`UNSET`] where none is: set when
+    /// a point first enters its barrier in a step, kept while it is inside.
     kappas: std::sync::Mutex<Vec<f64>>,
     /// The slots' positions and rates at the step start.
     start_q: Vec<f64>,
@@ -86,6 +86,10 @@ impl EdgeRef {
         moved.sqrt() + step.sqrt() < self.allow
     }
 }
+
+/// A stop point's stiffness where none is set for the step (a crease
+/// without a spring keeps a stiffness of 0).
+pub(super) const UNSET: f64 = -1.0;
 
 /// Points per crease edge where the crease stops act, ends included: a
 /// flat-folded crease's facets bend between its ends, and crossed each
@@ -168,7 +172,7 @@ pub(super) fn stop_points(
 }
 
 impl Stops {
-    /// The points' stiffnesses (0 where none is set).
+    /// The points' stiffnesses ([`UNSET`] where none is).
     pub(super) fn kappas(&self) -> Vec<f64> {
         self.kappas
             .lock()
@@ -176,7 +180,7 @@ impl Stops {
             .clone()
     }
 
-    /// Set the points' stiffnesses (a restored state's; 0 where none is set).
+    /// Set the points' stiffnesses (a restored state's; [`UNSET`] where none is).
     pub(super) fn set_kappas(&mut self, kappas: Vec<f64>) {
         *self.kappas.get_mut().unwrap_or_else(|e| e.into_inner()) = kappas;
     }
@@ -204,7 +208,7 @@ impl Stops {
             edge.slots = slots;
         }
         let refs = std::sync::Mutex::new(vec![EdgeRef::default(); edges.len()]);
-        let kappas = std::sync::Mutex::new(vec![0.0; points.len()]);
+        let kappas = std::sync::Mutex::new(vec![UNSET; points.len()]);
         Stops {
             points,
             edges,
@@ -314,7 +318,7 @@ impl ContactTerm {
                 }
                 let k = {
                     let mut kappas = stops.kappas.lock().unwrap_or_else(|e| e.into_inner());
-                    if kappas[i] <= 0.0 {
+                    if kappas[i] == UNSET {
                         kappas[i] = self.stop_stiffness(asm, sp);
                     }
                     kappas[i]
@@ -407,7 +411,7 @@ impl ContactTerm {
         stops.start_v.clear();
         stops.start_v.extend_from_slice(v);
         let kappas = stops.kappas.get_mut().unwrap_or_else(|e| e.into_inner());
-        kappas.resize(stops.points.len(), 0.0);
+        kappas.resize(stops.points.len(), UNSET);
         let mut near = false;
         for (sp, kappa) in stops.points.iter().zip(kappas.iter_mut()) {
             let [a, b, t] = sp
@@ -417,8 +421,8 @@ impl ContactTerm {
             let g = flat_gap(&a, &b, &t).0;
             near |= g < 2.0 * w;
             if g >= w {
-                *kappa = 0.0;
-            } else if *kappa <= 0.0 {
+                *kappa = UNSET;
+            } else if *kappa == UNSET {
                 *kappa = asm.physics.crease_k_per_length * sp.length;
             }
         }
