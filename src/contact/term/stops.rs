@@ -42,6 +42,14 @@ pub(super) struct Stops {
     start_v: Vec<f64>,
 }
 
+impl StopPoint {
+    /// The crease spring's stiffness of the point's share of its crease
+    /// (N m/rad): its stop's stiffness without a fast approach.
+    fn spring(&self, asm: &Assembler) -> f64 {
+        asm.physics.crease_k_per_length * self.length
+    }
+}
+
 /// One crease edge's points and the slots their maps read.
 struct StopEdge {
     points: std::ops::Range<usize>,
@@ -423,7 +431,7 @@ impl ContactTerm {
             if g >= w {
                 *kappa = UNSET;
             } else if *kappa == UNSET {
-                *kappa = asm.physics.crease_k_per_length * sp.length;
+                *kappa = sp.spring(asm);
             }
         }
         near
@@ -443,7 +451,7 @@ impl ContactTerm {
     /// Set while the point's barrier energy is zero and kept while it is
     /// inside, the stiffness changes no energy.
     fn stop_stiffness(&self, asm: &Assembler, sp: &StopPoint) -> f64 {
-        let k = asm.physics.crease_k_per_length * sp.length;
+        let k = sp.spring(asm);
         let (q, v) = (&self.stops.start_q, &self.stops.start_v);
         if q.len() != asm.n_dofs() || v.len() != q.len() {
             return k;
