@@ -22,7 +22,7 @@
 //!
 //! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird]
 //! [--fold PATH ...] [--scene PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]
-//! [--ramp S] [--hold S] [--back S] [--held]` (the suite runs unless `--fold` or `--scene` alone are given)
+//! [--ramp S] [--hold S] [--back S] [--held] [--subdivisions N]` (the suite runs unless `--fold` or `--scene` alone are given)
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
 //! targets, not flat and not in the default list; `--cpu-limit S` stops a
 //! run once its fold and its checks together have taken S CPU s, reported
@@ -37,7 +37,9 @@
 //! again (issue 52's deployment: the last column is the largest |fold
 //! angle| at the end; the flat-fold error is taken where the fold's hold
 //! ends); `--held` gives the input's values alone, no slopes, as a master
-//! without input derivatives holds its samples. `--help` prints this.)
+//! without input derivatives holds its samples. `--subdivisions N` samples
+//! contact's surface at N per facet side instead of the default 3. `--help`
+//! prints this.)
 
 mod common;
 use common::cpu_seconds;
@@ -185,10 +187,21 @@ impl Drive {
     }
 }
 
-fn run(scene: Scene, contact: bool, check: bool, flat: bool, cpu_limit: f64, drive: Drive) -> Row {
+fn run(
+    scene: Scene,
+    contact: Option<Option<usize>>,
+    check: bool,
+    flat: bool,
+    cpu_limit: f64,
+    drive: Drive,
+) -> Row {
     let mut scene = scene;
-    if contact {
-        scene.contact = Some(scene.default_contact());
+    if let Some(subdivisions) = contact {
+        let mut c = scene.default_contact();
+        if let Some(n) = subdivisions {
+            c.subdivisions = n;
+        }
+        scene.contact = Some(c);
     }
     let map = flat.then(|| flat_folded_positions(&final_targets(&scene)));
     let mut model = Model::new(scene).unwrap();
@@ -338,6 +351,7 @@ fn main() {
         _ => vec![false, true],
     };
     let check = !args.iter().any(|a| a == "--no-check");
+    let subdivisions: Option<usize> = value("--subdivisions").map(|v| v.parse().unwrap());
     let cpu_limit: f64 = value("--cpu-limit").map_or(f64::INFINITY, |v| v.parse().unwrap());
     let root = env!("CARGO_MANIFEST_DIR");
     let mut scenes: Vec<(String, Scene, bool)> = Vec::new();
@@ -394,7 +408,7 @@ fn main() {
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, flat));
     }
     println!(
-        "## Patterns folded over {} s and held {} s more{}, {} (default settings, 10 ms steps; CPU of the folds, the checks apart)",
+        "## Patterns folded over {} s and held {} s more{}, {} ({}, 10 ms steps; CPU of the folds, the checks apart)",
         drive.ramp,
         drive.hold,
         if drive.back > 0.0 {
@@ -409,6 +423,10 @@ fn main() {
             "held samples (no slopes)"
         } else {
             "with slopes"
+        },
+        match subdivisions {
+            Some(n) => format!("default settings but contact's {n} subdivisions"),
+            None => "default settings".to_string(),
         }
     );
     println!(
@@ -419,7 +437,14 @@ fn main() {
     for (name, scene, flat) in &scenes {
         for &contact in &modes {
             let facets = scene.mesh.triangles().len();
-            let r = run(scene.clone(), contact, check, *flat, cpu_limit, drive);
+            let r = run(
+                scene.clone(),
+                contact.then_some(subdivisions),
+                check,
+                *flat,
+                cpu_limit,
+                drive,
+            );
             let outputs = |n: usize| {
                 if check {
                     format!("{n} of {}", r.outputs)
