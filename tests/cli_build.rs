@@ -292,6 +292,79 @@ fn contact_option_takes_the_files_settings() {
         text.contains("thickness 2e-5 m") && text.contains("friction 0.45"),
         "{text}"
     );
+    // `--subdivisions` overrides the file's sampling and keeps the rest.
+    let text = check(&["--contact", "--subdivisions", "1"]);
+    assert!(
+        text.contains("thickness 2e-5 m")
+            && text.contains("friction 0.1,")
+            && text.contains("1 subdivisions"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--subdivisions N` sets contact's samples per facet side in check, build
+/// and simulate; without contact, or outside 1..=8, it is refused with the
+/// reason.
+#[test]
+fn subdivisions_set_contacts_sampling() {
+    let dir = scratch("subdivisions");
+    let file = root().join("scenes/single_crease.fold");
+    let run = |extra: &[&str]| {
+        let r = bin().args(extra).arg(&file).output().unwrap();
+        (
+            r.status.success(),
+            String::from_utf8_lossy(&r.stdout).into_owned(),
+            String::from_utf8_lossy(&r.stderr).into_owned(),
+        )
+    };
+    let (ok, text, err) = run(&["check", "--contact", "--subdivisions", "1"]);
+    assert!(
+        ok && text.contains("1 subdivisions per facet side"),
+        "{err}{text}"
+    );
+    let (ok, _, err) = run(&["check", "--subdivisions", "2"]);
+    assert!(
+        !ok && err.contains("--subdivisions") && err.contains("add --contact"),
+        "{err}"
+    );
+    for bad in ["0", "9", "two"] {
+        let (ok, _, err) = run(&["check", "--contact", "--subdivisions", bad]);
+        assert!(!ok && err.contains("--subdivisions"), "{bad}: {err}");
+    }
+    let fmu = dir.join("s.fmu");
+    let r = bin()
+        .args(["build", "--contact", "--subdivisions", "2"])
+        .arg(&file)
+        .arg("-o")
+        .arg(&fmu)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+    let mut json = String::new();
+    zip.by_name("resources/scene.json")
+        .unwrap()
+        .read_to_string(&mut json)
+        .unwrap();
+    let scene: origami_fmu::scene::Scene = serde_json::from_str(&json).unwrap();
+    assert_eq!(scene.contact.map(|c| c.subdivisions), Some(2));
+    let csv = dir.join("s.csv");
+    let r = bin()
+        .args([
+            "simulate",
+            "--contact",
+            "--subdivisions",
+            "1",
+            "--stop-time",
+            "0.02",
+        ])
+        .arg(&file)
+        .arg("-o")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -58,8 +58,8 @@ pub enum CliError {
     },
     /// `--friction` is negative or not finite.
     Friction(f64),
-    /// `--friction` without contact.
-    FrictionWithoutContact,
+    /// A contact option (given, and what it sets) without contact.
+    NeedsContact(&'static str, &'static str),
     /// FOLD-only options given for a scene JSON.
     FoldOptionsOnJson(PathBuf),
     /// `--step` or `--stop-time` is not a positive number.
@@ -226,9 +226,9 @@ impl std::fmt::Display for CliError {
             CliError::ModelOf { path, source } => write!(f, "{path}: {source}"),
             CliError::Limit { option, source } => write!(f, "{option}: {source}"),
             CliError::Friction(mu) => write!(f, "--friction {mu}: must be a finite number >= 0"),
-            CliError::FrictionWithoutContact => write!(
+            CliError::NeedsContact(option, what) => write!(
                 f,
-                "--friction sets the self-contact's friction, and contact is off: add \
+                "{option} sets the self-contact's {what}, and contact is off: add \
                  --contact (or \"ancf:contact\": {{\"enabled\": true}} in the scene)"
             ),
             CliError::FoldOptionsOnJson(path) => write!(

@@ -96,6 +96,11 @@ pub struct SceneOptions {
     /// `contact.friction`) [default: the scene's, else 0.3]. Needs contact on.
     #[arg(long, value_name = "MU")]
     pub friction: Option<f64>,
+    /// Samples per facet side of the surface self-contact keeps apart (1..=8) [default: the
+    /// scene's, else 3]. 1 samples the corners alone: a stack of flat panels several times
+    /// cheaper, curved facets then passing between samples (docs/contact.md). Needs contact on.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub subdivisions: Option<u8>,
     /// Read the frames after the crease pattern as keyframes of a folding sequence, one stage
     /// each: auto (when every one carries fold angles or folded coordinates, and the file has
     /// no ancf:sequence), on (an error when they do not), off.
@@ -125,7 +130,7 @@ impl SceneOptions {
             || self.keyframes != KeyframesArg::Auto
     }
 
-    /// Apply `--contact` and `--friction` to a loaded scene.
+    /// Apply `--contact`, `--friction` and `--subdivisions` to a loaded scene.
     pub fn apply(&self, scene: &mut scene::Scene) -> Result<(), CliError> {
         if self.contact && scene.contact.is_none() {
             scene.contact = Some(scene.default_contact());
@@ -136,7 +141,13 @@ impl SceneOptions {
             }
             match scene.contact.as_mut() {
                 Some(c) => c.friction = mu,
-                None => return Err(CliError::FrictionWithoutContact),
+                None => return Err(CliError::NeedsContact("--friction", "friction")),
+            }
+        }
+        if let Some(n) = self.subdivisions {
+            match scene.contact.as_mut() {
+                Some(c) => c.subdivisions = n.into(),
+                None => return Err(CliError::NeedsContact("--subdivisions", "sampling")),
             }
         }
         Ok(())
@@ -193,7 +204,7 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Loaded, CliErro
 }
 
 /// Read the FOLD scene at `path` with `options` (no `--contact`,
-/// `--friction`, no warnings printed).
+/// `--friction`, `--subdivisions`, no warnings printed).
 fn read_fold(path: &Path, options: &SceneOptions) -> Result<Loaded, CliError> {
     scene::load_report(path, &options.load_options()).map_err(|source| CliError::Scene {
         path: path.to_path_buf(),
