@@ -45,6 +45,7 @@ mod common;
 use common::cpu_seconds;
 use nalgebra::Vector3;
 use origami_fmu::benchmarks::{flat_fold_error, flat_folded_positions, fold_flat_by_sign};
+use origami_fmu::contact::ContactSettings;
 use origami_fmu::contact::check::IntersectionReport;
 use origami_fmu::ids::{EdgeId, VertexId};
 use origami_fmu::mesh::EdgeKind;
@@ -187,20 +188,17 @@ impl Drive {
     }
 }
 
+/// `scene` driven by `drive`, with self-contact where `contact` is given.
 fn run(
     scene: Scene,
-    contact: Option<Option<usize>>,
+    contact: Option<ContactSettings>,
     check: bool,
     flat: bool,
     cpu_limit: f64,
     drive: Drive,
 ) -> Row {
     let mut scene = scene;
-    if let Some(subdivisions) = contact {
-        let mut c = scene.default_contact();
-        if let Some(n) = subdivisions {
-            c.subdivisions = n;
-        }
+    if let Some(c) = contact {
         scene.contact = Some(c);
     }
     let map = flat.then(|| flat_folded_positions(&final_targets(&scene)));
@@ -437,14 +435,15 @@ fn main() {
     for (name, scene, flat) in &scenes {
         for &contact in &modes {
             let facets = scene.mesh.triangles().len();
-            let r = run(
-                scene.clone(),
-                contact.then_some(subdivisions),
-                check,
-                *flat,
-                cpu_limit,
-                drive,
-            );
+            // Contact at its defaults, at `--subdivisions` where given.
+            let settings = contact.then(|| {
+                let mut c = scene.default_contact();
+                if let Some(n) = subdivisions {
+                    c.subdivisions = n;
+                }
+                c
+            });
+            let r = run(scene.clone(), settings, check, *flat, cpu_limit, drive);
             let outputs = |n: usize| {
                 if check {
                     format!("{n} of {}", r.outputs)

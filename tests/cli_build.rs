@@ -191,6 +191,27 @@ fn every_scene_command_takes_frame_size_unit_and_f_edges() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `origami-fmu build OPTIONS FILE -o FMU` (it must succeed), and the scene
+/// the FMU carries in its resources.
+fn built_scene(options: &[&str], file: &Path, fmu: &Path) -> origami_fmu::scene::Scene {
+    let r = bin()
+        .arg("build")
+        .args(options)
+        .arg(file)
+        .arg("-o")
+        .arg(fmu)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(fmu).unwrap()).unwrap();
+    let mut json = String::new();
+    zip.by_name("resources/scene.json")
+        .unwrap()
+        .read_to_string(&mut json)
+        .unwrap();
+    serde_json::from_str(&json).unwrap()
+}
+
 /// `--contact` turns self-contact on in check, build and simulate, and
 /// `--friction` sets its coefficient; check lists contact and its outputs.
 #[test]
@@ -226,22 +247,11 @@ fn every_scene_command_takes_contact_and_friction() {
     let (ok, _, err) = check(&["--contact", "--friction=-1"]);
     assert!(!ok && err.contains("--friction -1"), "{err}");
     // build: the scene in the FMU has contact with that friction.
-    let fmu = dir.join("c.fmu");
-    let r = bin()
-        .args(["build", "--contact", "--friction", "0.45"])
-        .arg(&file)
-        .arg("-o")
-        .arg(&fmu)
-        .output()
-        .unwrap();
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
-    let mut json = String::new();
-    zip.by_name("resources/scene.json")
-        .unwrap()
-        .read_to_string(&mut json)
-        .unwrap();
-    let scene: origami_fmu::scene::Scene = serde_json::from_str(&json).unwrap();
+    let scene = built_scene(
+        &["--contact", "--friction", "0.45"],
+        &file,
+        &dir.join("c.fmu"),
+    );
     assert_eq!(scene.contact.map(|c| c.friction), Some(0.45));
     // simulate: the CSV has the contact outputs.
     let csv = dir.join("c.csv");
@@ -332,22 +342,11 @@ fn subdivisions_set_contacts_sampling() {
         let (ok, _, err) = run(&["check", "--contact", "--subdivisions", bad]);
         assert!(!ok && err.contains("--subdivisions"), "{bad}: {err}");
     }
-    let fmu = dir.join("s.fmu");
-    let r = bin()
-        .args(["build", "--contact", "--subdivisions", "2"])
-        .arg(&file)
-        .arg("-o")
-        .arg(&fmu)
-        .output()
-        .unwrap();
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
-    let mut json = String::new();
-    zip.by_name("resources/scene.json")
-        .unwrap()
-        .read_to_string(&mut json)
-        .unwrap();
-    let scene: origami_fmu::scene::Scene = serde_json::from_str(&json).unwrap();
+    let scene = built_scene(
+        &["--contact", "--subdivisions", "2"],
+        &file,
+        &dir.join("s.fmu"),
+    );
     assert_eq!(scene.contact.map(|c| c.subdivisions), Some(2));
     let csv = dir.join("s.csv");
     let r = bin()
