@@ -22,7 +22,7 @@
 //!
 //! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird]
 //! [--fold PATH ...] [--scene PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]
-//! [--ramp S] [--hold S] [--back S] [--held] [--subdivisions N]` (the suite runs unless `--fold` or `--scene` alone are given)
+//! [--ramp S] [--hold S] [--back S] [--held] [--subdivisions N] [--rule-off NAME]` (the suite runs unless `--fold` or `--scene` alone are given)
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
 //! targets, not flat and not in the default list; `--cpu-limit S` stops a
 //! run once its fold and its checks together have taken S CPU s, reported
@@ -38,8 +38,10 @@
 //! angle| at the end; the flat-fold error is taken where the fold's hold
 //! ends); `--held` gives the input's values alone, no slopes, as a master
 //! without input derivatives holds its samples. `--subdivisions N` samples
-//! contact's surface at N per facet side instead of the default 3. `--help`
-//! prints this.)
+//! contact's surface at N per facet side instead of the default 3.
+//! `--rule-off NAME` switches one of the stepper's speed rules off (the
+//! names of `IntegrationParameters::rules`), for a side-by-side run.
+//! `--help` prints this.)
 
 mod common;
 use common::cpu_seconds;
@@ -405,6 +407,17 @@ fn main() {
         let flat = ends_flat(&final_targets(&s));
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, flat));
     }
+    let rule_off = value("--rule-off").map(|n| {
+        origami_fmu::solver::IntegrationParameters::rules()
+            .iter()
+            .find(|r| r.name == n)
+            .unwrap_or_else(|| panic!("no rule {n}"))
+    });
+    if let Some(r) = rule_off {
+        for (_, s, _) in &mut scenes {
+            s.solver.integration = (r.off)(s.solver.integration);
+        }
+    }
     println!(
         "## Patterns folded over {} s and held {} s more{}, {} ({}, 10 ms steps; CPU of the folds, the checks apart)",
         drive.ramp,
@@ -425,7 +438,7 @@ fn main() {
         match subdivisions {
             Some(n) => format!("default settings but contact's {n} subdivisions"),
             None => "default settings".to_string(),
-        }
+        } + &rule_off.map_or(String::new(), |r| format!(", the rule {} off", r.name))
     );
     println!(
         "| pattern | facets | contact | CPU s | steps | Newton its | smallest gap (m) | finished | longest step (CPU s, at t) | outputs crossing: sampled surface | curved facets (16/side) | largest chord error (m) | flat-fold error | largest angle at the end (deg) |"
