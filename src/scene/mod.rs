@@ -443,7 +443,9 @@ pub struct SolverSettings {
     /// follows from it
     /// ([`crate::solver::IntegrationParameters::newton_tolerance`]).
     pub tolerance: f64,
-    /// Maximum Newton iterations per step.
+    /// Maximum Newton iterations per step. The default leaves room for
+    /// jams with friction, where the collision and friction bounds cut
+    /// corrections and the tolerance shrinks with the step.
     pub max_newton: usize,
     /// Full or modified Newton (generalized-alpha).
     #[serde(default)]
@@ -519,7 +521,7 @@ impl Default for SolverSettings {
             max_step: 1e-2,
             min_step: 1e-9,
             tolerance: 1e-4,
-            max_newton: 20,
+            max_newton: 30,
             newton: NewtonMode::Modified,
             stop_time: 1.0,
             max_internal_steps: DEFAULT_MAX_INTERNAL_STEPS,
