@@ -1385,7 +1385,7 @@ mod tests {
             "ancf:motions": [{"name": "grip", "vertex": 2}],
             "ancf:contact": {"enabled": false, "friction": 0.3},
             "ancf:solver": {"integrator": "central-difference", "rho_inf": 0.5, "max_step": 1e-4,
-                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 30, "newton": "full", "stop_time": 2,
+                            "min_step": 1e-10, "tolerance": 1e-7, "max_newton": 50, "newton": "full", "stop_time": 2,
                             "quadrature": "7-point"},
             "ancf:outputs": ["positions", "energies"],
             "ancf:refine": 2,
@@ -1408,7 +1408,7 @@ mod tests {
         assert_eq!(p.vertex_forces[0].0.vertex, VertexId(3));
         assert_eq!(p.vertex_motions[0].0.name, "grip");
         assert_eq!(p.solver.integrator, Integrator::CentralDifference);
-        assert_eq!(p.solver.max_newton, 30);
+        assert_eq!(p.solver.max_newton, 50);
         assert_eq!(p.solver.newton, NewtonMode::Full);
         assert_eq!(p.solver.quadrature, Rule::Dunavant7);
         assert!(p.outputs.positions && !p.outputs.fold_angles && p.outputs.energies);
