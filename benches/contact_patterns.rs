@@ -408,9 +408,7 @@ fn main() {
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, flat));
     }
     let rule_off = value("--rule-off").map(|n| {
-        origami_fmu::solver::IntegrationParameters::rules()
-            .iter()
-            .find(|r| r.name == n)
+        origami_fmu::solver::IntegrationParameters::rule(&n)
             .unwrap_or_else(|| panic!("no rule {n}"))
     });
     if let Some(r) = rule_off {

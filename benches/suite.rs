@@ -405,12 +405,7 @@ fn main() {
         Some(list) => list
             .split(',')
             .filter(|n| *n != "default")
-            .map(|n| {
-                IntegrationParameters::rules()
-                    .iter()
-                    .find(|r| r.name == n)
-                    .unwrap_or_else(|| panic!("no rule {n}"))
-            })
+            .map(|n| IntegrationParameters::rule(n).unwrap_or_else(|| panic!("no rule {n}")))
             .collect(),
     };
     let defaults = IntegrationParameters::default();

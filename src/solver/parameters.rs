@@ -141,6 +141,11 @@ pub struct Rule {
 }
 
 impl IntegrationParameters {
+    /// The speed rule named `name` (see [`IntegrationParameters::rules`]).
+    pub fn rule(name: &str) -> Option<&'static Rule> {
+        Self::rules().iter().find(|r| r.name == name)
+    }
+
     /// The speed rules that can be switched off one at a time.
     pub fn rules() -> &'static [Rule] {
         &[
