@@ -14,13 +14,14 @@
 //! for the patterns folded flat the distance of the end state from the
 //! flat-folding map (share of the folded size, in the state's best-fit
 //! plane). Under the table, the first output at which the sampled surface
-//! crossed, with its facets, and the first at which the curved facets did,
-//! with their chord errors.
+//! crossed, with its facets, the first at which the curved facets did,
+//! with their chord errors, and the first at which `contact.min_gap` fell
+//! below 0 (the guarantee: never).
 //!
 //! (A flat stack released in one held communication step, and what
 //! reading every output costs, are parts 3 and 4 of `benches/contact.rs`.)
 //!
-//! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird]
+//! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird,wbtess]
 //! [--fold PATH ...] [--scene PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]
 //! [--ramp S] [--hold S] [--back S] [--held] [--subdivisions N] [--rule-off NAME]` (the suite runs unless `--fold` or `--scene` alone are given)
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
@@ -67,6 +68,8 @@ struct Row {
     /// (time, what the checker found).
     crossings: usize,
     first_crossing: Option<(f64, IntersectionReport)>,
+    /// The first output with `contact.min_gap` below 0: time, gap.
+    first_negative_gap: Option<(f64, f64)>,
     /// Outputs at which the curved facets crossed (16 samples per side),
     /// and the first of them described.
     curved_crossings: usize,
@@ -217,6 +220,7 @@ fn run(
         longest: (0.0, 0.0),
         crossings: 0,
         first_crossing: None,
+        first_negative_gap: None,
         curved_crossings: 0,
         first_curved: None,
         chord_error: None,
@@ -260,6 +264,10 @@ fn run(
         }
         if let Some(c) = model.contact() {
             row.min_gap = Some(row.min_gap.map_or(c.min_gap, |g| g.min(c.min_gap)));
+            if c.min_gap < 0.0 {
+                row.first_negative_gap
+                    .get_or_insert((model.time(), c.min_gap));
+            }
         }
         if let Some((e, _)) = model.chord_error() {
             row.chord_error = Some(row.chord_error.map_or(e, |w| w.max(e)));
@@ -334,7 +342,7 @@ fn main() {
     let own = list("--scene");
     // The suite unless files alone are asked for.
     let suite = if folds.is_empty() && own.is_empty() {
-        "miura,yoshimura,kresling,waterbomb,smallbird,bird".to_string()
+        "miura,yoshimura,kresling,waterbomb,smallbird,bird,wbtess".to_string()
     } else {
         String::new()
     };
@@ -387,6 +395,11 @@ fn main() {
                 let mut s = load("tests/data/flat-folder/089_traditionaloripa_9_Birdbase.fold");
                 fold_flat_by_sign(&mut s);
                 ("9 bird bases (flat-folder)", s, true)
+            }
+            "wbtess" => {
+                // Its own targets: the collapsed tessellation, +-180 deg.
+                let s = load("scenes/waterbomb_tessellation.fold");
+                ("waterbomb tessellation 4x4", s, true)
             }
             "pyramid" => {
                 // Its own targets (not flat): it ends at them, uncrossed.
@@ -466,6 +479,11 @@ fn main() {
                 notes.push(format!(
                     "- {name}, contact {}: the curved facets (16/side) first crossed at {text}",
                     if contact { "on" } else { "off" },
+                ));
+            }
+            if let Some((t, gap)) = r.first_negative_gap {
+                notes.push(format!(
+                    "- {name}, contact on: contact.min_gap first below 0 at t = {t:.2} s ({gap:.2e} m)"
                 ));
             }
             if let Some((t, rep)) = &r.first_crossing {
