@@ -266,6 +266,62 @@ fn stop_turn_bound([a, b, t]: [Vector3<f64>; 3], [da, db, dt]: [Vector3<f64>; 3]
     turn(&a, &da) + turn(&b, &db)
 }
 
+/// The largest fraction, `limit` or a halving of it, of the move `(a, b, t)
+/// + alpha (da, db, dt)` from raw angle `raw0` (gap to flat `gap`) whose end
+/// keeps the point on its side of flat with a gap of at least `keep`, and
+/// so do the halvings of that fraction a line search may step back to; 0 if
+/// none. Passing flat wraps the raw angle across 0 = 2 pi; the angle need not
+/// change monotonically along the move, so an end on the right side says
+/// nothing of the points before it. Halvings are tested down to where
+/// [`stop_turn_bound`] alone keeps the point clear.
+fn stop_fraction(
+    x: [Vector3<f64>; 3],
+    dx: [Vector3<f64>; 3],
+    raw0: f64,
+    gap: f64,
+    keep: f64,
+    limit: f64,
+) -> f64 {
+    let room = (gap - keep).min(1.0);
+    if room <= 0.0 {
+        return 0.0;
+    }
+    let bounded = |alpha: f64| stop_turn_bound(x, dx.map(|d| d * alpha)) < room;
+    let clear = |alpha: f64| {
+        let [a, b, t] = [0, 1, 2].map(|i| x[i] + dx[i] * alpha);
+        (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
+            && flat_gap(&a, &b, &t).0 >= keep
+    };
+    let mut fraction = limit;
+    let mut halvings = 0;
+    loop {
+        if bounded(fraction) {
+            return fraction;
+        }
+        // The first of fraction, fraction / 2, ... (down to the bound) that
+        // is not clear: the fraction falls below it.
+        let mut alpha = fraction;
+        let mut blocked = None;
+        while !bounded(alpha) {
+            if !clear(alpha) {
+                blocked = Some(alpha);
+                break;
+            }
+            alpha *= 0.5;
+        }
+        match blocked {
+            None => return fraction,
+            Some(b) => {
+                fraction = 0.5 * b;
+                halvings += 1;
+                if halvings >= 60 {
+                    return 0.0;
+                }
+            }
+        }
+    }
+}
+
 /// A crease angle's gap to flat (rad) and `d gap / d theta`: `2 pi -
 /// theta` on the valley side (-1), `theta` on the mountain side (+1).
 fn flat_gap(a: &Vector3<f64>, b: &Vector3<f64>, t: &Vector3<f64>) -> (f64, f64) {
@@ -384,21 +440,8 @@ impl ContactTerm {
                 };
                 allow = allow.min(allowance(&[a, b, t], &sp.l1, gap, self.flat_width));
                 let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
-                if stop_turn_bound([a, b, t], [da, db_, dt]) < (gap - keep).min(1.0) {
-                    continue;
-                }
-                // Passing flat wraps the raw angle across 0 = 2 pi.
-                let clear = |alpha: f64| {
-                    let (a, b, t) = (a + da * alpha, b + db_ * alpha, t + dt * alpha);
-                    (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
-                        && flat_gap(&a, &b, &t).0 >= keep
-                };
-                let mut halvings = 0;
-                while !clear(fraction) && halvings < 60 {
-                    fraction *= 0.5;
-                    halvings += 1;
-                }
-                if halvings == 60 {
+                fraction = stop_fraction([a, b, t], [da, db_, dt], raw0, gap, keep, fraction);
+                if fraction == 0.0 {
                     return 0.0;
                 }
             }
@@ -514,6 +557,62 @@ impl ContactTerm {
 mod tests {
     use super::*;
     use crate::rng::XorShift;
+
+    /// A stop's fraction of a move keeps the point on its side of flat at its
+    /// end and at every halving of it down to the turn bound, where a line
+    /// search may step back to: near flat, moves whose end is on the right
+    /// side but whose middle is past flat (the angle is not monotone along
+    /// them) are cut. The endpoint test alone, as it was, let flat-folder's
+    /// Squirrel fold two creases past flat in the middle of a correction.
+    #[test]
+    fn stop_fraction_keeps_its_halvings_on_the_side() {
+        let mut rng = XorShift(53);
+        let mut v = |s: f64| Vector3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+        let (mut cut, mut endpoint_only_wrong) = (0, 0);
+        for i in 0..20000 {
+            let x = [v(1.0), v(1.0), v(1.0)];
+            let scale = [0.3, 1.0, 3.0][i % 3];
+            let dx = [v(scale), v(scale), v(scale)];
+            let raw0 = crate::crease::theta(&x[0], &x[1], &x[2]);
+            let gap = flat_gap(&x[0], &x[1], &x[2]).0;
+            let keep = (0.1 * gap).min(0.01);
+            let room = (gap - keep).min(1.0);
+            let at = |alpha: f64| [0, 1, 2].map(|k| x[k] + dx[k] * alpha);
+            let clear = |alpha: f64| {
+                let [a, b, t] = at(alpha);
+                (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
+                    && flat_gap(&a, &b, &t).0 >= keep
+            };
+            let bounded = |alpha: f64| stop_turn_bound(x, dx.map(|d| d * alpha)) < room;
+            let f = stop_fraction(x, dx, raw0, gap, keep, 1.0);
+            let mut alpha = f;
+            while alpha > 0.0 && !bounded(alpha) {
+                assert!(clear(alpha), "case {i}: {alpha} of {f} past flat");
+                alpha *= 0.5;
+            }
+            if f < 1.0 {
+                cut += 1;
+            }
+            // The endpoint-only rule: halve until the end is clear.
+            let mut g = 1.0;
+            while !bounded(g) && !clear(g) && g > 1e-18 {
+                g *= 0.5;
+            }
+            let mut alpha = g;
+            while alpha > 1e-18 && !bounded(alpha) {
+                if !clear(alpha) {
+                    endpoint_only_wrong += 1;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+        }
+        assert!(cut > 1000, "moves were cut ({cut})");
+        assert!(
+            endpoint_only_wrong > 0,
+            "some moves pass flat in the middle only ({endpoint_only_wrong})"
+        );
+    }
 
     /// The bound on a crease stop's turn holds along the whole move: the
     /// gap to flat never changes by more than it, at any fraction.
