@@ -283,7 +283,7 @@ fn stop_fraction(
     limit: f64,
 ) -> f64 {
     let room = (gap - keep).min(1.0);
-    if room <= 0.0 {
+    if room.is_nan() || room <= 0.0 || dx.iter().any(|d| !d.iter().all(|c| c.is_finite())) {
         return 0.0;
     }
     let bounded = |alpha: f64| stop_turn_bound(x, dx.map(|d| d * alpha)) < room;
@@ -302,7 +302,7 @@ fn stop_fraction(
         // is not clear: the fraction falls below it.
         let mut alpha = fraction;
         let mut blocked = None;
-        while !bounded(alpha) {
+        while alpha > 0.0 && !bounded(alpha) {
             if !clear(alpha) {
                 blocked = Some(alpha);
                 break;
@@ -608,6 +608,11 @@ mod tests {
             }
         }
         assert!(cut > 1000, "moves were cut ({cut})");
+        // A move that is not finite is no move.
+        let x = [Vector3::x(), Vector3::y(), Vector3::z()];
+        let mut dx = [Vector3::zeros(); 3];
+        dx[1].x = f64::NAN;
+        assert_eq!(stop_fraction(x, dx, 1.0, 0.5, 0.05, 1.0), 0.0);
         assert!(
             endpoint_only_wrong > 0,
             "some moves pass flat in the middle only ({endpoint_only_wrong})"
