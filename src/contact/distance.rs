@@ -599,8 +599,7 @@ mod tests {
     fn nearly_collinear_segments_apart_along_their_line() {
         let v = |x, y, z| Vector3::new(x, y, z);
         let point_segment = |p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| {
-            let t = ((p - a).dot(&(b - a)) / (b - a).norm_squared()).clamp(0.0, 1.0);
-            (a + (b - a) * t - p).norm_squared()
+            (a + (b - a) * segment_param(p, a, b) - p).norm_squared()
         };
         let exact = |a0: &Vector3<f64>, a1: &Vector3<f64>, b0: &Vector3<f64>, b1: &Vector3<f64>| {
             [
