@@ -289,8 +289,10 @@ fn stop_fraction(
     let bounded = |alpha: f64| stop_turn_bound(x, dx.map(|d| d * alpha)) < room;
     let clear = |alpha: f64| {
         let [a, b, t] = [0, 1, 2].map(|i| x[i] + dx[i] * alpha);
-        (crate::crease::theta(&a, &b, &t) - raw0).abs() < std::f64::consts::PI
-            && flat_gap(&a, &b, &t).0 >= keep
+        // The raw angle once: its gap to flat is flat_gap's.
+        let theta = crate::crease::theta(&a, &b, &t);
+        (theta - raw0).abs() < std::f64::consts::PI
+            && theta.min(std::f64::consts::TAU - theta) >= keep
     };
     let mut fraction = limit;
     let mut halvings = 0;
