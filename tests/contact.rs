@@ -1311,7 +1311,7 @@ fn the_chord_error_of_the_sampled_surface_is_the_sagitta() {
     let scene = Scene::with_defaults("chord", mesh.clone());
     let physics = origami_fmu::model::physics(&scene);
     let asm = Assembler::new(&mesh, physics, ElementOptions::default(), &[]).unwrap();
-    let surface = ContactSurface::new(&mesh, &asm.layout, &asm.elements, n, true);
+    let surface = ContactSurface::new(&mesh, &asm.layout, &asm.elements, n, true, 0.0);
     let mut q = asm.layout.reference_state(&mesh);
     let (flat, over) = surface.chord_error(&q, 1e-12);
     assert!(flat < 1e-15 && over.is_empty(), "flat: {flat} m, {over:?}");
@@ -1399,4 +1399,82 @@ fn exact_contact_assembler(scene: &Scene, q: &[f64]) -> Assembler {
     asm.add_barrier(Box::new(term));
     asm.before_step(q, &vec![0.0; q.len()]);
     asm
+}
+
+/// A square sheet of side 1 m slit from the middle of its left side half
+/// way in along two edges (vertices 4 and 6 on the cut, split into copies;
+/// 5 where it ends), its facets joined by flat F lines.
+fn slit_square() -> Scene {
+    let text = r#"{
+        "frame_unit": "m",
+        "vertices_coords": [[0,0],[1,0],[1,1],[0,1],[0,0.5],[0.5,0.5],[0.25,0.5]],
+        "edges_vertices": [[0,1],[1,2],[2,3],[3,4],[4,0],[4,6],[6,5],
+                           [0,5],[1,5],[2,5],[3,6],[0,6],[3,5]],
+        "edges_assignment": ["B","B","B","B","B","C","C","F","F","F","F","F","F"],
+        "faces_vertices": [[0,1,5],[1,2,5],[2,3,5],[3,4,6],[3,6,5],[4,0,6],[0,5,6]]
+    }"#;
+    let (fold, _) = origami_fmu::scene::fold::parse(text, None).unwrap();
+    origami_fmu::scene::build::from_fold(&fold, Some("slit"))
+        .unwrap()
+        .0
+}
+
+/// A cut's lips lie on each other in the flat sheet. Self-contact's
+/// samples on them stand back into their own facets by the kerf, so the
+/// lips start `2 kerf` apart, out of the barrier's reach, and the sampled
+/// surface is clear at rest; the shell itself keeps the drawn line. (With
+/// the lips on each other every pair that touches in the flat sheet was
+/// left out of contact, and the checker found the lips crossing at rest.)
+#[test]
+fn a_cuts_lips_start_a_kerf_apart() {
+    let mut scene = slit_square();
+    let settings = contact_on(&mut scene, 0.3);
+    let kerf = settings.kerf();
+    assert!(kerf > 0.5 * settings.thickness * (1.0 + settings.width));
+    let mut model = Model::new(scene).unwrap();
+    model.initialize().unwrap();
+    let rep = model.check_sampled_surface(0.1).unwrap();
+    assert!(rep.is_clear(), "{:?}", rep.intersecting);
+    // The lips' facets away from the cut's end share no vertex: their
+    // sampled surfaces are the kerf's width apart.
+    assert!(
+        (rep.min_distance - 2.0 * kerf).abs() < 1e-9,
+        "lips {} m apart, kerf {kerf} m",
+        rep.min_distance
+    );
+    let gap = model.contact().unwrap().min_gap;
+    assert!(gap > 0.0, "gap at rest {gap}");
+    // The vertex copies on the cut stay where the file draws them.
+    let mesh = &model.scene().mesh;
+    for v in 0..mesh.n_vertices() {
+        let x = model.vertex_position(VertexId(v));
+        let c = mesh.coords()[v];
+        assert_eq!([x[0], x[1], x[2]], [c.x, c.y, 0.0], "vertex {v}");
+    }
+}
+
+/// Rabbit Ear's crane with a cut from a corner (two cut edges) by issue
+/// 52's drive, every crease towards +-180 deg by its sign: the facets
+/// about the cut's lips fold against each other from the first output.
+/// Contact keeps the lips apart: the sampled surface is clear and the gap
+/// never negative at every output of the fold's first fifth.
+#[test]
+fn a_cut_cranes_lips_stay_apart_as_it_folds() {
+    let path = "tests/data/rabbit-ear/crane-cp-bmvfcj-simple.fold";
+    let (mut scene, _) = origami_fmu::scene::load(path).unwrap();
+    origami_fmu::benchmarks::fold_flat_by_sign(&mut scene);
+    scene.contact = Some(scene.default_contact());
+    let mut model = Model::new(scene).unwrap();
+    model.initialize().unwrap();
+    assert_clear(&model, path);
+    let fold = common::input(&model, "fold");
+    let dt = 0.01;
+    let mut stats = common::Work::default();
+    for k in 0..20 {
+        model.set_input(fold, k as f64 * dt).unwrap();
+        model.set_input_derivative(fold, 1, 1.0).unwrap();
+        stats.advance(&mut model, dt);
+        assert_clear(&model, path);
+    }
+    eprintln!("{path}: {}", stats.line());
 }

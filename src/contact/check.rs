@@ -63,8 +63,10 @@ pub fn sample_surface(surf: &ContactSurface, q: &[f64]) -> Sampled {
 /// Check the sheet at slot vector `q` (facets sampled with `m`
 /// subdivisions); distances between facets that share no vertex are looked
 /// for up to `search` (none with 0: only crossings, which is much cheaper).
+/// A cut's lips stand back by self-contact's kerf, as on its own surface.
 pub fn check(asm: &Assembler, mesh: &Mesh, q: &[f64], m: usize, search: f64) -> IntersectionReport {
-    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false);
+    let kerf = asm.contact().map_or(0.0, |c| c.surface().kerf);
+    let surf = ContactSurface::new(mesh, &asm.layout, &asm.elements, m, false, kerf);
     check_surface(&surf, mesh, q, search)
 }
 

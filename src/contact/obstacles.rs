@@ -156,7 +156,7 @@ impl ObstacleTerm {
                 error,
             })?;
         }
-        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, false);
+        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, false, 0.0);
         let scale = SheetScale::new(mesh, elements, surf.n, settings, areal_mass, membrane);
         let xi = 0.5 * settings.thickness;
         let s_hat = settings.width * xi;

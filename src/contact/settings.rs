@@ -37,6 +37,13 @@ impl Default for ContactSettings {
 }
 
 impl ContactSettings {
+    /// How far (m) self-contact's samples on a cut's lips stand back from
+    /// the drawn line: the lips start apart by the thickness and twice the
+    /// barrier's width, out of the barrier's reach.
+    pub fn kerf(&self) -> f64 {
+        0.5 * self.thickness * (1.0 + 2.0 * self.width)
+    }
+
     /// Whether a contact term can be made with these settings: a positive
     /// thickness.
     pub(crate) fn check(&self) -> Result<(), SettingsError> {

@@ -21,6 +21,8 @@ use crate::mesh::Mesh;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 
+mod kerf;
+
 /// One contact vertex as a linear map of the slots: `x = sum c_k q[slot_k]`.
 pub type VertexMap = Vec<(usize, f64)>;
 
@@ -60,6 +62,9 @@ pub struct ContactSurface {
     /// surface's (a linear map of the slots, zero where the facet is flat),
     /// and the probe's facet.
     pub chord_probes: Vec<(VertexMap, usize)>,
+    /// How far (m) the samples on a cut's lips stand back from the drawn
+    /// line into their facets (0: none); see [`ContactSurface::new`].
+    pub kerf: f64,
 }
 
 /// Where a lattice sample sits: a mesh corner, a point of a mesh edge
@@ -118,7 +123,11 @@ fn facet_neighbours(mesh: &Mesh) -> Vec<Vec<usize>> {
 impl ContactSurface {
     /// Sample every facet of `mesh` with `n >= 1` subdivisions per side;
     /// with `chord`, also the [`ContactSurface::chord_probes`] (the contact
-    /// term's surface; a checker's or the obstacles' need none).
+    /// term's surface; a checker's or the obstacles' need none). Where two
+    /// boundary lines of the flat sheet lie on each other (a cut's lips, a
+    /// vertex where sheets only touch), the samples on them stand back into
+    /// their own facets by `kerf` (m): the lips start `2 kerf` apart, and
+    /// the chord probes still measure from the drawn surface.
     #[allow(clippy::needless_range_loop)] // i, j are lattice coordinates
     pub fn new(
         mesh: &Mesh,
@@ -126,6 +135,7 @@ impl ContactSurface {
         elements: &[ShellElement],
         n: usize,
         chord: bool,
+        kerf: f64,
     ) -> Self {
         let n = n.max(1);
         let q_ref = layout.reference_state(mesh);
@@ -134,28 +144,39 @@ impl ContactSurface {
         let mut vertex_facets: Vec<Vec<usize>> = Vec::new();
         let mut fine_tris = Vec::new();
         let mut chord_probes = Vec::new();
+        // The surface point of facet `f` at area coordinates `l` as a slot
+        // map, less the given maps with their weights.
+        let facet_map = |f: usize, l: [f64; 3], less: &[(&VertexMap, f64)]| -> VertexMap {
+            let s = elements[f].shape().values(l);
+            let mut terms: HashMap<usize, f64> = HashMap::new();
+            for (node, combo) in layout.local[f].iter().enumerate() {
+                for (slot, c) in combo.terms() {
+                    *terms.entry(slot).or_insert(0.0) += s[node] * c;
+                }
+            }
+            for (m, w) in less {
+                for &(slot, c) in m.iter() {
+                    *terms.entry(slot).or_insert(0.0) -= w * c;
+                }
+            }
+            let mut m: VertexMap = terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
+            m.sort_unstable_by_key(|&(s, _)| s);
+            m
+        };
+        // The kerf's sites first, at their recessed points; the drawn
+        // points' maps kept for the chord probes.
+        let mut drawn: HashMap<usize, VertexMap> = HashMap::new();
+        for r in kerf::recessed_sites(mesh, n, kerf) {
+            if index.contains_key(&r.site) {
+                continue;
+            }
+            index.insert(r.site, maps.len());
+            drawn.insert(maps.len(), facet_map(r.facet, r.drawn, &[]));
+            maps.push(facet_map(r.facet, r.at, &[]));
+            vertex_facets.push(Vec::new());
+        }
         for (f, tri) in mesh.triangles().iter().enumerate() {
-            let shape = elements[f].shape();
-            let local = &layout.local[f];
-            // The surface point at area coordinates `l` as a slot map, less
-            // the given maps with their weights.
-            let map_at = |l: [f64; 3], less: &[(&VertexMap, f64)]| -> VertexMap {
-                let s = shape.values(l);
-                let mut terms: HashMap<usize, f64> = HashMap::new();
-                for (node, combo) in local.iter().enumerate() {
-                    for (slot, c) in combo.terms() {
-                        *terms.entry(slot).or_insert(0.0) += s[node] * c;
-                    }
-                }
-                for (m, w) in less {
-                    for &(slot, c) in m.iter() {
-                        *terms.entry(slot).or_insert(0.0) -= w * c;
-                    }
-                }
-                let mut m: VertexMap = terms.into_iter().filter(|&(_, c)| c != 0.0).collect();
-                m.sort_unstable_by_key(|&(s, _)| s);
-                m
-            };
+            let map_at = |l: [f64; 3], less: &[(&VertexMap, f64)]| facet_map(f, l, less);
             // Lattice (i, j): area coordinates ((n-i-j), i, j) / n.
             let mut id = vec![vec![0usize; n + 1]; n + 1];
             for i in 0..=n {
@@ -204,12 +225,12 @@ impl ContactSurface {
                 }
                 let l = t.map(area);
                 let centre = std::array::from_fn(|c| (l[0][c] + l[1][c] + l[2][c]) / 3.0);
-                let less: Vec<(&VertexMap, f64)> =
-                    ids.iter().map(|&v| (&maps[v], 1.0 / 3.0)).collect();
+                let m = |v: usize| drawn.get(&v).unwrap_or(&maps[v]);
+                let less: Vec<(&VertexMap, f64)> = ids.iter().map(|&v| (m(v), 1.0 / 3.0)).collect();
                 let mut probes = vec![map_at(centre, &less)];
                 for (a, b) in [(0, 1), (1, 2), (2, 0)] {
                     let mid = std::array::from_fn(|c| 0.5 * (l[a][c] + l[b][c]));
-                    probes.push(map_at(mid, &[(&maps[ids[a]], 0.5), (&maps[ids[b]], 0.5)]));
+                    probes.push(map_at(mid, &[(m(ids[a]), 0.5), (m(ids[b]), 0.5)]));
                 }
                 chord_probes.extend(probes.into_iter().map(|m| (m, f)));
             }
@@ -284,6 +305,7 @@ impl ContactSurface {
             coarse_edges,
             neighbours,
             facet_vertices,
+            kerf,
         }
     }
 

@@ -152,7 +152,14 @@ impl ContactTerm {
         membrane: f64,
     ) -> Result<ContactTerm, SettingsError> {
         settings.check()?;
-        let surf = ContactSurface::new(mesh, layout, elements, settings.subdivisions, true);
+        let surf = ContactSurface::new(
+            mesh,
+            layout,
+            elements,
+            settings.subdivisions,
+            true,
+            settings.kerf(),
+        );
         let scale = SheetScale::new(mesh, elements, surf.n, settings, areal_mass, membrane);
         let edge = scale.side;
         // The barrier's reach, and the candidate cache's margin: a tenth of

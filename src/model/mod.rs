@@ -415,6 +415,7 @@ impl Model {
             &sys.asm.elements,
             self.surface_subdivisions(),
             false,
+            sys.asm.contact().map_or(0.0, |c| c.surface().kerf),
         ))
     }
 
