@@ -276,6 +276,21 @@ fn forged_values_with_a_valid_checksum_are_refused_and_change_nothing() {
             "term_memory",
         ),
         (
+            "a candidate cache origin of one entry",
+            Box::new(|v| forge_term_memory(v, true, json!([3.0, 0.0, 0.0, 0.0, 0.0, 0.0]))),
+            "term_memory",
+        ),
+        (
+            "a candidate cache origin entry out of order",
+            Box::new(|v| forge_origin(v, 1, json!(0.0))),
+            "term_memory",
+        ),
+        (
+            "a candidate cache origin value of 1e300",
+            Box::new(|v| forge_origin(v, 2, json!(1e300))),
+            "term_memory",
+        ),
+        (
             "memory for a term that carries none",
             Box::new(|v| forge_term_memory(v, false, json!([1.0]))),
             "term_memory",
@@ -451,6 +466,17 @@ fn forge_term_memory(v: &mut Value, contact: bool, x: Value) {
     assert!(t.len() > 1, "one memory per force term");
     let k = if contact { t.len() - 1 } else { 0 };
     t[k] = x;
+}
+
+/// Set value `at` of the last entry of contact's memory list, the last of
+/// the candidate cache's origin (kind 3), to `x`.
+fn forge_origin(v: &mut Value, at: usize, x: Value) {
+    let mem = v.pointer_mut("/model/term_memory").unwrap();
+    let contact = mem.as_array_mut().unwrap().last_mut().unwrap();
+    let list = contact.as_array_mut().unwrap();
+    let k = list.len() - 6;
+    assert_eq!(list[k], json!(3.0), "the state lists the cache's origin");
+    list[k + at] = x;
 }
 
 /// The Rust API validates what it restores too: a state with forged

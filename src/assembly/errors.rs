@@ -204,6 +204,14 @@ pub enum MemoryError {
         /// How many crease stop points there are.
         points: usize,
     },
+    /// The candidate cache's origin entries (kind 3, at the list's end)
+    /// are not the slot vector's values in order.
+    OriginEntry {
+        /// The entry's place in the list.
+        entry: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// A pair's stiffness is not a positive number up to `max`.
     PairStiffness {
         /// The pair's place in the list.
@@ -274,6 +282,9 @@ impl fmt::Display for MemoryError {
                 f,
                 "pair {pair}: {vertex} is not a contact vertex (0..{vertices})"
             ),
+            MemoryError::OriginEntry { entry, reason } => {
+                write!(f, "entry {entry} (the candidate cache's origin): {reason}")
+            }
             MemoryError::PairStiffness {
                 pair,
                 stiffness,

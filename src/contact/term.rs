@@ -91,6 +91,13 @@ pub struct ContactTerm {
     touching: bool,
     /// The step start's candidate pairs.
     cache: CandidateCache,
+    /// The slot vector at whose contact-vertex positions `cache` was
+    /// searched (empty before the first search): a saved state lists it,
+    /// so that a restored one searches the same cache and continues bit
+    /// for bit (what a step does depends on the cache it keeps).
+    cache_q: Vec<f64>,
+    /// The model's DOFs (the length of `cache_q`).
+    n_dofs: usize,
     /// A search the contact report made at a step end, with the cache's
     /// own padding: the next step start takes it instead of searching
     /// again at the same positions.
@@ -184,6 +191,8 @@ impl ContactTerm {
             project: true,
             touching: false,
             cache: CandidateCache::default(),
+            cache_q: Vec::new(),
+            n_dofs: layout.n_dofs(),
             spare: Default::default(),
             last_positions: Default::default(),
             positions: Default::default(),
@@ -336,9 +345,10 @@ impl BarrierTerm for ContactTerm {
     }
 
     fn restore_memory(&mut self, memory: &[f64]) -> Result<(), MemoryError> {
-        let (pairs, stops) = self.parse_memory(memory)?;
+        let (pairs, stops, origin) = self.parse_memory(memory)?;
         self.restored = Some(pairs);
         self.stops.set_kappas(stops);
+        self.restore_cache(origin);
         Ok(())
     }
 
@@ -384,6 +394,9 @@ impl ForceTerm for ContactTerm {
         self.surf.positions(q, &mut x);
         self.surf.positions(v, &mut vx);
         let old = self.cache_at(&x);
+        if old.is_some() {
+            self.cache_q = q.to_vec();
+        }
         self.lag_at(&x, &vx, old.as_ref());
         self.creases_near_flat = self.stops_at_step_start(asm, q, v);
     }

@@ -1,4 +1,5 @@
-//! Self-contact's memory in a saved state: the pair stiffnesses, listed by key and read back.
+//! Self-contact's memory in a saved state: the pair stiffnesses, listed by key, and where the
+//! candidate cache was searched; listed and read back.
 
 use super::ContactTerm;
 use super::pairs::{PairKey, key};
@@ -18,12 +19,23 @@ pub(super) enum Entry {
 /// The entry kind of a crease stop point in the memory list.
 const STOP_KIND: f64 = 2.0;
 
+/// The entry kind of the candidate cache's origin in the memory list: the
+/// slot vector where it was searched, four values an entry.
+const ORIGIN_KIND: f64 = 3.0;
+
+/// What a restored memory list holds: the pairs' stiffnesses by key, the
+/// stop points' ([`super::stops::UNSET`] where none is listed), and the
+/// slot vector the candidate cache was searched at (None: no search yet).
+type Parsed = (HashMap<PairKey, f64>, Vec<f64>, Option<Vec<f64>>);
+
 impl ContactTerm {
     /// The pairs' and crease stops' barrier stiffnesses as a saved state
     /// lists them (the term's memory): six numbers an entry, the pairs'
     /// (edge-edge or not, its four contact vertices, the stiffness) in key
     /// order, then the stop points' with a positive stiffness (2, the point's
-    /// index, three zeros, the stiffness) in point order.
+    /// index, three zeros, the stiffness) in point order, then the slot
+    /// vector the candidate cache was searched at (3, the entry's index,
+    /// four of its values, the last entry padded with zeros).
     pub(super) fn memory_list(&self) -> Vec<f64> {
         let pairs: Vec<(PairKey, f64)> = match &self.restored {
             Some(map) => map.iter().map(|(k, &v)| (*k, v)).collect(),
@@ -49,24 +61,54 @@ impl ContactTerm {
                 out.extend([STOP_KIND, i as f64, 0.0, 0.0, 0.0, k]);
             }
         }
+        for (i, q) in self.cache_q.chunks(4).enumerate() {
+            let mut entry = [ORIGIN_KIND, i as f64, 0.0, 0.0, 0.0, 0.0];
+            entry[2..2 + q.len()].copy_from_slice(q);
+            out.extend(entry);
+        }
         out
+    }
+
+    /// Search the candidate cache at slot vector `origin` (a restored
+    /// state's, where the saved one was searched), or drop it (none: the
+    /// next step start searches).
+    pub(super) fn restore_cache(&mut self, origin: Option<Vec<f64>>) {
+        self.cache = match &origin {
+            Some(q) => {
+                let mut x = Vec::new();
+                self.surf.positions(q, &mut x);
+                self.search_cache(&x)
+            }
+            None => Default::default(),
+        };
+        self.blocks = self.cache_blocks();
+        self.kappas.clear();
+        self.cache_q = origin.unwrap_or_default();
+        if let Ok(mut spare) = self.spare.lock() {
+            *spare = None;
+        }
     }
 
     /// The stiffnesses of a list as [`ContactTerm::memory_list`] writes it
     /// (untrusted: a restored state's): sixes of kind (0 point-triangle, 1
     /// edge-edge, 2 crease stop point), four contact-vertex ids (a stop
     /// point's index and three zeros) and a positive stiffness up to
-    /// MAX_MAGNITUDE. Returns the pairs' by key and the stop points'
-    /// ([`super::stops::UNSET`] where none is listed).
-    pub(super) fn parse_memory(
-        &self,
-        memory: &[f64],
-    ) -> Result<(HashMap<PairKey, f64>, Vec<f64>), MemoryError> {
+    /// MAX_MAGNITUDE; then, where a search was made, the candidate cache's
+    /// origin: sixes of kind 3, the entry's index and four values of the
+    /// slot vector (the last padded with zeros), each value finite up to
+    /// MAX_MAGNITUDE.
+    pub(super) fn parse_memory(&self, memory: &[f64]) -> Result<Parsed, MemoryError> {
         if !memory.len().is_multiple_of(6) {
             return Err(MemoryError::PairLength {
                 values: memory.len(),
             });
         }
+        let first = memory
+            .chunks_exact(6)
+            .position(|m| m[0] == ORIGIN_KIND)
+            .unwrap_or(memory.len() / 6);
+        let origin = self.parse_origin(&memory[6 * first..], first)?;
+        let memory = &memory[..6 * first];
         let n = self.surf.n_vertices();
         let points = self.stops.points.len();
         let entries = parse_pairs(memory, 6, |pair, m| {
@@ -105,6 +147,53 @@ impl ContactTerm {
                 Entry::Stop(i) => stops[i] = k,
             }
         }
-        Ok((pairs, stops))
+        Ok((pairs, stops, origin))
+    }
+
+    /// The cache's origin from the origin entries that end a memory list
+    /// (`list` from entry `first` on; see [`ContactTerm::parse_memory`]).
+    fn parse_origin(&self, list: &[f64], first: usize) -> Result<Option<Vec<f64>>, MemoryError> {
+        if list.is_empty() {
+            return Ok(None);
+        }
+        let n = self.n_dofs;
+        let entries = n.div_ceil(4);
+        let max = crate::scene::limits::MAX_MAGNITUDE;
+        let bad = |entry: usize, reason: String| MemoryError::OriginEntry {
+            entry: first + entry,
+            reason,
+        };
+        if list.len() != 6 * entries {
+            return Err(bad(
+                0,
+                format!(
+                    "{} entries of kind 3; the candidate cache's origin takes {entries} (four of \
+                     the {n} DOFs each), the last ones of the list",
+                    list.len() / 6
+                ),
+            ));
+        }
+        let mut q = Vec::with_capacity(n);
+        for (i, m) in list.chunks_exact(6).enumerate() {
+            if m[0] != ORIGIN_KIND || m[1] != i as f64 {
+                return Err(bad(
+                    i,
+                    format!("({}, {}, ...) is not (3, {i}, ...)", m[0], m[1]),
+                ));
+            }
+            for (j, &x) in m[2..].iter().enumerate() {
+                let dof = 4 * i + j;
+                if dof >= n && x != 0.0 {
+                    return Err(bad(i, format!("{x} past the {n} DOFs is not 0")));
+                }
+                if !(x.is_finite() && x.abs() <= max) {
+                    return Err(bad(i, format!("{x} is not a finite number up to {max:e}")));
+                }
+                if dof < n {
+                    q.push(x);
+                }
+            }
+        }
+        Ok(Some(q))
     }
 }
