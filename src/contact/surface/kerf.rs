@@ -27,13 +27,16 @@ pub(super) struct Recessed {
 /// the copied corners. Empty where no two boundary lines lie on each other.
 pub(super) fn recessed_sites(mesh: &Mesh, n: usize, delta: f64) -> Vec<Recessed> {
     let mut out = Vec::new();
+    if delta.is_nan() || delta <= 0.0 {
+        return out;
+    }
     let group = coincident(mesh.coords(), 1e-9 * mesh.size());
     let copied: Vec<bool> = {
         let mut count = vec![0usize; group.len()];
         group.iter().for_each(|&g| count[g] += 1);
         group.iter().map(|&g| count[g] > 1).collect()
     };
-    if delta.is_nan() || delta <= 0.0 || !copied.iter().any(|&c| c) {
+    if !copied.iter().any(|&c| c) {
         return out;
     }
     let x = |v: VertexId| mesh.coord(v);
