@@ -96,6 +96,9 @@ pub struct ContactTerm {
     /// so that a restored one searches the same cache and continues bit
     /// for bit (what a step does depends on the cache it keeps).
     cache_q: Vec<f64>,
+    /// Whether the cache is still to be searched at `cache_q` (a restored
+    /// state's origin), at the next step start.
+    cache_pending: bool,
     /// The model's DOFs (the length of `cache_q`).
     n_dofs: usize,
     /// A search the contact report made at a step end, with the cache's
@@ -192,6 +195,7 @@ impl ContactTerm {
             touching: false,
             cache: CandidateCache::default(),
             cache_q: Vec::new(),
+            cache_pending: false,
             n_dofs: layout.n_dofs(),
             spare: Default::default(),
             last_positions: Default::default(),
@@ -393,10 +397,7 @@ impl ForceTerm for ContactTerm {
         let mut vx = Vec::new();
         self.surf.positions(q, &mut x);
         self.surf.positions(v, &mut vx);
-        let old = self.cache_at(&x);
-        if old.is_some() {
-            self.cache_q = q.to_vec();
-        }
+        let old = self.cache_at(q, &x);
         self.lag_at(&x, &vx, old.as_ref());
         self.creases_near_flat = self.stops_at_step_start(asm, q, v);
     }

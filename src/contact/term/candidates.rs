@@ -483,11 +483,28 @@ impl ContactTerm {
     /// motions up to the margin), unless the last search covers `x`
     /// with half its margin to spare. (Pairs are in a canonical order, so
     /// which search found them does not change a result.)
-    /// Returns the cache it replaced, if it searched.
-    pub(super) fn cache_at(&mut self, x: &[Vector3<f64>]) -> Option<CandidateCache> {
+    /// Returns the cache it replaced, if it searched. `q` is the slot
+    /// vector of `x`, kept as where the cache was searched; a restored
+    /// state's cache is searched here, at the saved origin, where that
+    /// covers `x` as the saved cache did.
+    pub(super) fn cache_at(&mut self, q: &[f64], x: &[Vector3<f64>]) -> Option<CandidateCache> {
         let pad = self.xi + self.s_hat;
         let margin = self.cache_margin;
-        if self.cache.covers(x, None, pad, 0.5 * margin) {
+        if std::mem::take(&mut self.cache_pending) {
+            let mut x0 = Vec::new();
+            self.surf.positions(&self.cache_q, &mut x0);
+            let origin = CandidateCache {
+                x0,
+                pad,
+                pairs: Vec::new(),
+            };
+            if origin.covers(x, None, pad, 0.5 * margin) {
+                let cache = self.search_cache(&origin.x0);
+                let old = std::mem::replace(&mut self.cache, cache);
+                self.blocks = self.cache_blocks();
+                return Some(old);
+            }
+        } else if self.cache.covers(x, None, pad, 0.5 * margin) {
             return None;
         }
         let spare = self.spare.get_mut().ok().and_then(Option::take);
@@ -497,6 +514,7 @@ impl ContactTerm {
         };
         let old = std::mem::replace(&mut self.cache, cache);
         self.blocks = self.cache_blocks();
+        self.cache_q = q.to_vec();
         Some(old)
     }
 

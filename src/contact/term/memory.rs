@@ -69,20 +69,16 @@ impl ContactTerm {
         out
     }
 
-    /// Search the candidate cache at slot vector `origin` (a restored
-    /// state's, where the saved one was searched), or drop it (none: the
-    /// next step start searches).
+    /// Drop the candidate cache; with `origin` (a restored state's: the
+    /// slot vector where the saved cache was searched), the next step start
+    /// searches it there where it covers that step start as the saved one
+    /// did (so a forged origin is searched only within the cache's margin
+    /// of the state's own positions), else at the step start.
     pub(super) fn restore_cache(&mut self, origin: Option<Vec<f64>>) {
-        self.cache = match &origin {
-            Some(q) => {
-                let mut x = Vec::new();
-                self.surf.positions(q, &mut x);
-                self.search_cache(&x)
-            }
-            None => Default::default(),
-        };
-        self.blocks = self.cache_blocks();
+        self.cache = Default::default();
+        self.blocks.clear();
         self.kappas.clear();
+        self.cache_pending = origin.is_some();
         self.cache_q = origin.unwrap_or_default();
         if let Ok(mut spare) = self.spare.lock() {
             *spare = None;
