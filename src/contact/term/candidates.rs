@@ -547,7 +547,7 @@ impl ContactTerm {
 
     /// Every slot pair `(a, b)`, `a < b`, among the slots of each of
     /// `cache.pairs` (sorted).
-    pub(super) fn cache_blocks(&self) -> Vec<(usize, usize)> {
+    fn cache_blocks(&self) -> Vec<(usize, usize)> {
         // Pairs between the same facets share their slots: each set once.
         let mut sets: Vec<Vec<usize>> = self
             .cache
