@@ -23,7 +23,7 @@
 //!
 //! `cargo bench --bench contact_patterns -- [--patterns miura,yoshimura,kresling,waterbomb,smallbird,bird,wbtess]
 //! [--fold PATH ...] [--scene PATH ...] [--contact on|off|both] [--no-check] [--cpu-limit S]
-//! [--ramp S] [--hold S] [--back S] [--held] [--subdivisions N] [--rule-off NAME]` (the suite runs unless `--fold` or `--scene` alone are given)
+//! [--frame N] [--ramp S] [--hold S] [--back S] [--held] [--subdivisions N] [--rule-off NAME]` (the suite runs unless `--fold` or `--scene` alone are given)
 //! (`--patterns pyramid` adds Origami Simulator's BoxPleatPyramid to its own
 //! targets, not flat and not in the default list; `--cpu-limit S` stops a
 //! run once its fold and its checks together have taken S CPU s, reported
@@ -32,7 +32,7 @@
 //! degrees by their sign; `--scene PATH` a scene as it is, its own targets
 //! or folding sequence (`ancf:sequence`, keyframes), the flat-fold error
 //! against the flat-folding map of its final fold angles where they are all
-//! 0 or +-180 degrees. `--ramp S` and `--hold S` set the drive: the `fold`
+//! 0 or +-180 degrees; `--frame N` reads those files' frame N. `--ramp S` and `--hold S` set the drive: the `fold`
 //! input from 0 to 1 over S s, then held for S s (defaults 1 and 0.5);
 //! `--back S` then returns it to 0 over S s and holds it the same time
 //! again (issue 52's deployment: the last column is the largest |fold
@@ -410,13 +410,24 @@ fn main() {
         };
         scenes.push((name.to_string(), scene, flat));
     }
+    // `--frame N`: the files' frame N (a file whose first frame is folded).
+    let options = origami_fmu::scene::LoadOptions {
+        frame: value("--frame")
+            .map(|n| origami_fmu::scene::FrameSelector::Index(n.parse().unwrap())),
+        ..Default::default()
+    };
+    let read = |f: &str| {
+        origami_fmu::scene::load_with(f, &options)
+            .unwrap_or_else(|e| panic!("{f} does not load: {e}"))
+            .0
+    };
     for f in &folds {
-        let (mut s, _) = origami_fmu::scene::load(f).unwrap();
+        let mut s = read(f);
         fold_flat_by_sign(&mut s);
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, true));
     }
     for f in &own {
-        let (s, _) = origami_fmu::scene::load(f).unwrap();
+        let s = read(f);
         let flat = ends_flat(&final_targets(&s));
         scenes.push((f.rsplit('/').next().unwrap_or(f).to_string(), s, flat));
     }
