@@ -297,9 +297,6 @@ fn stop_fraction(
     let mut fraction = limit;
     let mut halvings = 0;
     loop {
-        if bounded(fraction) {
-            return fraction;
-        }
         // The first of fraction, fraction / 2, ... (down to the bound) that
         // is not clear: the fraction falls below it.
         let mut alpha = fraction;
