@@ -490,7 +490,7 @@ impl ContactTerm {
     pub(super) fn cache_at(&mut self, q: &[f64], x: &[Vector3<f64>]) -> Option<CandidateCache> {
         let pad = self.xi + self.s_hat;
         let margin = self.cache_margin;
-        if std::mem::take(&mut self.cache_pending) {
+        let restored = if std::mem::take(&mut self.cache_pending) {
             let mut x0 = Vec::new();
             self.surf.positions(&self.cache_q, &mut x0);
             let origin = CandidateCache {
@@ -498,23 +498,24 @@ impl ContactTerm {
                 pad,
                 pairs: Vec::new(),
             };
-            if origin.covers(x, None, pad, 0.5 * margin) {
-                let cache = self.search_cache(&origin.x0);
-                let old = std::mem::replace(&mut self.cache, cache);
-                self.blocks = self.cache_blocks();
-                return Some(old);
-            }
+            origin
+                .covers(x, None, pad, 0.5 * margin)
+                .then(|| self.search_cache(&origin.x0))
         } else if self.cache.covers(x, None, pad, 0.5 * margin) {
             return None;
-        }
-        let spare = self.spare.get_mut().ok().and_then(Option::take);
-        let cache = match spare.filter(|c| c.pad == pad && c.x0 == x) {
-            Some(c) => c,
-            None => self.search_cache(x),
+        } else {
+            None
         };
+        let cache = restored.unwrap_or_else(|| {
+            self.cache_q = q.to_vec();
+            let spare = self.spare.get_mut().ok().and_then(Option::take);
+            match spare.filter(|c| c.pad == pad && c.x0 == x) {
+                Some(c) => c,
+                None => self.search_cache(x),
+            }
+        });
         let old = std::mem::replace(&mut self.cache, cache);
         self.blocks = self.cache_blocks();
-        self.cache_q = q.to_vec();
         Some(old)
     }
 
