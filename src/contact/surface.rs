@@ -48,7 +48,7 @@ pub struct ContactSurface {
     /// Facets that share a mesh vertex with each facet, itself included
     /// (sorted).
     pub neighbours: Vec<Vec<usize>>,
-    /// Contact vertices of each facet (its samples).
+    /// Contact vertices of each facet (its samples, sorted).
     pub facet_vertices: Vec<Vec<usize>>,
     /// Fine triangles of each facet (indices into `fine_tris`).
     pub facet_fine_tris: Vec<Vec<usize>>,

@@ -109,6 +109,14 @@ impl<'a> Search<'a> {
     fn near(&self, h: usize, ids: &[usize]) -> bool {
         self.slabs[h].is_none_or(|sl| sl.near(ids, self.x, self.dx, self.pad))
     }
+
+    /// Codes of facet `a`'s samples `ids` against facet `b`'s slab, into
+    /// `codes`.
+    fn fill(&self, codes: &mut Codes, ids: &[usize], b: usize) {
+        for &i in ids {
+            codes.0[i] = self.slabs[b].map_or(0, |sl| sl.code(i, self.x, self.dx, self.pad));
+        }
+    }
 }
 
 /// The box of the primitive with samples `ids`: the union of their boxes
@@ -117,19 +125,46 @@ fn union(samples: &[Aabb], ids: &[usize]) -> Aabb {
     Aabb::around_boxes(ids.iter().map(|&i| &samples[i]))
 }
 
-/// A facet's slab: the unit normal of its corner triangle and the span of
-/// its samples (with their swept ends) along it. Every primitive of the
-/// facet lies in the hull of its samples, so points whose span along the
-/// normal stays more than `pad` outside the slab are farther than `pad`
-/// from every primitive of the facet.
+/// A facet's slab: the unit normal of its corner triangle and the unit
+/// normals of that triangle's sides within its plane, with the span of the
+/// facet's samples (and their swept ends) along each. Every primitive of
+/// the facet lies in the hull of its samples, so points whose span along
+/// any of these axes stays more than `pad` outside the facet's are farther
+/// than `pad` from every primitive of the facet. The in-plane axes
+/// separate facets side by side in a sheet lying flat, which the normal
+/// alone cannot.
 #[derive(Clone, Copy)]
 struct Slab {
-    axis: Vector3<f64>,
-    lo: f64,
-    hi: f64,
+    axes: [Vector3<f64>; 4],
+    lo: [f64; 4],
+    hi: [f64; 4],
 }
 
 impl Slab {
+    /// The slab of a facet with corner triangle `c` and samples `ids` at `x`
+    /// (swept by `dx`); None where the triangle has no normal.
+    fn new(
+        c: [Vector3<f64>; 3],
+        ids: &[usize],
+        x: &[Vector3<f64>],
+        dx: Option<&[Vector3<f64>]>,
+    ) -> Option<Slab> {
+        let normal = (c[1] - c[0]).cross(&(c[2] - c[0])).try_normalize(0.0)?;
+        let side = |k: usize| {
+            (c[(k + 1) % 3] - c[k])
+                .cross(&normal)
+                .try_normalize(0.0)
+                .unwrap_or(normal)
+        };
+        let axes = [normal, side(0), side(1), side(2)];
+        let spans = axes.map(|axis| span(&axis, ids, x, dx));
+        Some(Slab {
+            axes,
+            lo: spans.map(|(lo, _)| lo),
+            hi: spans.map(|(_, hi)| hi),
+        })
+    }
+
     /// Whether points `ids` (and their swept ends) may come within `pad` of
     /// the facet.
     fn near(
@@ -139,8 +174,41 @@ impl Slab {
         dx: Option<&[Vector3<f64>]>,
         pad: f64,
     ) -> bool {
-        let (lo, hi) = span(&self.axis, ids, x, dx);
-        !(lo - self.hi > pad || self.lo - hi > pad)
+        (0..4).all(|k| {
+            let (lo, hi) = span(&self.axes[k], ids, x, dx);
+            !(lo - self.hi[k] > pad || self.lo[k] - hi > pad)
+        })
+    }
+
+    /// Where point `i` (and its swept end) lies against the slab: bit `2k`
+    /// set where it is more than `pad` below the span along axis `k`, bit
+    /// `2k + 1` where more than `pad` above. Points whose codes share a
+    /// bit are all on one side of one axis, out of reach of the facet (the
+    /// test of [`Slab::near`], point by point).
+    fn code(&self, i: usize, x: &[Vector3<f64>], dx: Option<&[Vector3<f64>]>, pad: f64) -> u8 {
+        let mut code = 0;
+        for k in 0..4 {
+            let a = self.axes[k].dot(&x[i]);
+            let b = dx.map_or(a, |d| self.axes[k].dot(&(x[i] + d[i])));
+            if a.max(b) < self.lo[k] - pad {
+                code |= 1 << (2 * k);
+            } else if a.min(b) > self.hi[k] + pad {
+                code |= 2 << (2 * k);
+            }
+        }
+        code
+    }
+}
+
+/// Samples against a facet's [`Slab`]: their codes, by sample (only the
+/// samples of the facet they were last filled for hold theirs).
+struct Codes(Vec<u8>);
+
+impl Codes {
+    /// Whether the primitive with samples `ids` (all of the filled facet's)
+    /// may come within the pad of the other facet.
+    fn near(&self, ids: &[usize]) -> bool {
+        ids.iter().fold(u8::MAX, |c, &i| c & self.0[i]) == 0
     }
 }
 
@@ -301,17 +369,15 @@ impl ContactTerm {
     /// triangle has no normal.
     fn slab(&self, x: &[Vector3<f64>], dx: Option<&[Vector3<f64>]>, h: usize) -> Option<Slab> {
         let s = &self.surf;
-        let c = s.coarse_tri(&self.mesh, h).map(|i| x[i]);
-        let axis = (c[1] - c[0]).cross(&(c[2] - c[0])).try_normalize(0.0)?;
-        let (lo, hi) = span(&axis, &s.facet_vertices[h], x, dx);
-        Some(Slab { axis, lo, hi })
+        let corners = s.coarse_tri(&self.mesh, h).map(|i| x[i]);
+        Slab::new(corners, &s.facet_vertices[h], x, dx)
     }
 
-    /// Whether facets `f` and `g` are more than `pad` apart along the
-    /// normal of either one's corner triangle: the samples of each (and
-    /// their swept ends) projected on it, every primitive of a facet being
-    /// in their hull. Tilted facets' boxes overlap far more often than the
-    /// facets come near.
+    /// Whether facets `f` and `g` are more than `pad` apart along an axis
+    /// of either one's [`Slab`]: the samples of each (and their swept ends)
+    /// projected on it, every primitive of a facet being in their hull.
+    /// Tilted facets' boxes overlap far more often than the facets come
+    /// near.
     fn facets_apart(&self, search: &Search, (f, g): (usize, usize)) -> bool {
         let s = &self.surf;
         !search.near(f, &s.facet_vertices[g]) || !search.near(g, &s.facet_vertices[f])
@@ -338,6 +404,7 @@ impl ContactTerm {
             let c = s.coarse_tri(&self.mesh, f).map(|i| x[i]);
             (c[1] - c[0]).cross(&(c[2] - c[0]))
         };
+        let (mut cf, mut cg) = (self.codes(), self.codes());
         for &(f, g) in near {
             if self.share_a_corner_only(f, g) || normal(f).dot(&normal(g)) >= 0.0 {
                 continue;
@@ -348,30 +415,50 @@ impl ContactTerm {
                     out.push(Pair { xi, ..pair });
                 }
             };
-            for (a, b) in [(f, g), (g, f)] {
-                self.samples_against(a, b, search, &mut keep);
-            }
-            self.fine_edges_against(f, g, search, &mut keep);
+            self.fill_codes(search, (f, &mut cf), (g, &mut cg));
+            self.samples_against((f, &cf), (g, &cg), search, &mut keep);
+            self.samples_against((g, &cg), (f, &cf), search, &mut keep);
+            self.fine_edges_against((f, &cf), (g, &cg), search, &mut keep);
         }
+    }
+
+    /// Facet `f`'s samples against `g`'s slab into `cf`, `g`'s against
+    /// `f`'s into `cg`.
+    fn fill_codes(
+        &self,
+        search: &Search,
+        (f, cf): (usize, &mut Codes),
+        (g, cg): (usize, &mut Codes),
+    ) {
+        let s = &self.surf;
+        search.fill(cf, &s.facet_vertices[f], g);
+        search.fill(cg, &s.facet_vertices[g], f);
     }
 
     /// Edge-edge pairs (at the full thickness) of facet `f`'s fine edges
     /// near facet `g` against `g`'s near `f`, sharing no sample and with
-    /// overlapping boxes, into `sink`.
-    fn fine_edges_against(&self, f: usize, g: usize, search: &Search, sink: &mut dyn FnMut(Pair)) {
+    /// overlapping boxes, into `sink`; `cf`, `cg`: each facet's samples
+    /// against the other's slab.
+    fn fine_edges_against(
+        &self,
+        (f, cf): (usize, &Codes),
+        (g, cg): (usize, &Codes),
+        search: &Search,
+        sink: &mut dyn FnMut(Pair),
+    ) {
         let s = &self.surf;
-        let edges_near = |h: usize, other: usize| -> Vec<usize> {
+        let edges_near = |h: usize, codes: &Codes| -> Vec<usize> {
             s.facet_fine_edges[h]
                 .iter()
                 .copied()
-                .filter(|&k| search.near(other, &s.fine_edges[k].0))
+                .filter(|&k| codes.near(&s.fine_edges[k].0))
                 .collect()
         };
-        let ef = edges_near(f, g);
+        let ef = edges_near(f, cf);
         if ef.is_empty() {
             return;
         }
-        let eg = edges_near(g, f);
+        let eg = edges_near(g, cg);
         for &i in &ef {
             for &j in &eg {
                 let (a, b) = (s.fine_edges[i].0, s.fine_edges[j].0);
@@ -384,19 +471,26 @@ impl ContactTerm {
 
     /// Point-triangle pairs (at the full thickness) of facet `a`'s samples
     /// off facet `b` against `b`'s sub-triangles, each near the other's
-    /// facet and their boxes overlapping, into `sink`.
-    fn samples_against(&self, a: usize, b: usize, search: &Search, sink: &mut dyn FnMut(Pair)) {
+    /// facet and their boxes overlapping, into `sink`; `ca`, `cb`: each
+    /// facet's samples against the other's slab.
+    fn samples_against(
+        &self,
+        (a, ca): (usize, &Codes),
+        (b, cb): (usize, &Codes),
+        search: &Search,
+        sink: &mut dyn FnMut(Pair),
+    ) {
         let s = &self.surf;
         let tris: Vec<usize> = s.facet_fine_tris[b]
             .iter()
             .copied()
-            .filter(|&k| search.near(a, &s.fine_tris[k].0))
+            .filter(|&k| cb.near(&s.fine_tris[k].0))
             .collect();
         if tris.is_empty() {
             return;
         }
         for &p in &s.facet_vertices[a] {
-            if s.vertex_facets[p].binary_search(&b).is_ok() || !search.near(b, &[p]) {
+            if s.vertex_facets[p].binary_search(&b).is_ok() || ca.0[p] != 0 {
                 continue;
             }
             for &k in &tris {
@@ -412,6 +506,11 @@ impl ContactTerm {
                 }
             }
         }
+    }
+
+    /// Room for every sample's code.
+    fn codes(&self) -> Codes {
+        Codes(vec![0; self.surf.n_vertices()])
     }
 
     /// The share of the thickness a pair between neighbouring facets keeps:
@@ -444,6 +543,7 @@ impl ContactTerm {
     /// holds keep its thickness.
     fn corner_pairs(&self, search: &Search, near: &[(usize, usize)], out: &mut Vec<Pair>) {
         let mut mine = Vec::new();
+        let (mut cf, mut cg) = (self.codes(), self.codes());
         let thin = |pair: Pair| {
             let xi = self.wedge_share(&pair).max(NEIGHBOUR_MIN * self.xi);
             Pair { xi, ..pair }
@@ -452,10 +552,11 @@ impl ContactTerm {
             .iter()
             .filter(|&&(f, g)| self.share_a_corner_only(f, g))
         {
-            for (a, b) in [(f, g), (g, f)] {
-                self.samples_against(a, b, search, &mut |pair| mine.push(thin(pair)));
-            }
-            self.fine_edges_against(f, g, search, &mut |pair| mine.push(thin(pair)));
+            self.fill_codes(search, (f, &mut cf), (g, &mut cg));
+            let mut sink = |pair| mine.push(thin(pair));
+            self.samples_against((f, &cf), (g, &cg), search, &mut sink);
+            self.samples_against((g, &cg), (f, &cf), search, &mut sink);
+            self.fine_edges_against((f, &cf), (g, &cg), search, &mut sink);
         }
         mine.sort_unstable_by_key(key);
         mine.dedup_by_key(|p| key(p));
@@ -575,5 +676,149 @@ impl ContactTerm {
         out.sort_unstable();
         out.dedup();
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::XorShift;
+
+    /// Ten samples about a triangle in the plane z = 0, lifted by up to
+    /// `bend` and moved by up to `sweep` (the swept ends), the first three
+    /// its corners.
+    fn facet(rng: &mut XorShift, bend: f64, sweep: f64) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+        let c = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(rng.range(0.5, 1.5), rng.range(-0.3, 0.3), 0.0),
+            Vector3::new(rng.range(-0.3, 0.8), rng.range(0.5, 1.5), 0.0),
+        ];
+        let mut x = c.to_vec();
+        for _ in 3..10 {
+            let (a, b) = (rng.uniform(), rng.uniform());
+            let (a, b) = if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
+            let mut p = c[0] + (c[1] - c[0]) * a + (c[2] - c[0]) * b;
+            p.z += rng.range(-bend, bend);
+            x.push(p);
+        }
+        let dx = (0..10)
+            .map(|_| {
+                Vector3::new(
+                    rng.range(-sweep, sweep),
+                    rng.range(-sweep, sweep),
+                    rng.range(-sweep, sweep),
+                )
+            })
+            .collect();
+        (x, dx)
+    }
+
+    /// A random point of the hull of `pts`.
+    fn hull_point(rng: &mut XorShift, pts: &[Vector3<f64>]) -> Vector3<f64> {
+        let w: Vec<f64> = pts
+            .iter()
+            .map(|_| -rng.uniform().max(1e-300).ln())
+            .collect();
+        let sum: f64 = w.iter().sum();
+        pts.iter().zip(&w).map(|(p, w)| p * (w / sum)).sum()
+    }
+
+    #[test]
+    fn a_samples_codes_agree_with_the_slabs_spans() {
+        let mut rng = XorShift(0x5eed_51ab);
+        for case in 0..200 {
+            let (mut x, mut dx) = facet(&mut rng, 0.1, 0.05);
+            // Points about the facet, out of and within its reach.
+            for _ in 0..30 {
+                x.push(Vector3::new(
+                    rng.range(-1.0, 2.0),
+                    rng.range(-1.0, 2.0),
+                    rng.range(-0.6, 0.6),
+                ));
+                dx.push(Vector3::new(
+                    rng.range(-0.1, 0.1),
+                    rng.range(-0.1, 0.1),
+                    rng.range(-0.1, 0.1),
+                ));
+            }
+            let ids: Vec<usize> = (0..10).collect();
+            let swept = (case % 2 == 1).then_some(dx.as_slice());
+            let corners = [x[0], x[1], x[2]];
+            let slab = Slab::new(corners, &ids, &x, swept).expect("a normal");
+            let pad = rng.range(0.0, 0.3);
+            let codes = Codes((0..x.len()).map(|i| slab.code(i, &x, swept, pad)).collect());
+            for _ in 0..50 {
+                let prim: Vec<usize> = (0..1 + rng.below(3)).map(|_| 10 + rng.below(30)).collect();
+                assert_eq!(
+                    codes.near(&prim),
+                    slab.near(&prim, &x, swept, pad),
+                    "case {case}, points {prim:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn what_a_slab_leaves_out_is_farther_than_the_pad() {
+        let mut rng = XorShift(0xfa7_5ab);
+        let mut left_out = 0;
+        for case in 0..300 {
+            let (mut x, _) = facet(&mut rng, 0.1, 0.0);
+            for _ in 0..3 {
+                x.push(Vector3::new(
+                    rng.range(-1.0, 2.0),
+                    rng.range(-1.0, 2.0),
+                    rng.range(-0.5, 0.5),
+                ));
+            }
+            let ids: Vec<usize> = (0..10).collect();
+            let slab = Slab::new([x[0], x[1], x[2]], &ids, &x, None).expect("a normal");
+            let pad = rng.range(0.01, 0.3);
+            let prim = [10, 11, 12];
+            if slab.near(&prim, &x, None, pad) {
+                continue;
+            }
+            left_out += 1;
+            let facet: Vec<Vector3<f64>> = x[..10].to_vec();
+            let tri: Vec<Vector3<f64>> = x[10..].to_vec();
+            for _ in 0..400 {
+                let (p, q) = (hull_point(&mut rng, &facet), hull_point(&mut rng, &tri));
+                assert!(
+                    (p - q).norm() > pad,
+                    "case {case}: {} <= pad {pad}",
+                    (p - q).norm()
+                );
+            }
+        }
+        assert!(
+            left_out > 50,
+            "{left_out} of 300 cases left out: the test tests little"
+        );
+    }
+
+    #[test]
+    fn facets_side_by_side_in_a_flat_sheet_are_apart() {
+        // Two triangles in one plane, 0.1 apart across a diagonal gap: the
+        // normal alone cannot part them, the sides' normals do.
+        let x = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(1.0, 0.1, 0.0),
+            Vector3::new(1.0, 1.1, 0.0),
+            Vector3::new(0.1, 1.1, 0.0),
+        ];
+        let slab = Slab::new([x[0], x[1], x[2]], &[0, 1, 2], &x, None).expect("a normal");
+        assert!(!slab.near(&[3, 4, 5], &x, None, 0.05));
+        assert!(slab.near(&[3, 4, 5], &x, None, 0.08));
+        let mut normal_only = slab;
+        normal_only.axes = [slab.axes[0]; 4];
+        normal_only.lo = [slab.lo[0]; 4];
+        normal_only.hi = [slab.hi[0]; 4];
+        assert!(normal_only.near(&[3, 4, 5], &x, None, 0.05));
     }
 }
