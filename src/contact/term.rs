@@ -204,7 +204,7 @@ impl ContactTerm {
             restored: None,
             blocks: Vec::new(),
             flat_width: settings.thickness / edge,
-            stops: Stops::new(stop_points(mesh, layout, elements)),
+            stops: Stops::new(stop_points(mesh, layout, elements), layout),
             creases_near_flat: false,
         })
     }

@@ -19,8 +19,10 @@ pub(super) struct StopPoint {
     /// Share of the crease's length (m) the point stands for.
     length: f64,
     maps: [crate::contact::surface::VertexMap; 3],
-    /// Each map's sum of |coefficient|: `|x(q) - x(r)| <= l1 max_s |q_s - r_s|`.
-    l1: [f64; 3],
+    /// Each map's sums of |coefficient| over its position slots and over
+    /// its gradient slots: `|x(q) - x(r)| <= l1[0] max_p |q_p - r_p| +
+    /// l1[1] max_g |q_g - r_g|` (p position slots, g gradient slots).
+    l1: [[f64; 2]; 3],
 }
 
 /// The crease stops' points, by crease edge, and for each edge the state
@@ -50,19 +52,23 @@ impl StopPoint {
     }
 }
 
-/// One crease edge's points and the slots their maps read.
+/// One crease edge's points, the slots their maps read and each slot's
+/// kind (0 position, 1 gradient).
 struct StopEdge {
     points: std::ops::Range<usize>,
     slots: Vec<usize>,
+    kinds: Vec<usize>,
 }
 
 /// An edge's reference: its slots' values where its points were last
-/// evaluated, and the largest move of any slot (m) that keeps every point
-/// clear; negative where none does.
+/// evaluated, and the rates `[A, B]` at which the largest moves of its
+/// position slots (m) and gradient slots use up the room of its points:
+/// moves with `A dp + B dg < 1` keep every point clear (see
+/// [`allowance`]); None where no move does.
 #[derive(Clone, Default)]
 struct EdgeRef {
     q: Vec<Vector3<f64>>,
-    allow: f64,
+    rates: Option<[f64; 2]>,
 }
 
 /// Slot `s`'s vector in `q`.
@@ -71,27 +77,32 @@ fn slot(q: &[f64], s: usize) -> Vector3<f64> {
 }
 
 impl EdgeRef {
-    /// Take `q` as the reference of `edge`, with its allowance.
-    fn set(&mut self, edge: &StopEdge, q: &[f64], allow: f64) {
+    /// Take `q` as the reference of `edge`, with its allowance's rates.
+    fn set(&mut self, edge: &StopEdge, q: &[f64], rates: Option<[f64; 2]>) {
         self.q.clear();
         self.q.extend(edge.slots.iter().map(|&s| slot(q, s)));
-        self.allow = allow;
+        self.rates = rates;
     }
 
     /// Whether every slot of `edge` at `q` (and along `q + alpha dq`,
     /// alpha in [0, 1]) is within the reference's allowance.
     fn covers(&self, edge: &StopEdge, q: &[f64], dq: Option<&[f64]>) -> bool {
-        if self.allow <= 0.0 || self.q.len() != edge.slots.len() {
+        let Some(rates) = self.rates else {
+            return false;
+        };
+        if self.q.len() != edge.slots.len() {
             return false;
         }
-        let (mut moved, mut step) = (0.0f64, 0.0f64);
-        for (&s, r) in edge.slots.iter().zip(&self.q) {
-            moved = moved.max((slot(q, s) - r).norm_squared());
+        // Largest moves (squared) and steps, by slot kind.
+        let (mut moved, mut step) = ([0.0f64; 2], [0.0f64; 2]);
+        for ((&s, &kind), r) in edge.slots.iter().zip(&edge.kinds).zip(&self.q) {
+            moved[kind] = moved[kind].max((slot(q, s) - r).norm_squared());
             if let Some(d) = dq {
-                step = step.max(slot(d, s).norm_squared());
+                step[kind] = step[kind].max(slot(d, s).norm_squared());
             }
         }
-        moved.sqrt() + step.sqrt() < self.allow
+        let reach = |k: usize| moved[k].sqrt() + step[k].sqrt();
+        rates[0] * reach(0) + rates[1] * reach(1) < 1.0
     }
 }
 
@@ -104,6 +115,11 @@ pub(super) const UNSET: f64 = -1.0;
 /// other along it (at a sixteenth of a facet from the crease) with only
 /// the ends stopped.
 const STOP_POINTS: usize = 9;
+
+/// Slot `s`'s kind as an index: 0 position, 1 gradient.
+fn slot_kind(layout: &DofLayout, s: usize) -> usize {
+    usize::from(layout.slot_kind[s] != crate::dofs::SlotKind::Position)
+}
 
 /// The crease stops' points: [`STOP_POINTS`] along every crease edge.
 pub(super) fn stop_points(
@@ -165,7 +181,11 @@ pub(super) fn stop_points(
             }
             if let (Some(a), Some(b), Some(t)) = (right, left, tangent) {
                 let l1 = |m: &crate::contact::surface::VertexMap| {
-                    m.iter().map(|&(_, c)| c.abs()).sum::<f64>()
+                    let mut sums = [0.0; 2];
+                    for &(s, c) in m {
+                        sums[slot_kind(layout, s)] += c.abs();
+                    }
+                    sums
                 };
                 out.push(StopPoint {
                     edge: e,
@@ -195,7 +215,7 @@ impl Stops {
 
     /// The stops at `points`, grouped by crease edge (each edge's points
     /// are consecutive), none with a reference yet.
-    pub(super) fn new(points: Vec<StopPoint>) -> Stops {
+    pub(super) fn new(points: Vec<StopPoint>, layout: &DofLayout) -> Stops {
         let mut edges: Vec<StopEdge> = Vec::new();
         for (i, sp) in points.iter().enumerate() {
             match edges.last_mut() {
@@ -203,6 +223,7 @@ impl Stops {
                 _ => edges.push(StopEdge {
                     points: i..i + 1,
                     slots: Vec::new(),
+                    kinds: Vec::new(),
                 }),
             }
         }
@@ -213,6 +234,7 @@ impl Stops {
                 .collect();
             slots.sort_unstable();
             slots.dedup();
+            edge.kinds = slots.iter().map(|&s| slot_kind(layout, s)).collect();
             edge.slots = slots;
         }
         let refs = std::sync::Mutex::new(vec![EdgeRef::default(); edges.len()]);
@@ -228,24 +250,45 @@ impl Stops {
     }
 }
 
-/// How far (m) every slot of a stop point's maps may move from where its
-/// vectors are `[a, b, t]` (gap to flat `gap`) while the point stays at
-/// least `width` from flat and turns by less than a radian (so the
-/// collision check's wrap test holds too): with `|dx| <= l1 d`, [`stop_turn_bound`]
-/// is at most `pi/2 d (K_a / |a x t| + K_b / |b x t|)`, `K = 2 l1_x |t| + |x|
-/// l1_t`, for `d <= |t| / l1_t`. Negative where no move is allowed.
-fn allowance([a, b, t]: &[Vector3<f64>; 3], l1: &[f64; 3], gap: f64, width: f64) -> f64 {
+/// The rates `[A, B]` at which moves of the position slots (by up to `dp`,
+/// m) and the gradient slots (by up to `dg`) of a stop point's maps use up
+/// its room from where its vectors are `[a, b, t]` (gap to flat `gap`):
+/// moves with `A dp + B dg < 1` keep the point at least `width` from flat
+/// and turning by less than a radian (so the collision check's wrap test
+/// holds too). With `|dx| <= d_x = l1_x[0] dp + l1_x[1] dg`,
+/// [`stop_turn_bound`] is at most `pi/2 (K_a / |a x t| + K_b / |b x t|)`,
+/// `K_x = 2 d_x |t| + |x| d_t`, for `d_t <= |t|`: both linear in `(dp,
+/// dg)`. Bounding position and gradient slots apart keeps a fold's
+/// turning gradients (a hundredth of a radian, against millimetres of
+/// motion) from setting the bound of the positions. None where no move is
+/// allowed.
+fn allowance(
+    [a, b, t]: &[Vector3<f64>; 3],
+    l1: &[[f64; 2]; 3],
+    gap: f64,
+    width: f64,
+) -> Option<[f64; 2]> {
     let room = (gap - width).min(1.0) - 1e-9;
     let nt = t.norm();
     let (na, nb) = (a.cross(t).norm(), b.cross(t).norm());
-    if room <= 0.0 || na <= 0.0 || nb <= 0.0 || l1[2] <= 0.0 {
-        return -1.0;
+    if room <= 0.0 || na <= 0.0 || nb <= 0.0 || l1[2][0] + l1[2][1] <= 0.0 {
+        return None;
     }
-    let ka = 2.0 * l1[0] * nt + a.norm() * l1[2];
-    let kb = 2.0 * l1[1] * nt + b.norm() * l1[2];
-    let d = room / (std::f64::consts::FRAC_PI_2 * (ka / na + kb / nb));
-    // A margin for rounding: the skip must never drop a point that acts.
-    0.999 * d.min(nt / l1[2])
+    let rate = |k: usize| {
+        let ka = 2.0 * l1[0][k] * nt + a.norm() * l1[2][k];
+        let kb = 2.0 * l1[1][k] * nt + b.norm() * l1[2][k];
+        let turn = std::f64::consts::FRAC_PI_2 * (ka / na + kb / nb) / room;
+        // A margin for rounding: the skip must never drop a point that acts.
+        turn.max(l1[2][k] / nt) / 0.999
+    };
+    Some([rate(0), rate(1)])
+}
+
+/// The rates of an edge's points together ([`allowance`]): the largest of
+/// each, None where a point has none.
+fn both(x: Option<[f64; 2]>, y: Option<[f64; 2]>) -> Option<[f64; 2]> {
+    let (x, y) = (x?, y?);
+    Some([x[0].max(y[0]), x[1].max(y[1])])
 }
 
 /// A bound on how far the angle between the crease normals `a x t` and
@@ -364,7 +407,7 @@ impl ContactTerm {
             if r.covers(edge, st.q, None) {
                 continue;
             }
-            let mut allow = f64::INFINITY;
+            let mut rates = Some([0.0; 2]);
             for i in edge.points.clone() {
                 let sp = &stops.points[i];
                 let [a, b, t] = sp
@@ -372,7 +415,7 @@ impl ContactTerm {
                     .each_ref()
                     .map(|m| crate::contact::surface::eval_map(m, st.q));
                 let (g, sign) = flat_gap(&a, &b, &t);
-                allow = allow.min(allowance(&[a, b, t], &sp.l1, g, w));
+                rates = both(rates, allowance(&[a, b, t], &sp.l1, g, w));
                 if g >= w {
                     continue;
                 }
@@ -405,7 +448,7 @@ impl ContactTerm {
                     self.scatter_maps_matrix(&sp.maps, &(co.k * h), batch);
                 }
             }
-            r.set(edge, st.q, allow);
+            r.set(edge, st.q, rates);
         }
         Ok(())
     }
@@ -422,7 +465,7 @@ impl ContactTerm {
             if r.covers(edge, q, Some(dq)) {
                 continue;
             }
-            let mut allow = f64::INFINITY;
+            let mut rates = Some([0.0; 2]);
             for sp in &stops.points[edge.points.clone()] {
                 let vecs = |x: &[f64]| {
                     sp.maps
@@ -437,14 +480,14 @@ impl ContactTerm {
                 } else {
                     raw0
                 };
-                allow = allow.min(allowance(&[a, b, t], &sp.l1, gap, self.flat_width));
+                rates = both(rates, allowance(&[a, b, t], &sp.l1, gap, self.flat_width));
                 let keep = (super::ccd::MIN_SEPARATION * gap).min(self.flat_width);
                 fraction = stop_fraction([a, b, t], [da, db_, dt], raw0, gap, keep, fraction);
                 if fraction == 0.0 {
                     return 0.0;
                 }
             }
-            r.set(edge, q, allow);
+            r.set(edge, q, rates);
         }
         fraction
     }
@@ -616,6 +659,57 @@ mod tests {
             endpoint_only_wrong > 0,
             "some moves pass flat in the middle only ({endpoint_only_wrong})"
         );
+    }
+
+    /// Moves of the slots within an allowance's rates keep the point at
+    /// least the width from flat all along them: each vector moved by the
+    /// most its map lets it (`l1` position and gradient sums times the
+    /// moves), in random directions.
+    #[test]
+    fn moves_within_the_allowance_keep_the_point_clear() {
+        let mut rng = XorShift(29);
+        let mut checked = 0;
+        for i in 0..4000 {
+            let mut v = |s: f64| Vector3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+            let x = [v(1.0), v(1.0), v(1.0)];
+            let mut l1 = [[0.0; 2]; 3];
+            for sums in &mut l1 {
+                *sums = [rng.range(0.0, 6.0), rng.range(0.0, 0.1)];
+            }
+            let gap = flat_gap(&x[0], &x[1], &x[2]).0;
+            let width = [1e-3, 0.05, 0.3][i % 3];
+            let Some(rates) = allowance(&x, &l1, gap, width) else {
+                continue;
+            };
+            // Moves using up a random share of the allowance, split at random.
+            let share = rng.range(0.0, 1.0);
+            let split = rng.uniform();
+            let (dp, dg) = (share * split / rates[0], share * (1.0 - split) / rates[1]);
+            let dx: [Vector3<f64>; 3] = std::array::from_fn(|k| {
+                let dir = Vector3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                );
+                dir.normalize() * (l1[k][0] * dp + l1[k][1] * dg)
+            });
+            let raw0 = crate::crease::theta(&x[0], &x[1], &x[2]);
+            for k in 1..=20 {
+                let alpha = k as f64 / 20.0;
+                let [a, b, t] = [0, 1, 2].map(|j| x[j] + dx[j] * alpha);
+                let raw = crate::crease::theta(&a, &b, &t);
+                assert!(
+                    (raw - raw0).abs() < 1.0 + 1e-12,
+                    "case {i}: turned {raw0} -> {raw}"
+                );
+                assert!(
+                    flat_gap(&a, &b, &t).0 >= width,
+                    "case {i}: within the width at {alpha}"
+                );
+            }
+            checked += 1;
+        }
+        assert!(checked > 2000, "{checked} cases had an allowance");
     }
 
     /// The bound on a crease stop's turn holds along the whole move: the
