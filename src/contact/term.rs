@@ -58,7 +58,7 @@ use super::settings::{ContactSettings, SettingsError};
 pub use report::ContactReport;
 
 use batch::{BlockPositions, MatrixBatch};
-use candidates::CandidateCache;
+use candidates::{CandidateCache, SlotBound};
 use friction::Stencil;
 use pairs::{Kind, Pair, PairKey, distance_sq, key, lift};
 use psd::project_psd;
@@ -91,6 +91,8 @@ pub struct ContactTerm {
     touching: bool,
     /// The step start's candidate pairs.
     cache: CandidateCache,
+    /// How far the contact vertices can have moved, from the slots' moves.
+    slot_bound: SlotBound,
     /// The slot vector at whose contact-vertex positions `cache` was
     /// searched (empty before the first search): a saved state lists it,
     /// so that a restored one searches the same cache and continues bit
@@ -177,6 +179,7 @@ impl ContactTerm {
         // pairs that near), at least the reach.
         let reach = settings.thickness * (1.0 + settings.width);
         let cache_margin = reach.max(0.1 * edge);
+        let slot_bound = SlotBound::new(&surf, layout);
         Ok(ContactTerm {
             surf,
             mesh: mesh.clone(),
@@ -194,6 +197,7 @@ impl ContactTerm {
             project: true,
             touching: false,
             cache: CandidateCache::default(),
+            slot_bound,
             cache_q: Vec::new(),
             cache_pending: false,
             n_dofs: layout.n_dofs(),
@@ -254,6 +258,9 @@ impl ContactTerm {
     /// that continuous collision detection proves free of surfaces coming
     /// closer than the thickness (conservatively: ACCD's separation margin).
     pub fn safe_fraction(&self, q: &[f64], dq: &[f64]) -> f64 {
+        if self.nothing_near(q, Some(dq), self.xi) {
+            return 1.0;
+        }
         let mut x = Vec::new();
         let mut d = Vec::new();
         self.positions_at(q, &mut x);
@@ -411,14 +418,18 @@ impl ForceTerm for ContactTerm {
     ) -> Result<(), EvalError> {
         let mut x = Vec::new();
         let mut v = Vec::new();
-        self.positions_at(st.q, &mut x);
+        // Positions only where a pair may be near.
+        let quiet = self.nothing_near(st.q, None, self.xi + self.s_hat);
+        if !quiet {
+            self.positions_at(st.q, &mut x);
+        }
         // Velocities only where lagged pairs (dashpots, friction) read them.
         if !self.at_start.lagged.is_empty() {
             self.surf.positions(st.v, &mut v);
         }
         out.dissipative_force.zeroed(out.force.len());
         let mut batch = MatrixBatch::default();
-        let active = self.active(&x)?;
+        let active = if quiet { Vec::new() } else { self.active(&x)? };
         out.barrier_pairs += active.len();
         // Matrices: each pair's barrier, dashpot and friction parts summed
         // (the lagged pairs are in the same canonical order) and scattered

@@ -42,7 +42,7 @@ impl ContactTerm {
         }
         // The next step starts here and would search again: search once,
         // as it would (a wider search than the report needs), and leave it.
-        let searched = self.search_cache(&x);
+        let searched = self.search_cache(q, &x);
         let r = self.report_over(&searched.x0, &searched.pairs, false, reach);
         if let Ok(mut spare) = self.spare.lock() {
             *spare = Some(searched);

@@ -72,8 +72,26 @@ struct EdgeRef {
 }
 
 /// Slot `s`'s vector in `q`.
-fn slot(q: &[f64], s: usize) -> Vector3<f64> {
+pub(super) fn slot(q: &[f64], s: usize) -> Vector3<f64> {
     Vector3::new(q[3 * s], q[3 * s + 1], q[3 * s + 2])
+}
+
+/// How far slots `(slot, kind, reference)` (kind 0 position, 1 gradient)
+/// can be from their references along `q + alpha dq`, alpha in [0, 1]: by
+/// kind, the largest distance at `q` plus the largest step.
+pub(super) fn reach_by_kind(
+    slots: impl Iterator<Item = (usize, usize, Vector3<f64>)>,
+    q: &[f64],
+    dq: Option<&[f64]>,
+) -> [f64; 2] {
+    let (mut moved, mut step) = ([0.0f64; 2], [0.0f64; 2]);
+    for (s, kind, r) in slots {
+        moved[kind] = moved[kind].max((slot(q, s) - r).norm_squared());
+        if let Some(d) = dq {
+            step[kind] = step[kind].max(slot(d, s).norm_squared());
+        }
+    }
+    [0, 1].map(|k| moved[k].sqrt() + step[k].sqrt())
 }
 
 impl EdgeRef {
@@ -93,16 +111,10 @@ impl EdgeRef {
         if self.q.len() != edge.slots.len() {
             return false;
         }
-        // Largest moves (squared) and steps, by slot kind.
-        let (mut moved, mut step) = ([0.0f64; 2], [0.0f64; 2]);
-        for ((&s, &kind), r) in edge.slots.iter().zip(&edge.kinds).zip(&self.q) {
-            moved[kind] = moved[kind].max((slot(q, s) - r).norm_squared());
-            if let Some(d) = dq {
-                step[kind] = step[kind].max(slot(d, s).norm_squared());
-            }
-        }
-        let reach = |k: usize| moved[k].sqrt() + step[k].sqrt();
-        rates[0] * reach(0) + rates[1] * reach(1) < 1.0
+        let slots =
+            (edge.slots.iter().zip(&edge.kinds).zip(&self.q)).map(|((&s, &k), r)| (s, k, *r));
+        let reach = reach_by_kind(slots, q, dq);
+        rates[0] * reach[0] + rates[1] * reach[1] < 1.0
     }
 }
 
@@ -117,7 +129,7 @@ pub(super) const UNSET: f64 = -1.0;
 const STOP_POINTS: usize = 9;
 
 /// Slot `s`'s kind as an index: 0 position, 1 gradient.
-fn slot_kind(layout: &DofLayout, s: usize) -> usize {
+pub(super) fn slot_kind(layout: &DofLayout, s: usize) -> usize {
     usize::from(layout.slot_kind[s] != crate::dofs::SlotKind::Position)
 }
 
