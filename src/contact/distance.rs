@@ -364,11 +364,22 @@ pub fn edge_edge_distance_sq<T: Real>(a0: &V3<T>, a1: &V3<T>, b0: &V3<T>, b1: &V
 /// hulls (the point, segment or triangle) is at least `d`, which a pair
 /// filter learns without the closest-feature search.
 pub fn axis_apart(x: &[Vector3<f64>; 4], k: usize, d: f64) -> bool {
-    let (a, b) = x.split_at(k);
+    // The spans of coordinate values, written out for the two stencils (a
+    // pair filter's innermost test, for every candidate every iteration).
+    let span = |v: &[f64]| {
+        v.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &y| {
+                (lo.min(y), hi.max(y))
+            })
+    };
     (0..3).any(|c| {
-        let lo = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
-        let hi = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
-        lo(b) - hi(a) >= d || lo(a) - hi(b) >= d
+        let v = [x[0][c], x[1][c], x[2][c], x[3][c]];
+        let ((alo, ahi), (blo, bhi)) = match k {
+            1 => (span(&v[..1]), span(&v[1..])),
+            2 => (span(&v[..2]), span(&v[2..])),
+            _ => (span(&v[..k]), span(&v[k..])),
+        };
+        blo - ahi >= d || alo - bhi >= d
     })
 }
 
@@ -789,6 +800,36 @@ mod tests {
             });
         }
         assert!(seen.len() >= 3, "{seen:?}");
+    }
+
+    /// The written-out spans decide as the plain splits of the stencil do,
+    /// for every split and on ties.
+    #[test]
+    fn axis_apart_is_the_split_stencils_test() {
+        let plain = |x: &[Vector3<f64>; 4], k: usize, d: f64| {
+            let (a, b) = x.split_at(k);
+            (0..3).any(|c| {
+                let lo = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
+                let hi =
+                    |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
+                lo(b) - hi(a) >= d || lo(a) - hi(b) >= d
+            })
+        };
+        let mut rng = XorShift(0x5b1d);
+        for case in 0..5000 {
+            // Coordinates on a coarse grid: ties between the spans are common.
+            let mut grid = || (rng.below(5) as f64 - 2.0) * 0.25;
+            let x: [Vector3<f64>; 4] =
+                std::array::from_fn(|_| Vector3::new(grid(), grid(), grid()));
+            let d = [0.0, 0.25, 0.5, 1.0][case % 4];
+            for k in 0..=4 {
+                assert_eq!(
+                    axis_apart(&x, k, d),
+                    plain(&x, k, d),
+                    "case {case}, split {k}"
+                );
+            }
+        }
     }
 
     #[test]
