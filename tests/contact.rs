@@ -293,22 +293,8 @@ fn crease_stop_and_neighbour_force_and_tangent_match_finite_differences() {
 /// those of a term that evaluates every point afresh, bit for bit.
 #[test]
 fn skipping_creases_far_from_flat_changes_no_force_and_no_fraction() {
-    let path = "tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold";
-    let mut scene = origami_fmu::scene::load(path).unwrap().0;
-    scene.contact = Some(scene.default_contact());
-    let mut model = Model::new(scene.clone()).unwrap();
-    model.initialize().unwrap();
-    let mut states = Vec::new();
-    origami_fmu::benchmarks::fold_by_ramp_with(&mut model, 110, 0.01, 1.0, true, |m, _| {
-        states.push(m.save_state().dynamics.q)
-    });
-    let build = || {
-        let physics = origami_fmu::model::physics(&scene);
-        let mut asm = Assembler::new(&scene.mesh, physics, ElementOptions::default(), &[]).unwrap();
-        let term = ContactTerm::on(&asm, &scene.mesh, scene.contact.as_ref().unwrap()).unwrap();
-        asm.add_barrier(Box::new(term));
-        asm
-    };
+    let (scene, states) = small_bird_folded();
+    let build = || contact_assembler(&scene);
     let mut kept = build();
     let zeros = vec![0.0; states[0].len()];
     let co = MatrixCoeffs {
@@ -355,21 +341,121 @@ fn skipping_creases_far_from_flat_changes_no_force_and_no_fraction() {
         stopped += usize::from(ek.term_energy > 0.0);
         for scale in [1.0, 4.0, 16.0] {
             let dq: Vec<f64> = next.iter().zip(q).map(|(b, a)| scale * (b - a)).collect();
-            let (fk, ff) = (
-                kept.max_step_fraction(q, &dq),
-                fresh.max_step_fraction(q, &dq),
-            );
-            assert_eq!(
-                fk.to_bits(),
-                ff.to_bits(),
-                "fraction at output {k}, x{scale}"
-            );
+            let fk = same_fraction(&kept, &fresh, q, &dq, &format!("output {k}, x{scale}"));
             cut += usize::from(fk < 1.0);
         }
     }
     assert!(
         stopped > 0 && cut > 0,
         "the stops acted ({stopped}) and cut moves ({cut})"
+    );
+}
+
+/// Flat-folder's small bird base with contact on, and its slot vectors at
+/// the 110 outputs of a fold over 1 s (flat from 1 s on).
+fn small_bird_folded() -> (Scene, Vec<Vec<f64>>) {
+    let path = "tests/data/flat-folder/244_komatsuoripa_Smallbird_Base.fold";
+    let mut scene = origami_fmu::scene::load(path).unwrap().0;
+    scene.contact = Some(scene.default_contact());
+    let mut model = Model::new(scene.clone()).unwrap();
+    model.initialize().unwrap();
+    let mut states = Vec::new();
+    origami_fmu::benchmarks::fold_by_ramp_with(&mut model, 110, 0.01, 1.0, true, |m, _| {
+        states.push(m.save_state().dynamics.q)
+    });
+    (scene, states)
+}
+
+/// An assembler of `scene` with its contact term.
+fn contact_assembler(scene: &Scene) -> Assembler {
+    let physics = origami_fmu::model::physics(scene);
+    let mut asm = Assembler::new(&scene.mesh, physics, ElementOptions::default(), &[]).unwrap();
+    let term = ContactTerm::on(&asm, &scene.mesh, scene.contact.as_ref().unwrap()).unwrap();
+    asm.add_barrier(Box::new(term));
+    asm
+}
+
+/// Two assemblers' collision-check fractions of the move `q -> q + dq`,
+/// asserted equal bit for bit (`what` names the case); the first's.
+fn same_fraction(a: &Assembler, b: &Assembler, q: &[f64], dq: &[f64], what: &str) -> f64 {
+    let (fa, fb) = (a.max_step_fraction(q, dq), b.max_step_fraction(q, dq));
+    assert_eq!(fa.to_bits(), fb.to_bits(), "fraction, {what}");
+    fa
+}
+
+/// The lists of the cache's pairs near the last evaluations and collision
+/// checks, kept while the sheet stays within their margin, change no
+/// evaluation and no fraction: a term asked at iterates moved from its step
+/// start (the sheet shifted by 1e-8 to 1e-3 m, every slot nudged by up to
+/// 3e-8), and for moves of 1e-7 to 1e-5 m, answers bit for bit as a term
+/// asked at each iterate first, on flat-folder's small bird base folded
+/// flat (its layers inside the barrier).
+#[test]
+fn near_lists_change_no_evaluation_and_no_fraction() {
+    let (scene, states) = small_bird_folded();
+    let q = states.last().unwrap().clone();
+    let build = || {
+        let mut asm = contact_assembler(&scene);
+        asm.before_step(&q, &vec![0.0; q.len()]);
+        asm
+    };
+    let kept = build();
+    let position = |i: usize| kept.layout.slot_kind[i / 3] == origami_fmu::dofs::SlotKind::Position;
+    let zeros = vec![0.0; q.len()];
+    let pi = vec![PI; kept.creases.len()];
+    let no_moment = vec![0.0; kept.creases.len()];
+    let evaluate = |asm: &Assembler, y: &[f64]| {
+        let st = origami_fmu::assembly::State {
+            q: y,
+            v: &zeros,
+            theta0: &pi,
+            moment: &no_moment,
+            theta_prev: &pi,
+        };
+        let mut ev = origami_fmu::assembly::Evaluation::default();
+        asm.evaluate(&st, &mut ev, None).map(|()| ev)
+    };
+    let mut rng = origami_fmu::rng::XorShift(0x11573);
+    let (mut inside, mut cut) = (0, 0);
+    for shift in [0.0, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3] {
+        for step in [1e-7, 1e-6, 1e-5] {
+            let dir = [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ];
+            let y: Vec<f64> = (q.iter().enumerate())
+                .map(|(i, a)| {
+                    let moved = if position(i) {
+                        a + shift * dir[i % 3]
+                    } else {
+                        *a
+                    };
+                    moved + rng.range(-3e-8, 3e-8)
+                })
+                .collect();
+            let dq: Vec<f64> = q.iter().map(|_| rng.range(-step, step)).collect();
+            let fresh = build();
+            match (evaluate(&kept, &y), evaluate(&fresh, &y)) {
+                (Ok(ek), Ok(ef)) => {
+                    assert_eq!(ek.barrier_pairs, ef.barrier_pairs, "shift {shift}");
+                    assert_eq!(ek.term_energy.to_bits(), ef.term_energy.to_bits());
+                    assert!(
+                        (ek.force.iter().zip(&ef.force)).all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "force, shift {shift}"
+                    );
+                    inside += usize::from(ek.barrier_pairs > 0);
+                }
+                (ek, ef) => assert_eq!(format!("{ek:?}"), format!("{ef:?}"), "shift {shift}"),
+            }
+            let what = format!("shift {shift}, move {step}");
+            let fk = same_fraction(&kept, &fresh, &y, &dq, &what);
+            cut += usize::from(fk < 1.0);
+        }
+    }
+    assert!(
+        inside >= 12 && cut > 0,
+        "pairs inside the barrier ({inside} of 18) and moves cut ({cut})"
     );
 }
 

@@ -58,7 +58,7 @@ use super::settings::{ContactSettings, SettingsError};
 pub use report::ContactReport;
 
 use batch::{BlockPositions, MatrixBatch};
-use candidates::{CandidateCache, SlotBound};
+use candidates::{CandidateCache, NEAR_MOVE_MARGINS, NEAR_REACH_MARGINS, NearList, SlotBound};
 use friction::Stencil;
 use pairs::{Kind, Pair, PairKey, distance_sq, key, lift};
 use psd::project_psd;
@@ -93,6 +93,10 @@ pub struct ContactTerm {
     cache: CandidateCache,
     /// How far the contact vertices can have moved, from the slots' moves.
     slot_bound: SlotBound,
+    /// The cache's pairs near the last evaluations and near the last
+    /// collision checks (emptied with the cache).
+    near: std::sync::Mutex<NearList>,
+    near_moves: std::sync::Mutex<NearList>,
     /// The slot vector at whose contact-vertex positions `cache` was
     /// searched (empty before the first search): a saved state lists it,
     /// so that a restored one searches the same cache and continues bit
@@ -198,6 +202,8 @@ impl ContactTerm {
             touching: false,
             cache: CandidateCache::default(),
             slot_bound,
+            near: Default::default(),
+            near_moves: Default::default(),
             cache_q: Vec::new(),
             cache_pending: false,
             n_dofs: layout.n_dofs(),
@@ -266,7 +272,17 @@ impl ContactTerm {
         self.positions_at(q, &mut x);
         self.surf.positions(dq, &mut d);
         let mut t: f64 = 1.0;
-        for p in self.near_pairs(&x, Some(&d), self.xi).iter() {
+        let pairs = self.near_pairs(&x, Some(&d), self.xi);
+        // The cache's pairs near the move alone, in the same order: those
+        // left out would find no time of impact (NEAR_MOVE_MARGINS).
+        let idx = if matches!(pairs, std::borrow::Cow::Borrowed(_)) {
+            self.near_indices(&self.near_moves, &x, Some(&d), |p, m| {
+                p.xi + NEAR_MOVE_MARGINS * m
+            })
+        } else {
+            (0..pairs.len()).collect()
+        };
+        for p in idx.into_iter().map(|i| &pairs[i]) {
             let (xs, ds) = (self.points(&x, p), self.points(&d, p));
             // Apart along an axis by more than the thickness and both
             // primitives' largest move up to `t`: no contact before `t`
@@ -293,7 +309,17 @@ impl ContactTerm {
         let mut out = Vec::new();
         let pairs = self.near_pairs(x, None, self.xi + self.s_hat);
         let cached = matches!(pairs, std::borrow::Cow::Borrowed(_));
-        for (i, &p) in pairs.iter().enumerate() {
+        // The cache's pairs near `x` alone, in the same order: those left
+        // out are apart by their reach here (NEAR_REACH_MARGINS).
+        let idx = if cached {
+            self.near_indices(&self.near, x, None, |p, m| {
+                p.xi + self.s_hat_of(p) + NEAR_REACH_MARGINS * m
+            })
+        } else {
+            (0..pairs.len()).collect()
+        };
+        for i in idx {
+            let p = pairs[i];
             let xs = self.points(x, &p);
             if p.apart(&xs, p.xi + self.s_hat_of(&p)) {
                 continue;

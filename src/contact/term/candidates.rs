@@ -23,6 +23,33 @@ pub(super) struct CandidateCache {
     pub(super) pairs: Vec<Pair>,
 }
 
+/// The cache's pairs an evaluation (or a collision check) can act on while
+/// every contact vertex (and its swept end) stays within `margin` of `x0`:
+/// the indices (ascending) of those not apart along an axis at `x0` by a
+/// reach that covers the margin (see [`ContactTerm::near_indices`]). In a
+/// jam a step's evaluations move the sheet by far less than the cache's
+/// margin, and the cache holds the layers around the touching ones too.
+#[derive(Clone, Debug, Default)]
+pub(super) struct NearList {
+    x0: Vec<Vector3<f64>>,
+    margin: f64,
+    idx: Vec<usize>,
+}
+
+/// A pair left out of an evaluation's [`NearList`] is apart along an axis
+/// at its origin by its reach plus this many margins: still apart by its
+/// reach anywhere within the margin (a little over two: no rounding of the
+/// moved spans brings it back).
+pub(super) const NEAR_REACH_MARGINS: f64 = 2.5;
+
+/// A pair left out of a collision check's [`NearList`] is apart along an
+/// axis at its origin by the thickness plus this many margins (`g`). With
+/// every point within the margin `m` of the origin all along the move, its
+/// gap stays above `g - 2 m`, and starts below `g + 2 m`: above a tenth of
+/// where it starts for `g` over 2.45 margins, where the advancement finds
+/// no time of impact.
+pub(super) const NEAR_MOVE_MARGINS: f64 = 3.0;
+
 /// How far the contact vertices can have moved, bounded from the slots'
 /// moves alone: a vertex `x = sum c_k q[slot_k]` moves by at most `l1[0]
 /// dp + l1[1] dg`, `dp` and `dg` the largest moves of any position and any
@@ -618,6 +645,47 @@ impl ContactTerm {
             && self.slot_bound.moved(q, &c.q0, dq) <= 0.999 * self.cache_margin
     }
 
+    /// Indices into the cache's pairs, ascending, of every pair the full
+    /// list's filters could keep at `x` (swept by `dx`): from `list` where
+    /// it covers `x` (and `x + dx`), else from a new list at `x` with a
+    /// margin of the barrier's width or the move, keeping the pairs not
+    /// apart along an axis by `reach(pair, margin)` there.
+    pub(super) fn near_indices(
+        &self,
+        list: &std::sync::Mutex<NearList>,
+        x: &[Vector3<f64>],
+        dx: Option<&[Vector3<f64>]>,
+        reach: impl Fn(&Pair, f64) -> f64,
+    ) -> Vec<usize> {
+        let mut near = list.lock().unwrap_or_else(|e| e.into_inner());
+        let within = |y: &Vector3<f64>, y0: &Vector3<f64>| (y - y0).norm() <= near.margin;
+        let covered = near.x0.len() == x.len()
+            && (x.iter().zip(&near.x0).enumerate())
+                .all(|(i, (y, y0))| within(y, y0) && dx.is_none_or(|d| within(&(y + d[i]), y0)));
+        if !covered {
+            // The barrier's width, or the move where it is longer (the
+            // cache covers `x + dx`, so at most twice the cache's margin).
+            let base = self.s_hat.min(self.cache_margin);
+            let margin = dx.map_or(base, |d| d.iter().map(|v| v.norm()).fold(base, f64::max));
+            let idx = (self.cache.pairs.iter().enumerate())
+                .filter_map(|(i, p)| (!p.apart(&self.points(x, p), reach(p, margin))).then_some(i))
+                .collect();
+            *near = NearList {
+                x0: x.to_vec(),
+                margin,
+                idx,
+            };
+        }
+        near.idx.clone()
+    }
+
+    /// Drop the near lists (the cache they index was replaced).
+    pub(super) fn forget_near(&mut self) {
+        for list in [&mut self.near, &mut self.near_moves] {
+            *list.get_mut().unwrap_or_else(|e| e.into_inner()) = NearList::default();
+        }
+    }
+
     /// The candidate pairs at `x` (swept by `dx`) with pad `pad`, or a
     /// superset of them: the step start's cache where it covers them.
     pub(super) fn near_pairs(
@@ -670,6 +738,7 @@ impl ContactTerm {
             }
         });
         let old = std::mem::replace(&mut self.cache, cache);
+        self.forget_near();
         self.blocks = self.cache_blocks();
         Some(old)
     }
@@ -897,6 +966,93 @@ mod tests {
             tightest = tightest.max(moved / b);
         }
         assert!(tightest > 0.2, "the bound is informative ({tightest})");
+    }
+
+    /// A random stencil (two primitives) about the origin.
+    fn stencil(rng: &mut XorShift) -> [Vector3<f64>; 4] {
+        std::array::from_fn(|_| {
+            Vector3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+        })
+    }
+
+    /// The unit step along the first axis on which the stencil's first `k`
+    /// points and the rest are `d` apart that brings the first primitive
+    /// towards the second, if any.
+    fn towards(x: &[Vector3<f64>; 4], k: usize, d: f64) -> Option<Vector3<f64>> {
+        (0..3).find_map(|c| {
+            let (a, b) = x.split_at(k);
+            let lo = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
+            let hi = |s: &[Vector3<f64>]| s.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
+            let e = Vector3::ith(c, 1.0);
+            if lo(b) - hi(a) >= d {
+                Some(e)
+            } else if lo(a) - hi(b) >= d {
+                Some(-e)
+            } else {
+                None
+            }
+        })
+    }
+
+    /// The stencil with its first `k` points moved by `u` and the rest by
+    /// `-u`.
+    fn closer(x: &[Vector3<f64>; 4], k: usize, u: Vector3<f64>) -> [Vector3<f64>; 4] {
+        std::array::from_fn(|i| if i < k { x[i] + u } else { x[i] - u })
+    }
+
+    /// What an evaluation's near list leaves out is apart by its reach
+    /// anywhere within the margin of the list's origin: each primitive
+    /// moved the whole margin towards the other (the worst case).
+    #[test]
+    fn left_out_of_an_evaluations_list_stays_apart() {
+        let mut rng = XorShift(0x1157);
+        let mut left_out = 0;
+        for case in 0..20000 {
+            let x0 = stencil(&mut rng);
+            let (k, reach, m) = (1 + case % 2, rng.range(0.0, 0.3), rng.range(0.01, 0.2));
+            let Some(u) = towards(&x0, k, reach + NEAR_REACH_MARGINS * m) else {
+                continue;
+            };
+            left_out += 1;
+            let x = closer(&x0, k, u * m);
+            assert!(
+                crate::contact::distance::axis_apart(&x, k, reach),
+                "case {case}"
+            );
+        }
+        assert!(left_out > 2000, "{left_out} cases left out");
+    }
+
+    /// What a collision check's near list leaves out has no time of impact
+    /// for a move whose start and end are within the margin of the list's
+    /// origin: started the margin apart, ended the margin towards each
+    /// other (the most the gap can fall against where it starts).
+    #[test]
+    fn left_out_of_a_checks_list_has_no_time_of_impact() {
+        let mut rng = XorShift(0x70e);
+        let mut left_out = 0;
+        for case in 0..20000 {
+            let x0 = stencil(&mut rng);
+            let (k, xi, m) = (1 + case % 2, rng.range(0.0, 0.3), rng.range(0.01, 0.2));
+            let Some(u) = towards(&x0, k, xi + NEAR_MOVE_MARGINS * m) else {
+                continue;
+            };
+            left_out += 1;
+            let x = closer(&x0, k, -u * m);
+            let end = closer(&x0, k, u * m);
+            let dx = std::array::from_fn(|i| end[i] - x[i]);
+            let toi = if k == 1 {
+                crate::contact::ccd::point_triangle_toi(x, dx, xi, 1.0)
+            } else {
+                crate::contact::ccd::edge_edge_toi(x, dx, xi, 1.0)
+            };
+            assert_eq!(toi, None, "case {case}");
+        }
+        assert!(left_out > 2000, "{left_out} cases left out");
     }
 
     #[test]

@@ -76,6 +76,7 @@ impl ContactTerm {
     /// of the state's own positions), else at the step start.
     pub(super) fn restore_cache(&mut self, origin: Option<Vec<f64>>) {
         self.cache = Default::default();
+        self.forget_near();
         self.blocks.clear();
         self.kappas.clear();
         self.cache_pending = origin.is_some();
