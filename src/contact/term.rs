@@ -275,13 +275,10 @@ impl ContactTerm {
         let pairs = self.near_pairs(&x, Some(&d), self.xi);
         // The cache's pairs near the move alone, in the same order: those
         // left out would find no time of impact (NEAR_MOVE_MARGINS).
-        let idx = if matches!(pairs, std::borrow::Cow::Borrowed(_)) {
-            self.near_indices(&self.near_moves, &x, Some(&d), |p, m| {
-                p.xi + NEAR_MOVE_MARGINS * m
-            })
-        } else {
-            (0..pairs.len()).collect()
-        };
+        let cached = matches!(pairs, std::borrow::Cow::Borrowed(_));
+        let idx = self.near_indices((&pairs, cached), &self.near_moves, &x, Some(&d), |p, m| {
+            p.xi + NEAR_MOVE_MARGINS * m
+        });
         for p in idx.into_iter().map(|i| &pairs[i]) {
             let (xs, ds) = (self.points(&x, p), self.points(&d, p));
             // Apart along an axis by more than the thickness and both
@@ -311,13 +308,9 @@ impl ContactTerm {
         let cached = matches!(pairs, std::borrow::Cow::Borrowed(_));
         // The cache's pairs near `x` alone, in the same order: those left
         // out are apart by their reach here (NEAR_REACH_MARGINS).
-        let idx = if cached {
-            self.near_indices(&self.near, x, None, |p, m| {
-                p.xi + self.s_hat_of(p) + NEAR_REACH_MARGINS * m
-            })
-        } else {
-            (0..pairs.len()).collect()
-        };
+        let idx = self.near_indices((&pairs, cached), &self.near, x, None, |p, m| {
+            p.xi + self.s_hat_of(p) + NEAR_REACH_MARGINS * m
+        });
         for i in idx {
             let p = pairs[i];
             let xs = self.points(x, &p);

@@ -645,18 +645,23 @@ impl ContactTerm {
             && self.slot_bound.moved(q, &c.q0, dq) <= 0.999 * self.cache_margin
     }
 
-    /// Indices into the cache's pairs, ascending, of every pair the full
-    /// list's filters could keep at `x` (swept by `dx`): from `list` where
-    /// it covers `x` (and `x + dx`), else from a new list at `x` with a
-    /// margin of the barrier's width or the move, keeping the pairs not
-    /// apart along an axis by `reach(pair, margin)` there.
+    /// Indices into `pairs` (of [`ContactTerm::near_pairs`], `cached` where
+    /// the cache's), ascending, of every pair the full list's filters could
+    /// keep at `x` (swept by `dx`): all of a search's own; of the cache's,
+    /// from `list` where it covers `x` (and `x + dx`), else from a new list
+    /// at `x` with a margin of the barrier's width or the move, keeping the
+    /// pairs not apart along an axis by `reach(pair, margin)` there.
     pub(super) fn near_indices(
         &self,
+        (pairs, cached): (&[Pair], bool),
         list: &std::sync::Mutex<NearList>,
         x: &[Vector3<f64>],
         dx: Option<&[Vector3<f64>]>,
         reach: impl Fn(&Pair, f64) -> f64,
     ) -> Vec<usize> {
+        if !cached {
+            return (0..pairs.len()).collect();
+        }
         let mut near = list.lock().unwrap_or_else(|e| e.into_inner());
         let within = |y: &Vector3<f64>, y0: &Vector3<f64>| (y - y0).norm() <= near.margin;
         let covered = near.x0.len() == x.len()
