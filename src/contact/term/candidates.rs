@@ -257,9 +257,11 @@ impl Slab {
         for k in 0..4 {
             let a = self.axes[k].dot(&x[i]);
             let b = dx.map_or(a, |d| self.axes[k].dot(&(x[i] + d[i])));
-            if a.max(b) < self.lo[k] - pad {
+            // The spans' own subtractions: rounding keeps their order, so
+            // the codes decide as the spans do.
+            if self.lo[k] - a.max(b) > pad {
                 code |= 1 << (2 * k);
-            } else if a.min(b) > self.hi[k] + pad {
+            } else if a.min(b) - self.hi[k] > pad {
                 code |= 2 << (2 * k);
             }
         }
