@@ -4,7 +4,8 @@
 //! Part 2: whole folds with and without contact (process CPU and wall time, steps,
 //! rejections, Newton steps cut by the collision check, pattern growths).
 //! Part 3: what reading every output after every step costs against
-//! reading none (a master that records every output, as fmpy does).
+//! reading none (a master that records every output, as fmpy does), and
+//! contact on against off where nothing touches, the runs interleaved.
 //! Part 4: a flat stack released in one held communication step (the
 //! deployable's scene, mu = 0 and 0.5): CPU s, steps, energy balance.
 //! CPU is the process's CPU time (the machine is shared).
@@ -135,6 +136,7 @@ fn main() {
     }
     if arg("--reads", 1) >= 1 {
         reads(arg("--reads", 1) >= 2);
+        never_touching(repeats);
     }
     if arg("--release", 1) == 1 {
         release();
@@ -200,6 +202,32 @@ fn reads(flat_fold: bool) {
             all / none
         );
     }
+}
+
+/// Part 3, last: contact on against off where nothing touches (the Miura
+/// 4x4 to its own targets, outputs not read), the runs interleaved (off,
+/// on, off, ...) so the machine's load falls on both alike; best of
+/// `repeats` each, CPU s.
+fn never_touching(repeats: usize) {
+    let scene = origami_fmu::scene::load("scenes/miura_4x4.fold").unwrap().0;
+    let scenes = [scene.clone(), with_contact(scene)];
+    let mut best = [f64::INFINITY; 2];
+    for _ in 0..repeats {
+        for (b, scene) in best.iter_mut().zip(&scenes) {
+            let mut model = Model::new(scene.clone()).unwrap();
+            model.initialize().unwrap();
+            let clock = Stopwatch::start();
+            origami_fmu::benchmarks::fold_by_ramp_with(&mut model, 80, 0.01, 0.5, true, |_, _| {});
+            *b = b.min(clock.cpu());
+        }
+    }
+    println!();
+    println!(
+        "Contact never touching, interleaved (best of {repeats}, CPU s): off {:.3}, on {:.3}, ratio {:.2}",
+        best[0],
+        best[1],
+        best[1] / best[0]
+    );
 }
 
 /// Part 4: the deployable closed flat, then its input set from 1 to 0 and
