@@ -97,15 +97,10 @@ pub struct ContactTerm {
     /// collision checks (emptied with the cache).
     near: std::sync::Mutex<NearList>,
     near_moves: std::sync::Mutex<NearList>,
-    /// The slot vector at whose contact-vertex positions `cache` was
-    /// searched (empty before the first search): a saved state lists it,
-    /// so that a restored one searches the same cache and continues bit
-    /// for bit (what a step does depends on the cache it keeps).
-    cache_q: Vec<f64>,
-    /// Whether the cache is still to be searched at `cache_q` (a restored
+    /// Whether the cache is still to be searched at its `q0` (a restored
     /// state's origin), at the next step start.
     cache_pending: bool,
-    /// The model's DOFs (the length of `cache_q`).
+    /// The model's DOFs (the length of the cache's `q0`).
     n_dofs: usize,
     /// A search the contact report made at a step end, with the cache's
     /// own padding: the next step start takes it instead of searching
@@ -204,7 +199,6 @@ impl ContactTerm {
             slot_bound,
             near: Default::default(),
             near_moves: Default::default(),
-            cache_q: Vec::new(),
             cache_pending: false,
             n_dofs: layout.n_dofs(),
             spare: Default::default(),

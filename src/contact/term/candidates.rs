@@ -17,6 +17,11 @@ use nalgebra::Vector3;
 /// their distance in both cases).
 #[derive(Clone, Debug, Default)]
 pub(super) struct CandidateCache {
+    /// The slot vector the cache was searched at (empty before the first
+    /// search; a restored state's origin, with no pairs, until the next
+    /// step start searches there): a saved state lists it, so that a
+    /// restored one searches the same cache and continues bit for bit
+    /// (what a step does depends on the cache it keeps).
     pub(super) q0: Vec<f64>,
     pub(super) x0: Vec<Vector3<f64>>,
     pub(super) pad: f64,
@@ -722,7 +727,7 @@ impl ContactTerm {
         let margin = self.cache_margin;
         let restored = if std::mem::take(&mut self.cache_pending) {
             let mut x0 = Vec::new();
-            self.surf.positions(&self.cache_q, &mut x0);
+            self.surf.positions(&self.cache.q0, &mut x0);
             let origin = CandidateCache {
                 x0,
                 pad,
@@ -730,17 +735,20 @@ impl ContactTerm {
             };
             origin
                 .covers(x, None, pad, 0.5 * margin)
-                .then(|| self.search_cache(&self.cache_q, &origin.x0))
+                .then(|| self.search_cache(&self.cache.q0, &origin.x0))
         } else if self.cache.covers(x, None, pad, 0.5 * margin) {
             return None;
         } else {
             None
         };
         let cache = restored.unwrap_or_else(|| {
-            self.cache_q = q.to_vec();
             let spare = self.spare.get_mut().ok().and_then(Option::take);
             match spare.filter(|c| c.pad == pad && c.x0 == x) {
-                Some(c) => c,
+                // Searched at the same positions; kept as searched at `q`.
+                Some(c) => CandidateCache {
+                    q0: q.to_vec(),
+                    ..c
+                },
                 None => self.search_cache(q, x),
             }
         });

@@ -2,6 +2,7 @@
 //! candidate cache was searched; listed and read back.
 
 use super::ContactTerm;
+use super::candidates::CandidateCache;
 use super::pairs::{PairKey, key};
 use crate::assembly::MemoryError;
 use crate::contact::memory::{list_index, list_pairs, parse_pairs};
@@ -61,7 +62,7 @@ impl ContactTerm {
                 out.extend([STOP_KIND, i as f64, 0.0, 0.0, 0.0, k]);
             }
         }
-        for (i, q) in self.cache_q.chunks(4).enumerate() {
+        for (i, q) in self.cache.q0.chunks(4).enumerate() {
             let mut entry = [ORIGIN_KIND, i as f64, 0.0, 0.0, 0.0, 0.0];
             entry[2..2 + q.len()].copy_from_slice(q);
             out.extend(entry);
@@ -75,12 +76,14 @@ impl ContactTerm {
     /// did (so a forged origin is searched only within the cache's margin
     /// of the state's own positions), else at the step start.
     pub(super) fn restore_cache(&mut self, origin: Option<Vec<f64>>) {
-        self.cache = Default::default();
+        self.cache_pending = origin.is_some();
+        self.cache = CandidateCache {
+            q0: origin.unwrap_or_default(),
+            ..Default::default()
+        };
         self.forget_near();
         self.blocks.clear();
         self.kappas.clear();
-        self.cache_pending = origin.is_some();
-        self.cache_q = origin.unwrap_or_default();
         if let Ok(mut spare) = self.spare.lock() {
             *spare = None;
         }
